@@ -1,0 +1,7 @@
+//! Argile: an immersive stereo/VR sculpting station.
+#![deny(unsafe_op_in_unsafe_fn)]
+#![warn(missing_docs, clippy::undocumented_unsafe_blocks)]
+
+pub mod math;
+pub mod mesh;
+pub mod render;

@@ -1,0 +1,5 @@
+//! Iso-surface extraction.
+
+mod types;
+
+pub use types::*;
