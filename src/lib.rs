@@ -2,6 +2,8 @@
 #![deny(unsafe_op_in_unsafe_fn)]
 #![warn(missing_docs, clippy::undocumented_unsafe_blocks)]
 
+pub mod field;
 pub mod math;
 pub mod mesh;
 pub mod render;
+pub mod tool;

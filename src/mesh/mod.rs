@@ -1,5 +1,37 @@
-//! Iso-surface extraction.
+//! Iso-surface extraction: the clay's surface as per-brick triangle chunks.
+//!
+//! Owns marching cubes over the field's bricks, the chunk meshes and the diffs the renderer
+//! applies. Knows nothing of Vulkan or devices; depends on `math` and `field`.
+//!
+//! ## Seam contract
+//!
+//! ```text
+//!   lattice points of brick K on one axis:  K·S ... K·S+S−1
+//!
+//!        apron      brick K cells          apron
+//!   K·S−1 |  K·S ─ K·S+1 ─ … ─ K·S+S−1 ─ K·S+S  | K·S+S+1
+//!     ▲      └───── cells whose minimum ─────┘      ▲
+//!     │            corner is in brick K             │
+//!  gradient                                     gradient of the
+//!  at K·S                                       far corners K·S+S
+//! ```
+//!
+//! A brick meshes exactly the cells whose minimum corner lies in it, so every cell is meshed
+//! by exactly one brick. It reads its samples plus an apron of one below and two above on each
+//! axis (far cell corners and central-difference gradients). Vertices on cell edges are
+//! interpolated from the lower-index end towards the higher one, in lattice coordinates, so
+//! where two bricks' triangles meet they compute bit-identical positions, normals and colours:
+//! the union of the chunks is a closed surface once coincident vertices are welded.
+//!
+//! Normals are the normalised negated field gradient (central differences), interpolated along
+//! the edge like the position; colour is interpolated from the samples likewise.
 
+mod cases;
+mod march;
+mod mesher;
 mod types;
 
+pub use cases::{case_table, CORNER_OFFSETS, EDGES};
+pub use march::{march_brick, Block, MarchScratch, BLOCK, BLOCK_VOLUME};
+pub use mesher::{gather_block, mesh_all, mesh_brick, meshable_bricks, remesh, remesh_dirty};
 pub use types::*;

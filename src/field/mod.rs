@@ -1,0 +1,20 @@
+//! The clay: a sparse density + colour field.
+//!
+//! Owns bricks, sampling, and the dirty set the mesher drains. Knows nothing of tools,
+//! meshes or Vulkan; depends only on `math`.
+//!
+//! Invariants:
+//! - density is in [0, 1]; 1 is full clay, the surface is the iso-level (default 0.5); the
+//!   stored values are samples of a band-limited characteristic function (Galyean–Hughes), so
+//!   a surface sits between samples with sub-voxel precision;
+//! - colour is linear RGBA per sample;
+//! - a lattice point without a brick is empty (density 0);
+//! - after every edit, the dirty set holds every brick whose mesh reads a changed sample.
+
+mod brick;
+mod sample;
+mod tree;
+
+pub use brick::{split_index, Brick, BrickKey, Colour, BRICK_SIZE, BRICK_VOLUME, DEFAULT_COLOUR};
+pub use sample::FieldReader;
+pub use tree::{bricks_reading, DirtySet, Field};

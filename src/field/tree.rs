@@ -1,0 +1,207 @@
+//! The field's storage: bricks keyed by signed brick coordinates, plus the dirty set.
+
+use std::collections::{HashMap, HashSet};
+
+use super::brick::{split_index, Brick, BrickKey, Colour, BRICK_SIZE, DEFAULT_COLOUR};
+use crate::math::{IVec3, VoxelTransform};
+
+/// Bricks whose mesh may have changed since the mesher last drained the set.
+pub type DirtySet = HashSet<BrickKey>;
+
+/// Every brick whose mesh reads lattice point `p`.
+///
+/// The mesher meshes, for brick `K`, the cells whose minimum corner lies in `K` and takes
+/// normals from central differences, so it reads lattice points `K·S − 1 ..= K·S + S + 1` on
+/// each axis (the apron). A change at `p` therefore dirties bricks
+/// `ceil((p − S − 1) / S) ..= floor((p + 1) / S)`.
+pub fn bricks_reading(lo: IVec3, hi: IVec3) -> (BrickKey, BrickKey) {
+    let s = IVec3::splat(BRICK_SIZE);
+    let first = (lo - IVec3::splat(BRICK_SIZE + 1) + s - IVec3::ONE).div_euclid(s);
+    let last = (hi + IVec3::ONE).div_euclid(s);
+    (first, last)
+}
+
+/// A sparse density + colour field on a regular lattice.
+///
+/// Invariants: densities are in [0, 1] (1 is full clay; the surface is the iso-level, default
+/// 0.5); a lattice point with no brick has density 0 and [`DEFAULT_COLOUR`]; every edit marks
+/// the bricks whose mesh reads what it changed (see [`bricks_reading`]) in the dirty set.
+///
+/// This first version has a single resolution level; its API (lattice points, bricks, dirty
+/// set, world sampling) is the one the multi-level field keeps.
+#[derive(Clone, Debug)]
+pub struct Field {
+    transform: VoxelTransform,
+    iso: f32,
+    bricks: HashMap<BrickKey, Brick>,
+    dirty: DirtySet,
+}
+
+impl Field {
+    /// An empty field with the given voxel size (metres) and iso-level.
+    pub fn new(voxel_size_m: f32, iso: f32) -> Self {
+        assert!(voxel_size_m > 0.0 && voxel_size_m.is_finite(), "voxel size must be positive");
+        Self {
+            transform: VoxelTransform::new(voxel_size_m),
+            iso,
+            bricks: HashMap::new(),
+            dirty: DirtySet::new(),
+        }
+    }
+
+    /// Lattice ↔ world transform.
+    pub fn transform(&self) -> &VoxelTransform {
+        &self.transform
+    }
+
+    /// The density of the surface.
+    pub fn iso(&self) -> f32 {
+        self.iso
+    }
+
+    /// Number of stored bricks.
+    pub fn brick_count(&self) -> usize {
+        self.bricks.len()
+    }
+
+    /// The brick with this key, if stored.
+    pub fn brick(&self, key: BrickKey) -> Option<&Brick> {
+        self.bricks.get(&key)
+    }
+
+    /// Keys of every stored brick, in no particular order.
+    pub fn brick_keys(&self) -> impl Iterator<Item = BrickKey> + '_ {
+        self.bricks.keys().copied()
+    }
+
+    /// Density at a lattice point.
+    pub fn density(&self, p: IVec3) -> f32 {
+        let (key, local) = split_index(p);
+        self.bricks.get(&key).map_or(0.0, |b| b.density[Brick::linear(local)])
+    }
+
+    /// Colour at a lattice point.
+    pub fn colour(&self, p: IVec3) -> Colour {
+        let (key, local) = split_index(p);
+        self.bricks.get(&key).map_or(DEFAULT_COLOUR, |b| b.colour[Brick::linear(local)])
+    }
+
+    /// Total matter in the field, in sample units (sum of densities).
+    pub fn mass(&self) -> f64 {
+        self.bricks.values().map(Brick::mass).sum()
+    }
+
+    /// Calls `edit` on every lattice point of the box `lo ..= hi`, brick by brick.
+    ///
+    /// `edit(point, density, colour)` may change the sample. Where no brick exists, `create`
+    /// decides: `true` makes one (for edits that add matter), `false` skips those points (for
+    /// edits that only remove or recolour matter). Bricks left empty are dropped. The bricks
+    /// whose mesh reads the box are marked dirty.
+    pub fn edit_box(
+        &mut self,
+        lo: IVec3,
+        hi: IVec3,
+        create: bool,
+        mut edit: impl FnMut(IVec3, &mut f32, &mut Colour),
+    ) {
+        if lo.cmpgt(hi).any() {
+            return;
+        }
+        let s = IVec3::splat(BRICK_SIZE);
+        let (k_lo, k_hi) = (lo.div_euclid(s), hi.div_euclid(s));
+        for kz in k_lo.z..=k_hi.z {
+            for ky in k_lo.y..=k_hi.y {
+                for kx in k_lo.x..=k_hi.x {
+                    let key = IVec3::new(kx, ky, kz);
+                    let base = key * s;
+                    let a = lo.max(base) - base;
+                    let b = hi.min(base + s - IVec3::ONE) - base;
+                    let brick = if create {
+                        self.bricks.entry(key).or_default()
+                    } else {
+                        match self.bricks.get_mut(&key) {
+                            Some(brick) => brick,
+                            None => continue,
+                        }
+                    };
+                    for z in a.z..=b.z {
+                        for y in a.y..=b.y {
+                            for x in a.x..=b.x {
+                                let local = IVec3::new(x, y, z);
+                                let i = Brick::linear(local);
+                                edit(base + local, &mut brick.density[i], &mut brick.colour[i]);
+                            }
+                        }
+                    }
+                    if brick.is_empty() {
+                        self.bricks.remove(&key);
+                    }
+                }
+            }
+        }
+        self.mark_dirty(lo, hi);
+    }
+
+    /// Marks dirty every brick whose mesh reads a lattice point of `lo ..= hi`.
+    pub fn mark_dirty(&mut self, lo: IVec3, hi: IVec3) {
+        let (first, last) = bricks_reading(lo, hi);
+        for z in first.z..=last.z {
+            for y in first.y..=last.y {
+                for x in first.x..=last.x {
+                    self.dirty.insert(IVec3::new(x, y, z));
+                }
+            }
+        }
+    }
+
+    /// The bricks marked dirty since the last call, leaving the set empty.
+    pub fn take_dirty(&mut self) -> DirtySet {
+        std::mem::take(&mut self.dirty)
+    }
+
+    /// The dirty set, without draining it.
+    pub fn dirty(&self) -> &DirtySet {
+        &self.dirty
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn absent_points_are_empty() {
+        let f = Field::new(0.001, 0.5);
+        assert_eq!(f.density(IVec3::new(-100, 5, 3)), 0.0);
+        assert_eq!(f.colour(IVec3::ZERO), DEFAULT_COLOUR);
+    }
+
+    #[test]
+    fn edit_box_writes_across_negative_bricks_and_drops_empty_ones() {
+        let mut f = Field::new(0.001, 0.5);
+        f.edit_box(IVec3::splat(-3), IVec3::splat(2), true, |_, d, _| *d = 1.0);
+        assert_eq!(f.brick_count(), 8);
+        assert_eq!(f.density(IVec3::splat(-3)), 1.0);
+        assert_eq!(f.density(IVec3::splat(-4)), 0.0);
+        assert!((f.mass() - 216.0).abs() < 1e-9);
+        f.edit_box(IVec3::splat(-3), IVec3::splat(2), false, |_, d, _| *d = 0.0);
+        assert_eq!(f.brick_count(), 0);
+    }
+
+    #[test]
+    fn dirty_set_covers_every_mesh_reading_the_change() {
+        let mut f = Field::new(0.001, 0.5);
+        // Point 0 of brick 0 is read by brick −1 (its cells reach +1 and gradients +2)...
+        f.mark_dirty(IVec3::ZERO, IVec3::ZERO);
+        let d = f.take_dirty();
+        assert!(d.contains(&IVec3::splat(-1)) && d.contains(&IVec3::ZERO));
+        assert_eq!(d.len(), 8);
+        // ...and point 7 by brick 1 (its gradient at point 8 reads point 7).
+        f.mark_dirty(IVec3::splat(7), IVec3::splat(7));
+        let d = f.take_dirty();
+        assert!(d.contains(&IVec3::ONE) && d.contains(&IVec3::ZERO) && !d.contains(&IVec3::splat(-1)));
+        // Points 2..=6 are read by brick 0 alone.
+        let (first, last) = bricks_reading(IVec3::splat(2), IVec3::splat(6));
+        assert_eq!((first, last), (IVec3::ZERO, IVec3::ZERO));
+    }
+}

@@ -1,0 +1,113 @@
+//! Meshing the whole field or just its dirty bricks, in parallel.
+
+use rayon::prelude::*;
+
+use super::march::{march_brick, Block, MarchScratch, BLOCK};
+use super::types::{ChunkMesh, MeshDiff};
+use crate::field::{Brick, BrickKey, Field, BRICK_SIZE, DEFAULT_COLOUR};
+use crate::math::IVec3;
+
+/// Copies brick `key`'s samples and apron into `block` (brick by brick, no per-sample lookup).
+pub fn gather_block(field: &Field, key: BrickKey, block: &mut Block) {
+    let s = BRICK_SIZE;
+    block.origin = key * s - IVec3::ONE;
+    let lo = block.origin;
+    let hi = lo + IVec3::splat(BLOCK as i32 - 1);
+    for nz in -1..=1 {
+        for ny in -1..=1 {
+            for nx in -1..=1 {
+                let nkey = key + IVec3::new(nx, ny, nz);
+                let base = nkey * s;
+                let a = lo.max(base);
+                let b = hi.min(base + IVec3::splat(s - 1));
+                let brick = field.brick(nkey);
+                for z in a.z..=b.z {
+                    for y in a.y..=b.y {
+                        for x in a.x..=b.x {
+                            let p = IVec3::new(x, y, z);
+                            let q = (p - lo).as_uvec3();
+                            let dst = q.x as usize + BLOCK * (q.y as usize + BLOCK * q.z as usize);
+                            match brick {
+                                Some(brick) => {
+                                    let src = Brick::linear(p - base);
+                                    block.density[dst] = brick.density[src];
+                                    block.colour[dst] = brick.colour[src];
+                                }
+                                None => {
+                                    block.density[dst] = 0.0;
+                                    block.colour[dst] = DEFAULT_COLOUR;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Meshes one brick into `out`, reusing the caller's buffers.
+pub fn mesh_brick(
+    field: &Field,
+    key: BrickKey,
+    block: &mut Block,
+    scratch: &mut MarchScratch,
+    out: &mut ChunkMesh,
+) {
+    gather_block(field, key, block);
+    march_brick(block, field.iso(), field.transform(), scratch, out);
+}
+
+/// Re-meshes the given bricks in parallel: bricks with triangles are upserted, the others
+/// removed (removing a chunk the renderer does not hold is harmless).
+pub fn remesh<I: IntoIterator<Item = BrickKey>>(field: &Field, keys: I) -> MeshDiff {
+    let mut keys: Vec<BrickKey> = keys.into_iter().collect();
+    // A fixed order makes diffs (and so draw order and images) reproducible.
+    keys.sort_unstable_by_key(|k| k.to_array());
+    keys.dedup();
+    let meshes: Vec<(BrickKey, ChunkMesh)> = keys
+        .par_iter()
+        .map_init(
+            || (Block::default(), MarchScratch::default()),
+            |(block, scratch), &key| {
+                let mut mesh = ChunkMesh::default();
+                mesh_brick(field, key, block, scratch, &mut mesh);
+                (key, mesh)
+            },
+        )
+        .collect();
+    let mut diff = MeshDiff::default();
+    for (key, mesh) in meshes {
+        if mesh.is_empty() {
+            diff.removed.push(key);
+        } else {
+            diff.upserted.push((key, mesh));
+        }
+    }
+    diff
+}
+
+/// Every brick that can hold triangles: a cell in brick `K` reads bricks `K ..= K + 1`, so
+/// each stored brick `B` may put triangles in bricks `B − 1 ..= B` on each axis.
+pub fn meshable_bricks(field: &Field) -> Vec<BrickKey> {
+    let mut keys: Vec<BrickKey> = field
+        .brick_keys()
+        .flat_map(|b| (0..8).map(move |c| b - IVec3::new(c & 1, (c >> 1) & 1, (c >> 2) & 1)))
+        .collect();
+    keys.sort_unstable_by_key(|k| k.to_array());
+    keys.dedup();
+    keys
+}
+
+/// Meshes the whole field; only upserts.
+pub fn mesh_all(field: &Field) -> MeshDiff {
+    let mut diff = remesh(field, meshable_bricks(field));
+    diff.removed.clear();
+    diff
+}
+
+/// Meshes the bricks the field marked dirty since the last call, draining its dirty set.
+pub fn remesh_dirty(field: &mut Field) -> MeshDiff {
+    let dirty = field.take_dirty();
+    remesh(field, dirty)
+}
