@@ -1,0 +1,589 @@
+//! Scene files: the initial clay, lights, environment, camera, tools, a scripted timeline and
+//! the capture times. Parsing, validation and defaults; the format is documented for users in
+//! `scenes/README.md`.
+//!
+//! Every error names the file, and the line and column where the problem is. Knows nothing of
+//! Vulkan; depends on `math`, `tool` (solids and tools) and `stereo` (the camera rig).
+
+mod colour;
+mod file;
+mod timeline;
+
+use std::path::{Path, PathBuf};
+
+pub use colour::{parse_hex, SceneColour};
+pub use timeline::{Hand, HandState, Key, Timeline};
+
+use crate::field::Colour;
+use crate::math::{Pose, Quat, Vec3};
+use crate::stereo::StereoRig;
+use crate::tool::{Action, CsgOp, PlacedSolid, Solid, Tool};
+use file::{ActionSpec, AttachSpec, ClaySpec, EnvironmentKind, LightKind, OpSpec, SceneFile, ShapeKind};
+
+/// The scene `argile` renders when given none, embedded in the binary.
+pub const DEFAULT_SCENE_TOML: &str = include_str!("../../scenes/default.toml");
+
+/// A problem with a scene file; the message names the file and, where it can, line and column.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The file cannot be read.
+    #[error("cannot read scene file {path}: {source}")]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The file is not valid for the scene format (syntax, unknown key, bad value).
+    #[error("{path}:{line}:{column}: {message}")]
+    Invalid {
+        /// The file.
+        path: String,
+        /// 1-based line.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// What is wrong and what to do.
+        message: String,
+    },
+}
+
+/// A solid of the initial clay.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClayPrimitive {
+    /// The placed solid.
+    pub solid: PlacedSolid,
+    /// How it combines with the clay before it.
+    pub op: CsgOp,
+    /// Linear RGBA.
+    pub colour: Colour,
+}
+
+/// What a light is attached to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Attachment {
+    /// Fixed in the world: turns with the sculpture.
+    Scene,
+    /// Given in the viewer's frame (x right, y up, −z forward): moves with the viewer.
+    Viewer,
+}
+
+/// A light as the scene places it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SceneLight {
+    /// Light travelling along `direction`.
+    Directional {
+        /// Direction of travel (in the frame of `attached_to`).
+        direction: Vec3,
+        /// Colour × intensity, linear.
+        radiance: Vec3,
+        /// Frame.
+        attached_to: Attachment,
+    },
+    /// A point light.
+    Point {
+        /// Position in metres (in the frame of `attached_to`).
+        position_m: Vec3,
+        /// Colour × intensity, linear.
+        radiance: Vec3,
+        /// Frame.
+        attached_to: Attachment,
+    },
+}
+
+/// The light surrounding the scene.
+#[derive(Clone, Debug, PartialEq)]
+pub enum EnvironmentChoice {
+    /// The built-in procedural studio.
+    Studio,
+    /// An equirectangular PNG or Radiance HDR image (path resolved against the scene's folder).
+    Image(PathBuf),
+}
+
+/// The environment settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnvironmentSettings {
+    /// Which environment.
+    pub choice: EnvironmentChoice,
+    /// Scale of its radiance.
+    pub intensity: f32,
+    /// Whether it is drawn as the background.
+    pub show: bool,
+    /// Linear background colour when it is not.
+    pub background: Vec3,
+}
+
+/// Clay material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MaterialSettings {
+    /// Blinn–Phong exponent.
+    pub shininess: f32,
+    /// Specular strength.
+    pub specular: f32,
+    /// Environment reflection at normal incidence.
+    pub reflectivity: f32,
+    /// Diffuse environment strength.
+    pub ambient: f32,
+}
+
+/// The workspace stage.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StageSettings {
+    /// Minimum corner, metres.
+    pub min_m: Vec3,
+    /// Maximum corner, metres.
+    pub max_m: Vec3,
+    /// Linear RGB.
+    pub colour: Vec3,
+}
+
+/// Image size and multisampling of each eye.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct OutputSettings {
+    /// Width of each eye's image.
+    pub width_px: u32,
+    /// Height of each eye's image.
+    pub height_px: u32,
+    /// MSAA samples.
+    pub samples: u32,
+}
+
+/// A named tool of the scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneTool {
+    /// Name keys refer to.
+    pub name: String,
+    /// The tool.
+    pub tool: Tool,
+    /// Opacity of its glyph in renders.
+    pub glyph_opacity: f32,
+}
+
+/// A moment at which a stereo pair is written.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Capture {
+    /// Base of the output file names (`NAME-left.png`, `NAME-right.png`).
+    pub name: String,
+    /// Time on the timeline, seconds.
+    pub time_s: f32,
+    /// Whether the tools' glyphs are drawn.
+    pub show_tools: bool,
+}
+
+/// A validated scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// Where it came from (a path, or `<built-in default scene>`).
+    pub source: String,
+    /// Field voxel size, metres.
+    pub voxel_size_m: f32,
+    /// Field iso-level.
+    pub iso: f32,
+    /// Output images.
+    pub output: OutputSettings,
+    /// The stereo camera.
+    pub rig: StereoRig,
+    /// Initial clay, in order.
+    pub clay: Vec<ClayPrimitive>,
+    /// Lights.
+    pub lights: Vec<SceneLight>,
+    /// Environment.
+    pub environment: EnvironmentSettings,
+    /// Clay material.
+    pub material: MaterialSettings,
+    /// The stage, if shown.
+    pub stage: Option<StageSettings>,
+    /// Tools.
+    pub tools: Vec<SceneTool>,
+    /// The scripted hands.
+    pub timeline: Timeline,
+    /// Captures, in time order.
+    pub captures: Vec<Capture>,
+}
+
+impl Scene {
+    /// Loads and validates a scene file.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| SceneError::Read { path: path.to_owned(), source })?;
+        Scene::parse(&text, &path.display().to_string(), path.parent())
+    }
+
+    /// The built-in default scene.
+    pub fn default_scene() -> Scene {
+        Scene::parse(DEFAULT_SCENE_TOML, "<built-in default scene>", None)
+            .expect("the embedded default scene is valid (tested)")
+    }
+
+    /// Parses and validates scene text. `name` is used in messages; relative image paths are
+    /// resolved against `base_dir` (the current directory when `None`).
+    pub fn parse(text: &str, name: &str, base_dir: Option<&Path>) -> Result<Scene, SceneError> {
+        let at = |span: Option<std::ops::Range<usize>>, message: String| {
+            let (line, column) = span.map_or((1, 1), |s| line_column(text, s.start));
+            SceneError::Invalid { path: name.to_owned(), line, column, message }
+        };
+        let file: SceneFile = toml::from_str(text).map_err(|e| at(e.span(), e.message().to_owned()))?;
+        resolve(file, name, base_dir, &at)
+    }
+}
+
+/// 1-based line and column of a byte offset.
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, column)
+}
+
+type At<'a> = dyn Fn(Option<std::ops::Range<usize>>, String) -> SceneError + 'a;
+
+fn positive(value: f32, what: &str, span: &std::ops::Range<usize>, at: &At) -> Result<f32, SceneError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(at(Some(span.clone()), format!("{what} must be a positive number of metres, not {value}")))
+    }
+}
+
+fn rotation(deg: [f32; 3]) -> Quat {
+    let [x, y, z] = deg.map(f32::to_radians);
+    Quat::from_euler(glam::EulerRot::XYZ, x, y, z)
+}
+
+fn solid_of(spec: &ClaySpec, span: &std::ops::Range<usize>, at: &At) -> Result<Solid, SceneError> {
+    let need = |v: Option<f32>, key: &str| -> Result<f32, SceneError> {
+        let v = v.ok_or_else(|| {
+            at(Some(span.clone()), format!("a {:?} needs `{key}`", spec.shape).to_lowercase())
+        })?;
+        positive(v, key, span, at)
+    };
+    let need3 = |v: Option<[f32; 3]>, key: &str| -> Result<Vec3, SceneError> {
+        let v = v.ok_or_else(|| {
+            at(Some(span.clone()), format!("a {:?} needs `{key}`", spec.shape).to_lowercase())
+        })?;
+        for c in v {
+            positive(c, key, span, at)?;
+        }
+        Ok(Vec3::from(v))
+    };
+    // Keys that belong to other shapes are refused, so a typo'd shape is noticed.
+    let allowed: &[&str] = match spec.shape {
+        ShapeKind::Sphere => &["radius_m"],
+        ShapeKind::Box => &["size_m"],
+        ShapeKind::RoundedBox => &["size_m", "corner_radius_m"],
+        ShapeKind::Cylinder => &["radius_m", "height_m"],
+        ShapeKind::Torus => &["major_radius_m", "minor_radius_m"],
+        ShapeKind::Bar => &["length_m", "radius_m"],
+        ShapeKind::Slab => &["size_m", "thickness_m"],
+    };
+    let present = [
+        ("radius_m", spec.radius_m.is_some()),
+        ("size_m", spec.size_m.is_some()),
+        ("corner_radius_m", spec.corner_radius_m.is_some()),
+        ("height_m", spec.height_m.is_some()),
+        ("major_radius_m", spec.major_radius_m.is_some()),
+        ("minor_radius_m", spec.minor_radius_m.is_some()),
+        ("length_m", spec.length_m.is_some()),
+        ("thickness_m", spec.thickness_m.is_some()),
+    ];
+    if let Some((key, _)) = present.iter().find(|(k, p)| *p && !allowed.contains(k)) {
+        return Err(at(
+            Some(span.clone()),
+            format!("`{key}` does not apply to shape {:?}; it takes {}", spec.shape, allowed.join(", "))
+                .to_lowercase(),
+        ));
+    }
+    Ok(match spec.shape {
+        ShapeKind::Sphere => Solid::Sphere { radius_m: need(spec.radius_m, "radius_m")? },
+        ShapeKind::Box => Solid::Box { half_m: need3(spec.size_m, "size_m")? * 0.5 },
+        ShapeKind::RoundedBox => {
+            let half_m = need3(spec.size_m, "size_m")? * 0.5;
+            let corner_m = need(spec.corner_radius_m, "corner_radius_m")?;
+            if corner_m > half_m.min_element() {
+                return Err(at(
+                    Some(span.clone()),
+                    format!(
+                        "corner_radius_m {corner_m} is more than half the smallest side {}",
+                        half_m.min_element() * 2.0
+                    ),
+                ));
+            }
+            Solid::RoundedBox { half_m, corner_m }
+        }
+        ShapeKind::Cylinder => Solid::Cylinder {
+            radius_m: need(spec.radius_m, "radius_m")?,
+            half_height_m: need(spec.height_m, "height_m")? * 0.5,
+        },
+        ShapeKind::Torus => Solid::Torus {
+            major_m: need(spec.major_radius_m, "major_radius_m")?,
+            minor_m: need(spec.minor_radius_m, "minor_radius_m")?,
+        },
+        ShapeKind::Bar => {
+            let half_length_m = need(spec.length_m, "length_m")? * 0.5;
+            let radius_m = need(spec.radius_m, "radius_m")?;
+            Solid::Bar { half_length_m: half_length_m.max(radius_m), radius_m }
+        }
+        ShapeKind::Slab => {
+            let size = need3(spec.size_m.map(|[x, _, z]| [x, 1.0, z]), "size_m")?;
+            let thickness = need(spec.thickness_m, "thickness_m")?;
+            let half_m = Vec3::new(size.x, thickness, size.z) * 0.5;
+            Solid::RoundedBox { half_m, corner_m: thickness * 0.25 }
+        }
+    })
+}
+
+fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At) -> Result<Scene, SceneError> {
+    let whole = 0..0;
+    let field_voxel = file.field.voxel_size_m;
+    if !(field_voxel.is_finite() && (1e-4..=0.05).contains(&field_voxel)) {
+        return Err(at(
+            None,
+            format!("[field] voxel_size_m must be between 0.0001 and 0.05 metres, not {field_voxel}"),
+        ));
+    }
+    if !(file.field.iso > 0.0 && file.field.iso < 1.0) {
+        return Err(at(
+            None,
+            format!("[field] iso must lie strictly between 0 and 1, not {}", file.field.iso),
+        ));
+    }
+    let o = &file.output;
+    if !(16..=8192).contains(&o.width_px) || !(16..=8192).contains(&o.height_px) {
+        return Err(at(
+            None,
+            format!(
+                "[output] image size must be 16..8192 pixels per side, not {}x{}",
+                o.width_px, o.height_px
+            ),
+        ));
+    }
+    if !matches!(o.samples, 1 | 2 | 4 | 8) {
+        return Err(at(None, format!("[output] samples must be 1, 2, 4 or 8, not {}", o.samples)));
+    }
+    let c = &file.camera;
+    let eye = Vec3::from(c.eye_m);
+    let target = Vec3::from(c.target_m);
+    let distance = (target - eye).length();
+    if distance < 1e-4 {
+        return Err(at(None, "[camera] eye_m and target_m must differ".to_owned()));
+    }
+    if Vec3::from(c.up).cross(target - eye).length_squared() < 1e-12 {
+        return Err(at(None, "[camera] up must not be parallel to the viewing direction".to_owned()));
+    }
+    if !(1.0..=170.0).contains(&c.fov_y_deg) {
+        return Err(at(None, format!("[camera] fov_y_deg must be between 1 and 170, not {}", c.fov_y_deg)));
+    }
+    if !(c.interaxial_m >= 0.0 && c.interaxial_m < 1.0) {
+        return Err(at(
+            None,
+            format!("[camera] interaxial_m must be between 0 and 1 metre, not {}", c.interaxial_m),
+        ));
+    }
+    let convergence_m = c.convergence_m.unwrap_or(distance);
+    positive(convergence_m, "[camera] convergence_m", &whole, at)?;
+    if !(c.near_m > 0.0 && c.far_m > c.near_m) {
+        return Err(at(None, format!("[camera] need 0 < near_m < far_m, got {} and {}", c.near_m, c.far_m)));
+    }
+    let rig = StereoRig {
+        eye_m: eye,
+        target_m: target,
+        up: Vec3::from(c.up),
+        fov_y_deg: c.fov_y_deg,
+        interaxial_m: c.interaxial_m,
+        convergence_m,
+        near_m: c.near_m,
+        far_m: c.far_m,
+    };
+
+    let mut clay = Vec::with_capacity(file.clay.len());
+    for spanned in &file.clay {
+        let span = spanned.span();
+        let spec = spanned.get_ref();
+        let solid = solid_of(spec, &span, at)?;
+        positive(spec.scale, "scale", &span, at)?;
+        let colour = spec.colour.unwrap_or(SceneColour([0.6, 0.6, 0.6])).with_alpha(1.0);
+        let op = match spec.op {
+            OpSpec::Union => CsgOp::Union,
+            OpSpec::Difference => CsgOp::Difference,
+        };
+        let pose = Pose { position_m: Vec3::from(spec.position_m), rotation: rotation(spec.rotation_deg) };
+        clay.push(ClayPrimitive { solid: PlacedSolid { solid, pose, scale: spec.scale }, op, colour });
+    }
+
+    let mut lights = Vec::new();
+    for spanned in &file.light {
+        let span = spanned.span();
+        let l = spanned.get_ref();
+        let radiance = Vec3::from(l.colour.0) * l.intensity;
+        if !(l.intensity >= 0.0 && l.intensity.is_finite()) {
+            return Err(at(
+                Some(span),
+                format!("light intensity must be zero or positive, not {}", l.intensity),
+            ));
+        }
+        let attached_to = match l.attached_to {
+            AttachSpec::Scene => Attachment::Scene,
+            AttachSpec::Viewer => Attachment::Viewer,
+        };
+        lights.push(match (l.kind, l.direction, l.position_m) {
+            (LightKind::Directional, Some(d), None) if Vec3::from(d).length_squared() > 1e-12 => {
+                SceneLight::Directional { direction: Vec3::from(d).normalize(), radiance, attached_to }
+            }
+            (LightKind::Point, None, Some(p)) => {
+                SceneLight::Point { position_m: Vec3::from(p), radiance, attached_to }
+            }
+            (LightKind::Directional, ..) => {
+                return Err(at(
+                    Some(span),
+                    "a directional light needs a non-zero `direction` and no `position_m`".to_owned(),
+                ))
+            }
+            (LightKind::Point, ..) => {
+                return Err(at(Some(span), "a point light needs `position_m` and no `direction`".to_owned()))
+            }
+        });
+    }
+
+    let e = &file.environment;
+    let choice = match (e.kind, &e.path) {
+        (EnvironmentKind::Studio, None) => EnvironmentChoice::Studio,
+        (EnvironmentKind::Image, Some(p)) => {
+            let p = PathBuf::from(p);
+            EnvironmentChoice::Image(match base_dir {
+                Some(dir) if p.is_relative() => dir.join(p),
+                _ => p,
+            })
+        }
+        (EnvironmentKind::Studio, Some(_)) => {
+            return Err(at(None, "[environment] `path` is only for kind = \"image\"".to_owned()))
+        }
+        (EnvironmentKind::Image, None) => {
+            return Err(at(
+                None,
+                "[environment] kind = \"image\" needs `path` (an equirectangular .png or .hdr)".to_owned(),
+            ))
+        }
+    };
+    let environment = EnvironmentSettings {
+        choice,
+        intensity: e.intensity.max(0.0),
+        show: e.show,
+        background: Vec3::from(e.background.0),
+    };
+
+    let m = &file.material;
+    let material = MaterialSettings {
+        shininess: m.shininess.clamp(1.0, 1024.0),
+        specular: m.specular.clamp(0.0, 1.0),
+        reflectivity: m.reflectivity.clamp(0.0, 1.0),
+        ambient: m.ambient.clamp(0.0, 4.0),
+    };
+
+    let s = &file.stage;
+    let stage = if s.show {
+        let (min_m, max_m) = (Vec3::from(s.min_m), Vec3::from(s.max_m));
+        if min_m.cmpge(max_m).any() {
+            return Err(at(None, "[stage] min_m must be below max_m on every axis".to_owned()));
+        }
+        Some(StageSettings { min_m, max_m, colour: Vec3::from(s.colour.0) })
+    } else {
+        None
+    };
+
+    let mut tools: Vec<SceneTool> = Vec::new();
+    for spanned in &file.tool {
+        let span = spanned.span();
+        let t = spanned.get_ref();
+        if tools.iter().any(|o| o.name == t.name) {
+            return Err(at(Some(span), format!("a tool named `{}` is already defined", t.name)));
+        }
+        // Sphere is the one shape this version stamps; the key exists so scenes name it.
+        let file::ToolShapeSpec::Sphere = t.shape;
+        let radius_m = positive(t.radius_m, "radius_m", &span, at)?;
+        if !(0.05..=4.0).contains(&t.spacing) {
+            return Err(at(
+                Some(span),
+                format!("spacing is a fraction of the radius between 0.05 and 4, not {}", t.spacing),
+            ));
+        }
+        let action = match t.action {
+            ActionSpec::Add => Action::Add,
+            ActionSpec::Remove => Action::Remove,
+        };
+        let tool = Tool { radius_m, action, colour: t.colour.with_alpha(1.0), spacing: t.spacing };
+        tools.push(SceneTool { name: t.name.clone(), tool, glyph_opacity: t.glyph_opacity.clamp(0.0, 1.0) });
+    }
+
+    let mut keys = Vec::with_capacity(file.key.len());
+    for spanned in &file.key {
+        let span = spanned.span();
+        let k = spanned.get_ref();
+        let Some(tool) = tools.iter().position(|t| t.name == k.tool) else {
+            let known: Vec<&str> = tools.iter().map(|t| t.name.as_str()).collect();
+            return Err(at(Some(span), format!("no tool named `{}` (tools: {})", k.tool, known.join(", "))));
+        };
+        if !(k.time_s.is_finite() && k.time_s >= 0.0) {
+            return Err(at(Some(span), format!("time_s must be zero or positive, not {}", k.time_s)));
+        }
+        let hand = match k.hand {
+            file::HandSpec::Left => Hand::Left,
+            file::HandSpec::Right => Hand::Right,
+        };
+        keys.push(Key {
+            time_s: k.time_s,
+            hand,
+            tool,
+            pose: Pose { position_m: Vec3::from(k.position_m), rotation: rotation(k.rotation_deg) },
+            active: k.active,
+        });
+    }
+    let step_s = file.timeline.step_s;
+    if !(step_s > 0.0 && step_s <= 1.0) {
+        return Err(at(None, format!("[timeline] step_s must be in (0, 1] seconds, not {step_s}")));
+    }
+    let timeline = Timeline::new(keys, step_s).map_err(|(i, msg)| at(Some(file.key[i].span()), msg))?;
+
+    let mut captures: Vec<Capture> = Vec::new();
+    for spanned in &file.capture {
+        let span = spanned.span();
+        let c = spanned.get_ref();
+        let valid_name = !c.name.is_empty()
+            && c.name.chars().all(|ch| ch.is_ascii_alphanumeric() || ch == '-' || ch == '_');
+        if !valid_name {
+            return Err(at(
+                Some(span),
+                format!("capture name `{}` must be letters, digits, '-' or '_'", c.name),
+            ));
+        }
+        if captures.iter().any(|o| o.name == c.name) {
+            return Err(at(Some(span), format!("two captures are named `{}`", c.name)));
+        }
+        if !(c.time_s.is_finite() && c.time_s >= 0.0) {
+            return Err(at(Some(span), format!("time_s must be zero or positive, not {}", c.time_s)));
+        }
+        captures.push(Capture { name: c.name.clone(), time_s: c.time_s, show_tools: c.show_tools });
+    }
+    if captures.is_empty() {
+        captures.push(Capture { name: "final".to_owned(), time_s: timeline.duration_s(), show_tools: true });
+    }
+    captures.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+
+    Ok(Scene {
+        source: name.to_owned(),
+        voxel_size_m: field_voxel,
+        iso: file.field.iso,
+        output: OutputSettings { width_px: o.width_px, height_px: o.height_px, samples: o.samples },
+        rig,
+        clay,
+        lights,
+        environment,
+        material,
+        stage,
+        tools,
+        timeline,
+        captures,
+    })
+}
+
+#[cfg(test)]
+mod tests;

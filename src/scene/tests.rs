@@ -1,0 +1,104 @@
+use super::*;
+
+fn err(text: &str) -> (usize, usize, String) {
+    match Scene::parse(text, "t.toml", None) {
+        Err(SceneError::Invalid { line, column, message, path }) => {
+            assert_eq!(path, "t.toml");
+            (line, column, message)
+        }
+        other => panic!("expected an error, got {other:?}"),
+    }
+}
+
+#[test]
+fn the_default_scene_is_valid() {
+    let s = Scene::default_scene();
+    assert_eq!(s.clay.len(), 4);
+    assert_eq!(s.tools.len(), 2);
+    assert_eq!(s.captures.len(), 1);
+    assert_eq!(s.output.samples, 4);
+    assert!(s.timeline.duration_s() > 2.0);
+}
+
+#[test]
+fn an_empty_file_is_a_scene_with_defaults() {
+    let s = Scene::parse("", "empty.toml", None).unwrap();
+    assert!(s.clay.is_empty());
+    assert_eq!(s.captures[0].name, "final");
+    assert_eq!(s.environment.choice, EnvironmentChoice::Studio);
+}
+
+#[test]
+fn unknown_keys_are_refused_with_line_and_column() {
+    let (line, column, message) = err("[camera]\nfov_y_deg = 30.0\nfov = 3\n");
+    assert_eq!((line, column), (3, 1));
+    assert!(message.contains("unknown field `fov`"), "{message}");
+}
+
+#[test]
+fn syntax_errors_name_the_line() {
+    let (line, _, _) = err("[field]\nvoxel_size_m = 0.002\n[[clay]\n");
+    assert_eq!(line, 3);
+}
+
+#[test]
+fn shape_parameters_are_checked_against_the_shape() {
+    let (line, _, message) = err("\n\n[[clay]]\nshape = \"sphere\"\nsize_m = [1.0, 1.0, 1.0]\n");
+    assert_eq!(line, 3);
+    assert!(message.contains("`size_m` does not apply"), "{message}");
+    let (_, _, message) = err("[[clay]]\nshape = \"torus\"\nmajor_radius_m = 0.1\n");
+    assert!(message.contains("needs `minor_radius_m`"), "{message}");
+    let (_, _, message) = err("[[clay]]\nshape = \"sphere\"\nradius_m = -1.0\n");
+    assert!(message.contains("positive"), "{message}");
+    let (_, _, message) = err("[[clay]]\nshape = \"pyramid\"\n");
+    assert!(message.contains("unknown variant `pyramid`"), "{message}");
+}
+
+#[test]
+fn keys_must_name_a_defined_tool() {
+    let text = "[[tool]]\nname = \"a\"\nradius_m = 0.01\naction = \"add\"\n\n[[key]]\ntime_s = 0.0\ntool = \"b\"\nposition_m = [0.0, 0.0, 0.0]\n";
+    let (line, _, message) = err(text);
+    assert_eq!(line, 6);
+    assert!(message.contains("no tool named `b`") && message.contains("tools: a"), "{message}");
+}
+
+#[test]
+fn colours_accept_hex_and_linear_triples_only() {
+    let s =
+        Scene::parse("[[clay]]\nshape = \"sphere\"\nradius_m = 0.1\ncolour = [0.5, 0.25, 1.0]\n", "c", None)
+            .unwrap();
+    assert_eq!(s.clay[0].colour, [0.5, 0.25, 1.0, 1.0]);
+    let (_, _, message) = err("[[clay]]\nshape = \"sphere\"\nradius_m = 0.1\ncolour = \"red\"\n");
+    assert!(message.contains("#rrggbb"), "{message}");
+    let (_, _, message) = err("[[clay]]\nshape = \"sphere\"\nradius_m = 0.1\ncolour = [2.0, 0.0, 0.0]\n");
+    assert!(message.contains("0..1"), "{message}");
+}
+
+#[test]
+fn image_environments_resolve_against_the_scene_folder() {
+    let s =
+        Scene::parse("[environment]\nkind = \"image\"\npath = \"sky.hdr\"\n", "s", Some(Path::new("scenes")))
+            .unwrap();
+    assert_eq!(s.environment.choice, EnvironmentChoice::Image(PathBuf::from("scenes/sky.hdr")));
+    let (_, _, message) = err("[environment]\nkind = \"image\"\n");
+    assert!(message.contains("needs `path`"), "{message}");
+}
+
+#[test]
+fn a_missing_file_is_named() {
+    let e = Scene::load(Path::new("no/such/scene.toml")).unwrap_err();
+    assert!(e.to_string().starts_with("cannot read scene file no/such/scene.toml"), "{e}");
+}
+
+#[test]
+fn captures_are_sorted_and_names_checked() {
+    let s = Scene::parse(
+        "[[capture]]\nname = \"b\"\ntime_s = 2.0\n[[capture]]\nname = \"a\"\ntime_s = 1.0\n",
+        "c",
+        None,
+    )
+    .unwrap();
+    assert_eq!(s.captures.iter().map(|c| c.name.as_str()).collect::<Vec<_>>(), ["a", "b"]);
+    let (_, _, message) = err("[[capture]]\nname = \"../x\"\ntime_s = 1.0\n");
+    assert!(message.contains("letters, digits"), "{message}");
+}

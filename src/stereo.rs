@@ -1,0 +1,240 @@
+//! The desktop stereo camera rig and the composition of stereo pairs into preview images.
+//!
+//! Off-axis (asymmetric) frusta, never toe-in: both eyes look along the same axis; each eye's
+//! frustum passes through the same window on the convergence plane, so points on that plane
+//! have zero parallax, nearer points crossed (negative) parallax and farther points uncrossed
+//! (positive) parallax, and no point has vertical parallax.
+//!
+//! ```text
+//!            window on the convergence plane (width W = 2·C·tan(fov_x / 2))
+//!      ┌───────────────────────────────┐        ▲
+//!       \   ╲                    ╱    /         │ C (convergence distance)
+//!        \    ╲                ╱     /          │
+//!         \     ╲            ╱      /           │
+//!          L ───── e/2 ── · ── e/2 ── R         ▼   (e = interaxial, · = centre eye)
+//! ```
+//!
+//! Screen parallax of a point at distance `Z` along the view axis, on the convergence plane:
+//! `p = e · (Z − C) / Z` (metres on that plane), which is `p / W · width` pixels.
+//! Knows nothing of Vulkan handles; it hands the renderer plain [`StereoViews`].
+
+use crate::math::{Mat4, Vec3};
+use crate::render::{EyeView, StereoViews};
+
+/// A stereo camera: a centre eye looking at a target, two eyes either side of it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StereoRig {
+    /// Centre eye position, metres.
+    pub eye_m: Vec3,
+    /// Point the centre eye looks at, metres.
+    pub target_m: Vec3,
+    /// Approximate up direction.
+    pub up: Vec3,
+    /// Vertical field of view, degrees.
+    pub fov_y_deg: f32,
+    /// Distance between the eyes, metres.
+    pub interaxial_m: f32,
+    /// Distance from the eyes to the zero-parallax plane, metres.
+    pub convergence_m: f32,
+    /// Near clipping distance, metres.
+    pub near_m: f32,
+    /// Far clipping distance, metres.
+    pub far_m: f32,
+}
+
+impl StereoRig {
+    /// Unit vector along which both eyes look.
+    pub fn forward(&self) -> Vec3 {
+        (self.target_m - self.eye_m).normalize()
+    }
+
+    /// Unit vector from the left eye to the right eye.
+    pub fn right(&self) -> Vec3 {
+        self.forward().cross(self.up).normalize()
+    }
+
+    /// The centre eye's world → view transform.
+    pub fn centre_view(&self) -> Mat4 {
+        Mat4::look_to_rh(self.eye_m, self.forward(), self.up)
+    }
+
+    /// Width of the zero-parallax window on the convergence plane, metres.
+    pub fn window_width_m(&self, aspect: f32) -> f32 {
+        2.0 * self.convergence_m * (self.fov_y_deg.to_radians() * 0.5).tan() * aspect
+    }
+
+    /// Both eyes' views for images of the given aspect ratio (width / height).
+    pub fn views(&self, aspect: f32) -> StereoViews {
+        let forward = self.forward();
+        let right = self.right();
+        let up = right.cross(forward);
+        let half_h = self.convergence_m * (self.fov_y_deg.to_radians() * 0.5).tan();
+        let half_w = half_h * aspect;
+        let n = self.near_m;
+        let scale = n / self.convergence_m;
+        let eye = |sign: f32| {
+            let offset = sign * 0.5 * self.interaxial_m;
+            let position = self.eye_m + right * offset;
+            // The window is fixed in the world; seen from an eye shifted by `offset`, its edges
+            // shift by −offset.
+            let (l, r) = ((-half_w - offset) * scale, (half_w - offset) * scale);
+            let (b, t) = (-half_h * scale, half_h * scale);
+            EyeView {
+                view: Mat4::look_to_rh(position, forward, up),
+                projection: vulkan_frustum(l, r, b, t, n, self.far_m),
+                position_m: position,
+            }
+        };
+        StereoViews { eyes: [eye(-1.0), eye(1.0)] }
+    }
+
+    /// Expected horizontal parallax (right-eye column minus left-eye column) in pixels of a
+    /// point at `distance_m` along the view axis, for images `width_px` wide.
+    pub fn parallax_px(&self, distance_m: f32, width_px: u32, aspect: f32) -> f32 {
+        let p = self.interaxial_m * (distance_m - self.convergence_m) / distance_m;
+        p / self.window_width_m(aspect) * width_px as f32
+    }
+}
+
+/// An off-axis perspective projection into Vulkan clip space: right-handed view space looking
+/// down −Z, clip y pointing down (so row 0 of the image is the top), depth 0 at `near` and 1 at
+/// `far`. `l, r, b, t` are the window edges on the near plane.
+pub fn vulkan_frustum(l: f32, r: f32, b: f32, t: f32, near: f32, far: f32) -> Mat4 {
+    use crate::math::Vec4;
+    Mat4::from_cols(
+        Vec4::new(2.0 * near / (r - l), 0.0, 0.0, 0.0),
+        Vec4::new(0.0, -2.0 * near / (t - b), 0.0, 0.0),
+        Vec4::new((r + l) / (r - l), -(t + b) / (t - b), far / (near - far), -1.0),
+        Vec4::new(0.0, 0.0, near * far / (near - far), 0.0),
+    )
+}
+
+/// How a stereo pair is combined into one preview image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Preview {
+    /// Left image on the left, right image on the right, full width each.
+    Sbs,
+    /// Red–cyan anaglyph with Dubois' least-squares matrices (computed in linear RGB).
+    Anaglyph,
+}
+
+/// Dubois' least-squares red–cyan matrices (rows: output R, G, B; columns: input R, G, B).
+const DUBOIS_LEFT: [[f32; 3]; 3] =
+    [[0.437, 0.449, 0.164], [-0.062, -0.062, -0.024], [-0.048, -0.050, -0.017]];
+const DUBOIS_RIGHT: [[f32; 3]; 3] =
+    [[-0.011, -0.032, -0.007], [0.377, 0.761, 0.009], [-0.026, -0.093, 1.234]];
+
+fn srgb_to_linear(c: u8) -> f32 {
+    let c = f32::from(c) / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn linear_to_srgb(c: f32) -> u8 {
+    let c = c.clamp(0.0, 1.0);
+    let s = if c <= 0.003_130_8 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
+    (s * 255.0).round() as u8
+}
+
+/// Combines a stereo pair (sRGB-encoded, same size) into a preview image.
+pub fn compose(preview: Preview, left: &image::RgbaImage, right: &image::RgbaImage) -> image::RgbaImage {
+    let (w, h) = left.dimensions();
+    debug_assert_eq!(right.dimensions(), (w, h));
+    match preview {
+        Preview::Sbs => {
+            let mut out = image::RgbaImage::new(w * 2, h);
+            image::imageops::replace(&mut out, left, 0, 0);
+            image::imageops::replace(&mut out, right, i64::from(w), 0);
+            out
+        }
+        Preview::Anaglyph => {
+            let lut: Vec<f32> = (0..=255u8).map(srgb_to_linear).collect();
+            image::RgbaImage::from_fn(w, h, |x, y| {
+                let (l, r) = (left.get_pixel(x, y), right.get_pixel(x, y));
+                let lin_l = [lut[usize::from(l[0])], lut[usize::from(l[1])], lut[usize::from(l[2])]];
+                let lin_r = [lut[usize::from(r[0])], lut[usize::from(r[1])], lut[usize::from(r[2])]];
+                let channel = |row: usize| {
+                    let v: f32 = (0..3)
+                        .map(|k| DUBOIS_LEFT[row][k] * lin_l[k] + DUBOIS_RIGHT[row][k] * lin_r[k])
+                        .sum();
+                    linear_to_srgb(v)
+                };
+                image::Rgba([channel(0), channel(1), channel(2), 255])
+            })
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Vec4;
+
+    fn rig() -> StereoRig {
+        StereoRig {
+            eye_m: Vec3::new(0.0, 0.0, 0.6),
+            target_m: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y_deg: 40.0,
+            interaxial_m: 0.064,
+            convergence_m: 0.6,
+            near_m: 0.05,
+            far_m: 10.0,
+        }
+    }
+
+    fn to_pixel(view: &EyeView, p: Vec3, width: f32, height: f32) -> (f32, f32, f32) {
+        let clip = view.projection * view.view * Vec4::from((p, 1.0));
+        let ndc = clip.truncate() / clip.w;
+        ((ndc.x * 0.5 + 0.5) * width, (ndc.y * 0.5 + 0.5) * height, ndc.z)
+    }
+
+    #[test]
+    fn convergence_plane_has_zero_parallax_and_depth_maps_to_unit_range() {
+        let r = rig();
+        let v = r.views(1.0);
+        for p in [Vec3::ZERO, Vec3::new(0.1, -0.05, 0.0)] {
+            let (xl, yl, _) = to_pixel(&v.eyes[0], p, 512.0, 512.0);
+            let (xr, yr, _) = to_pixel(&v.eyes[1], p, 512.0, 512.0);
+            assert!((xl - xr).abs() < 1e-3 && (yl - yr).abs() < 1e-3);
+        }
+        let near = to_pixel(&v.eyes[0], Vec3::new(0.0, 0.0, 0.6 - 0.05), 1.0, 1.0).2;
+        let far = to_pixel(&v.eyes[0], Vec3::new(0.0, 0.0, 0.6 - 10.0), 1.0, 1.0).2;
+        assert!(near.abs() < 1e-5 && (far - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn parallax_matches_the_formula_and_has_no_vertical_component() {
+        let r = rig();
+        let v = r.views(1.5);
+        for z in [0.3f32, 0.45, 0.9, 2.0] {
+            let p = Vec3::new(0.02, 0.07, 0.6 - z);
+            let (xl, yl, _) = to_pixel(&v.eyes[0], p, 768.0, 512.0);
+            let (xr, yr, _) = to_pixel(&v.eyes[1], p, 768.0, 512.0);
+            assert!((yl - yr).abs() < 1e-3, "vertical parallax at {z}");
+            let expected = r.parallax_px(z, 768, 1.5);
+            assert!(((xr - xl) - expected).abs() < 1e-2, "z {z}: {} vs {expected}", xr - xl);
+            assert_eq!(xr - xl < 0.0, z < r.convergence_m, "crossed in front, uncrossed behind");
+        }
+    }
+
+    #[test]
+    fn up_is_up_in_the_image() {
+        let v = rig().views(1.0);
+        let (_, y_high, _) = to_pixel(&v.eyes[0], Vec3::new(0.0, 0.1, 0.0), 100.0, 100.0);
+        assert!(y_high < 50.0, "a point above the axis lands in the top half (row 0 is the top)");
+    }
+
+    #[test]
+    fn anaglyph_of_grey_is_near_grey_and_sbs_doubles_width() {
+        let grey = image::RgbaImage::from_pixel(4, 2, image::Rgba([128, 128, 128, 255]));
+        let sbs = compose(Preview::Sbs, &grey, &grey);
+        assert_eq!(sbs.dimensions(), (8, 2));
+        let a = compose(Preview::Anaglyph, &grey, &grey);
+        let p = a.get_pixel(1, 1);
+        assert!(p[0] > 90 && p[1] > 90 && p[2] > 90, "{p:?}");
+    }
+}
