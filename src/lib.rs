@@ -4,9 +4,11 @@
 
 pub mod app;
 pub mod field;
+pub mod input;
 pub mod math;
 pub mod mesh;
 pub mod render;
 pub mod scene;
 pub mod stereo;
 pub mod tool;
+pub mod xr;

@@ -141,7 +141,10 @@ fn edge_vertex(
     let (x1, y1, z1) = (x + step[0], y + step[1], z + step[2]);
     let (a, b) = (at(x, y, z), at(x1, y1, z1));
     let (va, vb) = (block.density[a], block.density[b]);
-    let t = (iso - va) / (vb - va);
+    // Kept off the ends so that a sample lying exactly on the iso-level (tool values are
+    // multiples of 1/64) does not put the vertices of several edges at one point: positions
+    // then stay distinct and a mesh welded by position keeps its topology.
+    let t = ((iso - va) / (vb - va)).clamp(1e-4, 1.0 - 1e-4);
     let mut lattice = (block.origin + IVec3::new(x as i32, y as i32, z as i32)).as_vec3();
     lattice[axis] += t;
     let position = transform.index_to_world(lattice);

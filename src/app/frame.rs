@@ -1,0 +1,100 @@
+//! Building the renderer's per-frame snapshot from the scene and the playback state.
+
+use crate::math::{Mat4, Vec3, Vec4};
+use crate::render::{Frame, Light, Material, Stage, ToolGlyph};
+use crate::scene::{Attachment, Scene, SceneLight};
+
+/// Resolves the scene's lights into world space for the current viewer.
+pub fn world_lights(scene: &Scene) -> Vec<Light> {
+    // The viewer's frame is the centre eye's: view space → world space.
+    let viewer_to_world = scene.rig.centre_view().inverse();
+    scene
+        .lights
+        .iter()
+        .map(|l| match *l {
+            SceneLight::Directional { direction, radiance, attached_to } => Light::Directional {
+                direction: match attached_to {
+                    Attachment::Scene => direction,
+                    Attachment::Viewer => viewer_to_world.transform_vector3(direction),
+                },
+                radiance,
+            },
+            SceneLight::Point { position_m, radiance, attached_to } => Light::Point {
+                position_m: match attached_to {
+                    Attachment::Scene => position_m,
+                    Attachment::Viewer => viewer_to_world.transform_point3(position_m),
+                },
+                radiance,
+            },
+        })
+        .collect()
+}
+
+/// The frame to draw: views for the output's aspect, lights, material, stage, and a glyph for
+/// each tool held in `hands` (`(tool index, pose)` pairs) when `show_tools`.
+pub fn build_frame(scene: &Scene, hands: &[(usize, crate::math::Pose)], show_tools: bool) -> Frame {
+    let aspect = scene.output.width_px as f32 / scene.output.height_px as f32;
+    let tools = if show_tools {
+        hands
+            .iter()
+            .map(|&(tool, pose)| {
+                let t = &scene.tools[tool];
+                ToolGlyph {
+                    model: pose.to_matrix() * Mat4::from_scale(Vec3::splat(t.tool.radius_m)),
+                    colour: Vec4::from(t.tool.colour).truncate().extend(t.glyph_opacity),
+                }
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let m = &scene.material;
+    Frame {
+        views: scene.rig.views(aspect),
+        lights: world_lights(scene),
+        material: Material {
+            shininess: m.shininess,
+            specular: m.specular,
+            reflectivity: m.reflectivity,
+            ambient: m.ambient,
+        },
+        tools,
+        stage: scene.stage.map(|s| Stage { min_m: s.min_m, max_m: s.max_m, colour: s.colour }),
+        show_environment: scene.environment.show,
+        background: scene.environment.background,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn viewer_lights_follow_the_viewer() {
+        let scene = Scene::parse(
+            "[camera]\neye_m = [1.0, 0.0, 0.0]\ntarget_m = [0.0, 0.0, 0.0]\n\
+             [[light]]\nkind = \"directional\"\ndirection = [0.0, 0.0, -1.0]\nattached_to = \"viewer\"\n\
+             [[light]]\nkind = \"directional\"\ndirection = [0.0, 0.0, -1.0]\n",
+            "l",
+            None,
+        )
+        .unwrap();
+        let lights = world_lights(&scene);
+        let Light::Directional { direction, .. } = lights[0] else { panic!() };
+        assert!((direction - Vec3::new(-1.0, 0.0, 0.0)).length() < 1e-5, "shines where the viewer looks: {direction}");
+        let Light::Directional { direction, .. } = lights[1] else { panic!() };
+        assert!((direction - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-5);
+    }
+
+    #[test]
+    fn glyphs_carry_the_tool_size_and_opacity() {
+        let scene = Scene::default_scene();
+        let pose = crate::math::Pose { position_m: Vec3::new(0.1, 0.0, 0.0), ..Default::default() };
+        let f = build_frame(&scene, &[(0, pose)], true);
+        let g = f.tools[0];
+        let edge = g.model.transform_point3(Vec3::X);
+        assert!((edge.x - (0.1 + scene.tools[0].tool.radius_m)).abs() < 1e-6);
+        assert_eq!(g.colour.w, scene.tools[0].glyph_opacity);
+        assert!(build_frame(&scene, &[(0, pose)], false).tools.is_empty());
+    }
+}
