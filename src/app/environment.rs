@@ -43,7 +43,8 @@ fn load_equirect(path: &Path) -> Result<Environment, EnvironmentError> {
         .with_guessed_format()
         .map_err(|e| fail(format!("cannot read it: {e}")))?;
     let format = reader.format();
-    let (width, height) = reader.into_dimensions().map_err(|e| fail(format!("not a PNG or HDR image: {e}")))?;
+    let (width, height) =
+        reader.into_dimensions().map_err(|e| fail(format!("not a PNG or HDR image: {e}")))?;
     if width > MAX_SIDE || height > MAX_SIDE || width < 4 || height < 2 {
         return Err(fail(format!("{width}x{height} texels is outside 4x2 ..= {MAX_SIDE}x{MAX_SIDE}")));
     }

@@ -81,7 +81,10 @@ mod tests {
         .unwrap();
         let lights = world_lights(&scene);
         let Light::Directional { direction, .. } = lights[0] else { panic!() };
-        assert!((direction - Vec3::new(-1.0, 0.0, 0.0)).length() < 1e-5, "shines where the viewer looks: {direction}");
+        assert!(
+            (direction - Vec3::new(-1.0, 0.0, 0.0)).length() < 1e-5,
+            "shines where the viewer looks: {direction}"
+        );
         let Light::Directional { direction, .. } = lights[1] else { panic!() };
         assert!((direction - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-5);
     }

@@ -40,7 +40,8 @@ pub fn spacemouse_model(vendor: u16, product: u16) -> Option<&'static str> {
 /// interface of a 3Dconnexion vendor id whose usage is Multi-axis Controller.
 pub fn is_spacemouse(vendor: u16, product: u16, usage_page: u16, usage: u16) -> bool {
     SPACEMOUSE_VENDORS.contains(&vendor)
-        && (spacemouse_model(vendor, product).is_some() || (usage_page == GENERIC_DESKTOP && usage == MULTI_AXIS_CONTROLLER))
+        && (spacemouse_model(vendor, product).is_some()
+            || (usage_page == GENERIC_DESKTOP && usage == MULTI_AXIS_CONTROLLER))
 }
 
 /// An input device the station can use.
@@ -86,7 +87,11 @@ pub fn probe() -> InputReport {
     match gilrs::Gilrs::new() {
         Ok(gilrs) => {
             for (id, pad) in gilrs.gamepads() {
-                report.devices.push(SeenDevice { kind: "gamepad", name: pad.name().to_owned(), location: format!("gamepad {id}") });
+                report.devices.push(SeenDevice {
+                    kind: "gamepad",
+                    name: pad.name().to_owned(),
+                    location: format!("gamepad {id}"),
+                });
             }
         }
         Err(e) => report.problems.push(format!("cannot enumerate gamepads: {e}")),

@@ -1,0 +1,197 @@
+//! Invariants of the mesher on analytic shapes and random strokes: closed, consistently
+//! oriented surfaces on the iso-level, seams that weld, incremental = full re-meshing.
+
+use std::collections::HashMap;
+
+use argile::field::{Field, FieldReader};
+use argile::math::{IVec3, Pose, Quat, Vec3};
+use argile::mesh::{mesh_all, remesh_dirty, ChunkKey, ChunkMesh};
+use argile::tool::{rasterize_solid, stamp_sphere, Action, CsgOp, PlacedSolid, Solid};
+use proptest::prelude::*;
+
+/// All chunks welded by exact position (the seam contract makes shared vertices bit-identical).
+struct Welded {
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    triangles: Vec<[u32; 3]>,
+}
+
+fn weld<'a>(chunks: impl IntoIterator<Item = &'a ChunkMesh>) -> Welded {
+    let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
+    let mut w = Welded { positions: Vec::new(), normals: Vec::new(), triangles: Vec::new() };
+    for chunk in chunks {
+        let map: Vec<u32> = chunk
+            .vertices
+            .iter()
+            .map(|v| {
+                let key = v.position.map(f32::to_bits);
+                *ids.entry(key).or_insert_with(|| {
+                    w.positions.push(Vec3::from(v.position));
+                    w.normals.push(Vec3::from(v.normal));
+                    (w.positions.len() - 1) as u32
+                })
+            })
+            .collect();
+        for t in chunk.indices.chunks_exact(3) {
+            w.triangles.push([map[t[0] as usize], map[t[1] as usize], map[t[2] as usize]]);
+        }
+    }
+    w
+}
+
+/// Every directed edge is used exactly once and its reverse exactly once: a closed, edge-manifold,
+/// consistently oriented surface.
+fn assert_closed_and_oriented(w: &Welded) {
+    let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in &w.triangles {
+        assert!(t[0] != t[1] && t[1] != t[2] && t[0] != t[2], "degenerate triangle {t:?}");
+        for i in 0..3 {
+            *directed.entry((t[i], t[(i + 1) % 3])).or_default() += 1;
+        }
+    }
+    for (&(a, b), &n) in &directed {
+        assert_eq!(n, 1, "edge {a}->{b} used {n} times");
+        assert_eq!(directed.get(&(b, a)), Some(&1), "edge {a}->{b} has no opposite: the surface is open");
+    }
+}
+
+fn area_and_volume(w: &Welded) -> (f32, f32) {
+    let mut area = 0.0;
+    let mut volume = 0.0;
+    for t in &w.triangles {
+        let [a, b, c] = t.map(|i| w.positions[i as usize]);
+        area += 0.5 * (b - a).cross(c - a).length();
+        volume += a.dot(b.cross(c)) / 6.0;
+    }
+    (area, volume)
+}
+
+fn solid_field(solid: Solid, voxel: f32, position: Vec3) -> Field {
+    let mut f = Field::new(voxel, 0.5);
+    let placed =
+        PlacedSolid { solid, pose: Pose { position_m: position, rotation: Quat::IDENTITY }, scale: 1.0 };
+    rasterize_solid(&mut f, &placed, CsgOp::Union, [0.8, 0.4, 0.2, 1.0]);
+    f
+}
+
+fn full_mesh(field: &Field) -> Welded {
+    let diff = mesh_all(field);
+    weld(diff.upserted.iter().map(|(_, m)| m))
+}
+
+fn assert_on_iso_level(field: &Field, w: &Welded) {
+    let mut reader = FieldReader::new(field);
+    for p in &w.positions {
+        let d = reader.density_world(*p);
+        assert!((d - field.iso()).abs() < 2e-3, "vertex {p} has density {d}");
+    }
+}
+
+#[test]
+fn a_single_full_sample_is_an_octahedron() {
+    let mut f = Field::new(1.0, 0.5);
+    f.edit_box(IVec3::ZERO, IVec3::ZERO, true, |_, d, _| *d = 1.0);
+    let w = full_mesh(&f);
+    // Eight cells share the sample; each cuts its corner with one triangle.
+    assert_eq!(w.triangles.len(), 8);
+    assert_eq!(w.positions.len(), 6);
+    assert_closed_and_oriented(&w);
+    let (_, volume) = area_and_volume(&w);
+    // Vertices halfway along each axis: an octahedron of "radius" 0.5, volume 4/3 · 0.5³.
+    assert!((volume - 4.0 / 3.0 * 0.125).abs() < 1e-3, "volume {volume}");
+}
+
+#[test]
+fn a_sphere_straddling_brick_seams_is_closed_with_the_right_area_and_volume() {
+    let r = 0.0237;
+    // Centred on a brick corner so that the surface crosses seams on every axis.
+    let f = solid_field(Solid::Sphere { radius_m: r }, 0.001, Vec3::new(0.016, -0.008, 0.0));
+    let w = full_mesh(&f);
+    assert_closed_and_oriented(&w);
+    assert_on_iso_level(&f, &w);
+    let (area, volume) = area_and_volume(&w);
+    let pi = std::f32::consts::PI;
+    assert!((area / (4.0 * pi * r * r) - 1.0).abs() < 0.02, "area {area}");
+    assert!((volume / (4.0 / 3.0 * pi * r * r * r) - 1.0).abs() < 0.02, "volume {volume}");
+    // Normals point out of the sphere.
+    for (p, n) in w.positions.iter().zip(&w.normals) {
+        let out = (*p - Vec3::new(0.016, -0.008, 0.0)).normalize();
+        assert!(n.dot(out) > 0.95, "normal {n} at {p}");
+        assert!((n.length() - 1.0).abs() < 1e-4);
+    }
+}
+
+#[test]
+fn torus_and_box_are_closed_and_on_the_iso_level() {
+    for solid in [
+        Solid::Torus { major_m: 0.02, minor_m: 0.0065 },
+        Solid::Box { half_m: Vec3::new(0.0113, 0.0171, 0.0093) },
+        Solid::RoundedBox { half_m: Vec3::new(0.02, 0.01, 0.015), corner_m: 0.004 },
+        Solid::Cylinder { radius_m: 0.009, half_height_m: 0.013 },
+        Solid::Bar { half_length_m: 0.03, radius_m: 0.006 },
+    ] {
+        let f = solid_field(solid, 0.001, Vec3::new(0.0031, 0.0007, -0.0049));
+        let w = full_mesh(&f);
+        assert!(!w.triangles.is_empty(), "{solid:?}");
+        assert_closed_and_oriented(&w);
+        assert_on_iso_level(&f, &w);
+        let (_, volume) = area_and_volume(&w);
+        assert!(volume > 0.0, "{solid:?}: outward orientation gives a positive volume");
+    }
+}
+
+#[test]
+fn meshing_is_reproducible_bit_for_bit() {
+    let f = solid_field(Solid::Torus { major_m: 0.02, minor_m: 0.006 }, 0.001, Vec3::ZERO);
+    let a = mesh_all(&f);
+    let b = mesh_all(&f);
+    assert_eq!(a.upserted, b.upserted);
+}
+
+#[derive(Clone, Debug)]
+struct Stamp {
+    centre: Vec3,
+    radius: f32,
+    add: bool,
+}
+
+fn stamps() -> impl Strategy<Value = Vec<Stamp>> {
+    prop::collection::vec(
+        (-0.012f32..0.012, -0.012f32..0.012, -0.012f32..0.012, 0.0015f32..0.008, prop::bool::weighted(0.7))
+            .prop_map(|(x, y, z, radius, add)| Stamp { centre: Vec3::new(x, y, z), radius, add }),
+        1..12,
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, rng_seed: proptest::test_runner::RngSeed::Fixed(0x4152_4749), ..ProptestConfig::default() })]
+
+    /// After any sequence of strokes, incremental re-meshing of the dirty bricks gives exactly
+    /// the chunks of a full re-mesh, and the surface is closed, oriented and free of NaN.
+    #[test]
+    fn incremental_meshing_equals_full_meshing_and_stays_closed(stamps in stamps()) {
+        let mut field = Field::new(0.001, 0.5);
+        let mut chunks: HashMap<ChunkKey, ChunkMesh> = HashMap::new();
+        for s in &stamps {
+            let action = if s.add { Action::Add } else { Action::Remove };
+            stamp_sphere(&mut field, s.centre, s.radius, action, [0.2, 0.5, 0.9, 1.0]);
+            let diff = remesh_dirty(&mut field);
+            for key in diff.removed {
+                chunks.remove(&key);
+            }
+            for (key, mesh) in diff.upserted {
+                chunks.insert(key, mesh);
+            }
+        }
+        let full: HashMap<ChunkKey, ChunkMesh> = mesh_all(&field).upserted.into_iter().collect();
+        prop_assert_eq!(&chunks, &full);
+        for key in field.brick_keys() {
+            let brick = field.brick(key).unwrap();
+            prop_assert!(brick.density.iter().all(|d| (0.0..=1.0).contains(d)));
+        }
+        let w = weld(full.values());
+        prop_assert!(w.positions.iter().chain(&w.normals).all(|v| v.is_finite()));
+        assert_closed_and_oriented(&w);
+        assert_on_iso_level(&field, &w);
+    }
+}
