@@ -1,1 +1,180 @@
-fn main() {}
+//! `argile`: the command-line shell over the station (`argile::app`).
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use argile::app::{self, bench, RenderOptions};
+use argile::scene::Scene;
+use argile::stereo::Preview;
+use clap::{Parser, Subcommand};
+
+/// Argile: sculpt virtual clay in stereo and VR.
+///
+/// With no command, starts the station on the default scene. Until the desktop window exists,
+/// the station renders the default scene headless and says where the stereo pair is.
+#[derive(Parser)]
+#[command(version, about, long_about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Plays a scene's timeline offscreen and writes every capture as NAME-left.png and
+    /// NAME-right.png.
+    Render {
+        /// The scene file (TOML, see scenes/README.md).
+        scene: PathBuf,
+        /// Folder for the images (created if missing).
+        #[arg(long, short)]
+        out: PathBuf,
+        /// Also write a combined preview image per capture.
+        #[arg(long, value_enum)]
+        preview: Option<Preview>,
+        /// Per-eye image size, WIDTHxHEIGHT, instead of the scene's.
+        #[arg(long, value_parser = parse_size)]
+        size: Option<(u32, u32)>,
+        /// Turn the Vulkan validation layer on (fails on any validation message).
+        #[arg(long)]
+        validation: bool,
+    },
+    /// Lists the Vulkan devices, the OpenXR state and the input devices Argile sees.
+    Info,
+    /// Runs the standard benchmark workloads.
+    Bench {
+        /// One JSON object per line.
+        #[arg(long)]
+        json: bool,
+        /// Small sizes: checks the workloads run, figures are not comparable.
+        #[arg(long)]
+        quick: bool,
+        /// Workloads to run (all when none is named).
+        #[arg(value_enum)]
+        workloads: Vec<bench::Workload>,
+    },
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) =
+        s.split_once('x').ok_or_else(|| format!("`{s}` is not WIDTHxHEIGHT (for example 512x512)"))?;
+    let parse = |v: &str| v.parse::<u32>().ok().filter(|v| (16..=8192).contains(v));
+    match (parse(w), parse(h)) {
+        (Some(w), Some(h)) => Ok((w, h)),
+        _ => Err(format!("`{s}`: width and height must be whole numbers from 16 to 8192")),
+    }
+}
+
+fn main() -> ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn,argile=info")),
+        )
+        .with_writer(std::io::stderr)
+        .with_target(false)
+        .init();
+    let cli = Cli::parse();
+    let result = match cli.command {
+        None => station(),
+        Some(Command::Render { scene, out, preview, size, validation }) => {
+            render(&scene, out, preview, size, validation)
+        }
+        Some(Command::Info) => info(),
+        Some(Command::Bench { json, quick, workloads }) => run_bench(json, quick, &workloads),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn print_written(written: &[app::WrittenCapture]) {
+    for w in written {
+        println!("wrote {} and {}", w.left.display(), w.right.display());
+        if let Some(p) = &w.preview {
+            println!("wrote {}", p.display());
+        }
+    }
+}
+
+fn station() -> Result<()> {
+    let has_display = std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some();
+    if has_display {
+        println!("The interactive desktop window is not part of this version; rendering the default scene headless.");
+    } else {
+        println!("No display found: rendering the default scene headless.");
+    }
+    let scene = Scene::default_scene();
+    let options = RenderOptions {
+        out_dir: PathBuf::from("argile-out"),
+        preview: Some(Preview::Anaglyph),
+        progress: true,
+        validation: false,
+        size_px: None,
+    };
+    let written = app::render_scene(&scene, &options)?;
+    print_written(&written);
+    Ok(())
+}
+
+fn render(
+    scene: &std::path::Path,
+    out: PathBuf,
+    preview: Option<Preview>,
+    size: Option<(u32, u32)>,
+    validation: bool,
+) -> Result<()> {
+    let scene = Scene::load(scene)?;
+    let options = RenderOptions { out_dir: out, preview, progress: true, validation, size_px: size };
+    let written = app::render_scene(&scene, &options)?;
+    print_written(&written);
+    Ok(())
+}
+
+fn info() -> Result<()> {
+    println!("Argile {}", env!("CARGO_PKG_VERSION"));
+    println!("\nVulkan:");
+    match argile::render::probe_devices() {
+        Ok(probe) => print!("{probe}"),
+        Err(e) => println!("  {e}"),
+    }
+    println!("\nOpenXR:\n  {}", argile::xr::probe());
+    println!("\nInput devices:");
+    let input = argile::input::probe();
+    if input.devices.is_empty() {
+        println!("  none found (no SpaceMouse, no gamepad)");
+    }
+    for d in &input.devices {
+        println!("  {}: {} ({})", d.kind, d.name, d.location);
+    }
+    for p in &input.problems {
+        println!("  {p}");
+    }
+    Ok(())
+}
+
+fn run_bench(json: bool, quick: bool, workloads: &[bench::Workload]) -> Result<()> {
+    let workloads = if workloads.is_empty() { &bench::Workload::ALL[..] } else { workloads };
+    let size = if quick { bench::BenchSize::QUICK } else { bench::BenchSize::STANDARD };
+    let stdout = std::io::stdout();
+    bench::run(workloads, size, |value| {
+        let mut out = stdout.lock();
+        let line = if json {
+            value.to_string()
+        } else {
+            let obj = value
+                .as_object()
+                .map(|o| o.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join("  "));
+            obj.unwrap_or_default()
+        };
+        // A closed pipe (`| head`) is not an error worth a panic.
+        let _ = writeln!(out, "{line}");
+    })
+    .context("benchmark failed")
+}

@@ -7,6 +7,7 @@ use crate::scene::{Hand, Scene};
 use crate::tool::{rasterize_solid, Stroke};
 
 /// The clay and the hands' strokes at the current time of a scene's timeline.
+#[derive(Debug)]
 pub struct Playback<'s> {
     scene: &'s Scene,
     field: Field,

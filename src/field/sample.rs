@@ -10,6 +10,7 @@ use crate::math::{IVec3, Vec3};
 /// A read accessor that remembers the last brick it visited, so that coherent reads (a
 /// kernel walking neighbouring points) skip the hash lookup (OpenVDB's `ValueAccessor`).
 /// One per thread; it borrows the field immutably.
+#[derive(Debug)]
 pub struct FieldReader<'f> {
     field: &'f Field,
     cached: Option<(BrickKey, Option<&'f Brick>)>,

@@ -133,7 +133,7 @@ mod tests {
 
     #[test]
     fn single_corner_is_one_triangle_facing_away_from_it() {
-        for c in 0..8 {
+        for (c, offset) in CORNER_OFFSETS.iter().enumerate() {
             let tris = &case_table()[1 << c];
             assert_eq!(tris.len(), 1, "corner {c}");
             // Points at the edge midpoints; the normal must point away from the dense corner.
@@ -145,7 +145,7 @@ mod tests {
             };
             let [a, b, d] = tris[0].map(mid);
             let n = (b - a).cross(d - a);
-            let corner = glam::Vec3::from(CORNER_OFFSETS[c].map(|v| v as f32));
+            let corner = glam::Vec3::from(offset.map(|v| v as f32));
             assert!(n.dot(a - corner) > 0.0, "corner {c}: normal {n} points into the clay");
         }
     }

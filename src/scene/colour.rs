@@ -40,7 +40,7 @@ const EXPECTED: &str = "a colour: \"#rrggbb\" (sRGB) or [r, g, b] (linear, each 
 impl<'de> Visitor<'de> for ColourVisitor {
     type Value = SceneColour;
 
-    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(EXPECTED)
     }
 

@@ -237,7 +237,7 @@ fn line_column(text: &str, offset: usize) -> (usize, usize) {
 
 type At<'a> = dyn Fn(Option<std::ops::Range<usize>>, String) -> SceneError + 'a;
 
-fn positive(value: f32, what: &str, span: &std::ops::Range<usize>, at: &At) -> Result<f32, SceneError> {
+fn positive(value: f32, what: &str, span: &std::ops::Range<usize>, at: &At<'_>) -> Result<f32, SceneError> {
     if value.is_finite() && value > 0.0 {
         Ok(value)
     } else {
@@ -250,7 +250,7 @@ fn rotation(deg: [f32; 3]) -> Quat {
     Quat::from_euler(glam::EulerRot::XYZ, x, y, z)
 }
 
-fn solid_of(spec: &ClaySpec, span: &std::ops::Range<usize>, at: &At) -> Result<Solid, SceneError> {
+fn solid_of(spec: &ClaySpec, span: &std::ops::Range<usize>, at: &At<'_>) -> Result<Solid, SceneError> {
     let need = |v: Option<f32>, key: &str| -> Result<f32, SceneError> {
         let v = v.ok_or_else(|| {
             at(Some(span.clone()), format!("a {:?} needs `{key}`", spec.shape).to_lowercase())
@@ -332,7 +332,7 @@ fn solid_of(spec: &ClaySpec, span: &std::ops::Range<usize>, at: &At) -> Result<S
     })
 }
 
-fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At) -> Result<Scene, SceneError> {
+fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) -> Result<Scene, SceneError> {
     let whole = 0..0;
     let field_voxel = file.field.voxel_size_m;
     if !(field_voxel.is_finite() && (1e-4..=0.05).contains(&field_voxel)) {

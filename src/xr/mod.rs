@@ -31,7 +31,7 @@ pub enum XrState {
 }
 
 impl std::fmt::Display for XrState {
-    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             XrState::NoLoader { reason } => write!(
                 f,

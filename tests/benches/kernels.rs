@@ -1,1 +1,82 @@
-fn main() {}
+//! Criterion benchmarks of the CPU kernels: marching one brick, stamping the band-limited
+//! sphere, and re-meshing what a stroke dirtied. `argile bench` holds the end-to-end workloads.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+
+use argile::field::Field;
+use argile::math::{Pose, Quat, Vec3};
+use argile::mesh::{gather_block, march_brick, remesh_dirty, Block, ChunkMesh, MarchScratch};
+use argile::tool::{rasterize_solid, stamp_sphere, Action, CsgOp, PlacedSolid, Solid};
+
+fn sphere_field(radius_m: f32) -> Field {
+    let mut f = Field::new(0.001, 0.5);
+    let solid = PlacedSolid {
+        solid: Solid::Sphere { radius_m },
+        pose: Pose { position_m: Vec3::new(0.0003, 0.0001, -0.0002), rotation: Quat::IDENTITY },
+        scale: 1.0,
+    };
+    rasterize_solid(&mut f, &solid, CsgOp::Union, [0.7, 0.4, 0.2, 1.0]);
+    f
+}
+
+fn march(c: &mut Criterion) {
+    let field = sphere_field(0.02);
+    // A brick the surface crosses diagonally.
+    let key = (Vec3::splat(0.02 / 3f32.sqrt() / 0.001 / 8.0)).as_ivec3();
+    let mut block = Block::default();
+    gather_block(&field, key, &mut block);
+    let mut scratch = MarchScratch::default();
+    let mut mesh = ChunkMesh::default();
+    march_brick(&block, 0.5, field.transform(), &mut scratch, &mut mesh);
+    let tris = mesh.triangle_count();
+    assert!(tris > 0, "the benchmarked brick holds surface");
+    let mut group = c.benchmark_group("march_brick");
+    group.throughput(Throughput::Elements(tris as u64));
+    group.bench_function(BenchmarkId::from_parameter(format!("tris={tris}")), |b| {
+        b.iter(|| march_brick(&block, 0.5, field.transform(), &mut scratch, &mut mesh))
+    });
+    group.bench_function("gather", |b| b.iter(|| gather_block(&field, key, &mut block)));
+    group.finish();
+}
+
+fn stamp(c: &mut Criterion) {
+    let mut group = c.benchmark_group("apply_brush");
+    for r in [4.0f32, 8.0, 16.0] {
+        let mut field = sphere_field(0.03);
+        let mut x = 0.0f32;
+        group.bench_function(BenchmarkId::new("sphere_add", format!("radius_voxels={r}")), |b| {
+            b.iter(|| {
+                x = (x + 0.0005) % 0.01;
+                stamp_sphere(
+                    &mut field,
+                    Vec3::new(0.03 + x, 0.0, 0.0),
+                    r * 0.001,
+                    Action::Add,
+                    [0.2, 0.4, 0.9, 1.0],
+                )
+            })
+        });
+    }
+    group.finish();
+}
+
+fn remesh(c: &mut Criterion) {
+    let mut group = c.benchmark_group("remesh_dirty");
+    for r in [4.0f32, 16.0] {
+        let mut field = sphere_field(0.03);
+        remesh_dirty(&mut field);
+        let mut i = 0;
+        group.bench_function(BenchmarkId::from_parameter(format!("stamp_radius_voxels={r}")), |b| {
+            b.iter(|| {
+                i += 1;
+                let y = (i % 40) as f32 * 0.0005;
+                stamp_sphere(&mut field, Vec3::new(0.03, y, 0.0), r * 0.001, Action::Remove, [0.0; 4]);
+                remesh_dirty(&mut field)
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, march, stamp, remesh);
+criterion_main!(benches);

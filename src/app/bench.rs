@@ -1,0 +1,241 @@
+//! The standard workloads of `argile bench`: each yields one JSON object per measurement.
+
+use std::time::Instant;
+
+use anyhow::Result;
+use serde_json::{json, Value};
+
+use super::capture::renderer_for;
+use super::frame::build_frame;
+use super::playback::Playback;
+use crate::field::Field;
+use crate::math::{IVec3, Vec3};
+use crate::mesh::{mesh_all, remesh_dirty, ChunkMesh, MeshDiff};
+use crate::scene::Scene;
+use crate::tool::{stamp_sphere, Action};
+
+/// A standard workload.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Workload {
+    /// A straight stroke of sphere stamps of radius 4, 8, 16 and 32 voxels into empty space.
+    Stamp,
+    /// Stereo frames of the default scene and of a mesh of over a million triangles.
+    RenderStereo,
+}
+
+impl Workload {
+    /// Every workload, in the order `argile bench` runs them.
+    pub const ALL: [Workload; 2] = [Workload::Stamp, Workload::RenderStereo];
+}
+
+/// Sizes of the workloads.
+#[derive(Clone, Copy, Debug)]
+pub struct BenchSize {
+    /// Stamps per stroke.
+    pub stamps: usize,
+    /// Strokes per radius (the median is reported).
+    pub repetitions: usize,
+    /// Per-eye image side.
+    pub image_px: u32,
+    /// Timed frames.
+    pub frames: usize,
+    /// Triangles the big render mesh reaches at least.
+    pub big_mesh_triangles: usize,
+}
+
+impl BenchSize {
+    /// The standard sizes.
+    pub const STANDARD: BenchSize =
+        BenchSize { stamps: 200, repetitions: 5, image_px: 1024, frames: 20, big_mesh_triangles: 1_000_000 };
+    /// A small run that checks the workloads work (not for figures).
+    pub const QUICK: BenchSize =
+        BenchSize { stamps: 20, repetitions: 1, image_px: 128, frames: 2, big_mesh_triangles: 100_000 };
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        f64::NAN
+    } else if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Runs the workloads, handing each result to `emit`.
+pub fn run(workloads: &[Workload], size: BenchSize, mut emit: impl FnMut(Value)) -> Result<()> {
+    for w in workloads {
+        match w {
+            Workload::Stamp => bench_stamp(size, &mut emit),
+            Workload::RenderStereo => bench_render(size, &mut emit)?,
+        }
+    }
+    Ok(())
+}
+
+/// One stroke of `n` stamps of radius `r` voxels along +X, spacing r/2, into an empty field;
+/// returns (µs per stamp for the field update, µs per stamp with re-meshing, triangles).
+fn stroke(n: usize, r: f32, remesh: bool) -> (f64, usize) {
+    let voxel = 0.001;
+    let mut field = Field::new(voxel, 0.5);
+    let mut triangles = 0;
+    let start = Instant::now();
+    for i in 0..n {
+        let centre = Vec3::new(i as f32 * 0.5 * r * voxel, 0.0, 0.0);
+        stamp_sphere(&mut field, centre, r * voxel, Action::Add, [0.7, 0.4, 0.2, 1.0]);
+        if remesh {
+            let diff = remesh_dirty(&mut field);
+            triangles += diff.upserted_triangles();
+        }
+    }
+    (start.elapsed().as_secs_f64() * 1e6 / n as f64, triangles)
+}
+
+fn bench_stamp(size: BenchSize, emit: &mut impl FnMut(Value)) {
+    for r in [4.0f32, 8.0, 16.0, 32.0] {
+        let field_only: Vec<f64> = (0..size.repetitions).map(|_| stroke(size.stamps, r, false).0).collect();
+        let mut remeshed_tris = 0;
+        let with_mesh: Vec<f64> = (0..size.repetitions)
+            .map(|_| {
+                let (t, tris) = stroke(size.stamps, r, true);
+                remeshed_tris = tris;
+                t
+            })
+            .collect();
+        emit(json!({
+            "workload": "stamp",
+            "radius_voxels": r,
+            "stamps": size.stamps,
+            "spacing_voxels": r / 2.0,
+            "repetitions": size.repetitions,
+            "threads": rayon::current_num_threads(),
+            "field_us_per_stamp_median": median(field_only),
+            "field_and_mesh_us_per_stamp_median": median(with_mesh),
+            "remeshed_triangles_per_stroke": remeshed_tris,
+        }));
+    }
+}
+
+/// Copies of `mesh` on a square grid on the XZ plane until the total reaches `triangles`.
+fn replicate(mesh: &MeshDiff, triangles: usize, spacing_m: f32) -> (MeshDiff, f32) {
+    let per_copy = mesh.upserted_triangles().max(1);
+    let copies = triangles.div_ceil(per_copy);
+    let side = (copies as f64).sqrt().ceil() as i32;
+    let mut out = MeshDiff::default();
+    let mut made = 0;
+    'grid: for gz in 0..side {
+        for gx in 0..side {
+            if made == copies {
+                break 'grid;
+            }
+            let offset = Vec3::new(gx as f32 - (side - 1) as f32 * 0.5, 0.0, -(gz as f32)) * spacing_m;
+            // Keys far apart so that copies never share a chunk key.
+            let key_offset = IVec3::new(gx * 4096, 0, gz * 4096);
+            for (key, chunk) in &mesh.upserted {
+                let mut c: ChunkMesh = chunk.clone();
+                for v in &mut c.vertices {
+                    v.position = (Vec3::from(v.position) + offset).to_array();
+                }
+                out.upserted.push((*key + key_offset, c));
+            }
+            made += 1;
+        }
+    }
+    (out, side as f32 * spacing_m)
+}
+
+fn bench_render(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> {
+    let mut scene = Scene::default_scene();
+    scene.output.width_px = size.image_px;
+    scene.output.height_px = size.image_px;
+    let mut playback = Playback::new(&scene);
+    let end = scene.captures.last().map_or(0.0, |c| c.time_s);
+    playback.advance_to(end, |_| {});
+    let sculpt = mesh_all(playback.field());
+    let hands = playback.hands();
+    let (big, extent) = replicate(&sculpt, size.big_mesh_triangles, 0.3);
+
+    let mut renderer = renderer_for(&scene, None, false)?;
+    for (name, diff, frame_scene) in [
+        ("default", &sculpt, scene.clone()),
+        ("million-triangles", &big, {
+            let mut s = scene.clone();
+            s.rig.eye_m = Vec3::new(0.0, extent * 0.6, extent * 0.55);
+            s.rig.target_m = Vec3::new(0.0, 0.0, -extent * 0.45);
+            s.rig.convergence_m = (s.rig.target_m - s.rig.eye_m).length();
+            s.rig.far_m = extent * 4.0;
+            s.stage = None;
+            s
+        }),
+    ] {
+        // Replace whatever the previous mesh left.
+        let clear = MeshDiff {
+            removed: sculpt.upserted.iter().chain(&big.upserted).map(|(k, _)| *k).collect(),
+            ..MeshDiff::default()
+        };
+        renderer.apply(&clear)?;
+        renderer.apply(diff)?;
+        let frame = build_frame(&frame_scene, &hands, true);
+        for _ in 0..3 {
+            renderer.draw(&frame)?;
+        }
+        let mut frame_ms = Vec::with_capacity(size.frames);
+        for _ in 0..size.frames {
+            let t = Instant::now();
+            renderer.draw(&frame)?;
+            frame_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        }
+        let mut readback_ms = Vec::new();
+        for _ in 0..size.frames.min(5) {
+            let t = Instant::now();
+            renderer.read_back()?;
+            readback_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        }
+        let min_frame = frame_ms.iter().copied().fold(f64::INFINITY, f64::min);
+        emit(json!({
+            "workload": "render-stereo",
+            "scene": name,
+            "device": renderer.device_name(),
+            "width_px": size.image_px,
+            "height_px": size.image_px,
+            "eyes": 2,
+            "samples": scene.output.samples,
+            "triangles": renderer.triangle_count(),
+            "frames": size.frames,
+            "median_frame_ms": median(frame_ms),
+            "min_frame_ms": min_frame,
+            "median_readback_ms": median(readback_ms),
+        }));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn replication_reaches_the_triangle_count_with_distinct_keys() {
+        let scene = Scene::default_scene();
+        let sculpt = mesh_all(Playback::new(&scene).field());
+        let (big, _) = replicate(&sculpt, 3 * sculpt.upserted_triangles() + 1, 0.3);
+        assert_eq!(big.upserted_triangles(), 4 * sculpt.upserted_triangles());
+        let mut keys: Vec<[i32; 3]> = big.upserted.iter().map(|(k, _)| k.to_array()).collect();
+        keys.sort_unstable();
+        keys.dedup();
+        assert_eq!(keys.len(), big.upserted.len());
+    }
+
+    #[test]
+    fn stamp_workload_reports_every_radius() {
+        let mut lines = Vec::new();
+        run(&[Workload::Stamp], BenchSize::QUICK, |v| lines.push(v)).unwrap();
+        assert_eq!(lines.len(), 4);
+        for l in &lines {
+            assert!(l["field_us_per_stamp_median"].as_f64().unwrap() > 0.0);
+            assert!(l["remeshed_triangles_per_stroke"].as_u64().unwrap() > 0);
+        }
+    }
+}

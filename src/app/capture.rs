@@ -1,0 +1,137 @@
+//! Headless rendering of a scene: play its timeline and write each capture as a stereo PNG pair.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+
+use super::environment::load_environment;
+use super::frame::build_frame;
+use super::playback::Playback;
+use crate::mesh::{mesh_all, remesh_dirty};
+use crate::render::{Renderer, RendererDesc, StereoImage};
+use crate::scene::Scene;
+use crate::stereo::{compose, Preview};
+
+/// Options of a headless render.
+#[derive(Clone, Debug)]
+pub struct RenderOptions {
+    /// Folder the images go to (created if missing).
+    pub out_dir: PathBuf,
+    /// Also write a combined preview image per capture.
+    pub preview: Option<Preview>,
+    /// Show a progress bar on the terminal.
+    pub progress: bool,
+    /// Turn the Vulkan validation layer on.
+    pub validation: bool,
+    /// Override the scene's per-eye image size.
+    pub size_px: Option<(u32, u32)>,
+}
+
+/// One written capture.
+#[derive(Clone, Debug)]
+pub struct WrittenCapture {
+    /// Capture name.
+    pub name: String,
+    /// Left-eye image.
+    pub left: PathBuf,
+    /// Right-eye image.
+    pub right: PathBuf,
+    /// Preview image, when asked for.
+    pub preview: Option<PathBuf>,
+}
+
+/// Writes an image atomically: to a temporary file beside the target, then renamed over it.
+pub fn save_png_atomically(image: &image::RgbaImage, path: &Path) -> Result<()> {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("image.png");
+    let temp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    image
+        .save_with_format(&temp, image::ImageFormat::Png)
+        .with_context(|| format!("cannot write {}", temp.display()))?;
+    std::fs::rename(&temp, path)
+        .with_context(|| format!("cannot move {} to {}", temp.display(), path.display()))?;
+    Ok(())
+}
+
+/// A renderer for a scene's output settings and environment.
+pub fn renderer_for(scene: &Scene, size_px: Option<(u32, u32)>, validation: bool) -> Result<Renderer> {
+    let environment = load_environment(&scene.environment.choice)?;
+    let (width, height) = size_px.unwrap_or((scene.output.width_px, scene.output.height_px));
+    let desc = RendererDesc { width, height, samples: scene.output.samples, validation };
+    Ok(Renderer::new(&desc, &environment, scene.environment.intensity)?)
+}
+
+/// Plays `scene` and renders every capture. Returns what was written, in capture order.
+pub fn render_scene(scene: &Scene, options: &RenderOptions) -> Result<Vec<WrittenCapture>> {
+    std::fs::create_dir_all(&options.out_dir)
+        .with_context(|| format!("cannot create the output folder {}", options.out_dir.display()))?;
+    let mut scene = scene.clone();
+    if let Some((w, h)) = options.size_px {
+        scene.output.width_px = w;
+        scene.output.height_px = h;
+    }
+    let mut renderer = renderer_for(&scene, None, options.validation)?;
+    tracing::info!("rendering {} on {}", scene.source, renderer.device_name());
+    let mut playback = Playback::new(&scene);
+    let initial = mesh_all(playback.field());
+    playback.field_mut().take_dirty();
+    renderer.apply(&initial)?;
+
+    let end = scene.captures.last().map_or(0.0, |c| c.time_s);
+    let bar = progress_bar(options.progress && end > 0.0, end);
+    let mut written = Vec::with_capacity(scene.captures.len());
+    for capture in &scene.captures {
+        playback.advance_to(capture.time_s, |t| bar.set_position((t * 1000.0) as u64));
+        let diff = remesh_dirty(playback.field_mut());
+        renderer.apply(&diff)?;
+        let frame = build_frame(&scene, &playback.hands(), capture.show_tools);
+        renderer.draw(&frame)?;
+        let StereoImage { left, right } = renderer.read_back()?;
+        let left_path = options.out_dir.join(format!("{}-left.png", capture.name));
+        let right_path = options.out_dir.join(format!("{}-right.png", capture.name));
+        save_png_atomically(&left, &left_path)?;
+        save_png_atomically(&right, &right_path)?;
+        let preview = match options.preview {
+            Some(mode) => {
+                let suffix = match mode {
+                    Preview::Sbs => "sbs",
+                    Preview::Anaglyph => "anaglyph",
+                };
+                let path = options.out_dir.join(format!("{}-{suffix}.png", capture.name));
+                save_png_atomically(&compose(mode, &left, &right), &path)?;
+                Some(path)
+            }
+            None => None,
+        };
+        written.push(WrittenCapture {
+            name: capture.name.clone(),
+            left: left_path,
+            right: right_path,
+            preview,
+        });
+    }
+    bar.finish_and_clear();
+    let messages = renderer.take_validation_messages();
+    if !messages.is_empty() {
+        anyhow::bail!(
+            "the Vulkan validation layer reported {} problem(s):\n{}",
+            messages.len(),
+            messages.join("\n")
+        );
+    }
+    Ok(written)
+}
+
+fn progress_bar(show: bool, end_s: f32) -> indicatif::ProgressBar {
+    if !show {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new((end_s * 1000.0) as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{prefix} [{bar:40}] {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar.set_prefix("sculpting");
+    bar.set_message(format!("timeline of {end_s:.2} s"));
+    bar
+}

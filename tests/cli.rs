@@ -1,0 +1,90 @@
+//! The `argile` command as a user runs it.
+
+use std::process::Command;
+
+fn argile() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_argile"))
+}
+
+fn temp_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("argile-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn info_lists_vulkan_openxr_and_input_without_a_display() {
+    let out = argile().arg("info").env_remove("DISPLAY").env_remove("WAYLAND_DISPLAY").output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        text.contains("Vulkan:") && text.contains("OpenXR:") && text.contains("Input devices:"),
+        "{text}"
+    );
+    assert!(text.contains("multiview"), "the Vulkan section names the multiview capability: {text}");
+}
+
+#[test]
+fn bench_json_prints_one_object_per_line() {
+    let out = argile().args(["bench", "--json", "--quick", "stamp"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<serde_json::Value> =
+        text.lines().map(|l| serde_json::from_str(l).expect("a JSON object per line")).collect();
+    assert_eq!(lines.len(), 4, "one line per radius");
+    assert!(lines.iter().all(|l| l["workload"] == "stamp"));
+}
+
+#[test]
+fn bench_render_stereo_runs_on_the_vulkan_device() {
+    let out = argile().args(["bench", "--json", "--quick", "render-stereo"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<serde_json::Value> = text.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(lines.len(), 2);
+    assert!(lines[1]["triangles"].as_u64().unwrap() >= 100_000);
+    assert!(lines.iter().all(|l| l["median_frame_ms"].as_f64().unwrap() > 0.0 && l["device"].is_string()));
+}
+
+#[test]
+fn render_writes_the_pair_and_preview_and_says_where() {
+    let dir = temp_dir("render");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/tests/parallax.toml");
+    let out = argile()
+        .args(["render", scene, "--out"])
+        .arg(&dir)
+        .args(["--preview", "sbs", "--size", "64x48"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
+    for name in ["parallax-left.png", "parallax-right.png", "parallax-sbs.png"] {
+        assert!(text.contains(name), "says where {name} is: {text}");
+        let img = image::open(dir.join(name)).unwrap();
+        assert_eq!(img.height(), 48);
+    }
+    assert_eq!(image::open(dir.join("parallax-sbs.png")).unwrap().width(), 128);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn scene_errors_name_the_file_line_and_column() {
+    let dir = temp_dir("bad-scene");
+    let scene = dir.join("bad.toml");
+    std::fs::write(&scene, "[camera]\nfov_y_deg = 30.0\nfov = 3\n").unwrap();
+    let out = argile().arg("render").arg(&scene).arg("--out").arg(dir.join("out")).output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains(&format!("{}:3:1: unknown field `fov`", scene.display())), "{err}");
+    assert!(!dir.join("out").exists(), "nothing is written for a bad scene");
+
+    let out = argile().args(["render", "no/such/scene.toml", "--out"]).arg(dir.join("out")).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read scene file no/such/scene.toml"));
+
+    let out = argile().args(["render", "x.toml", "--out", "o", "--size", "12x9000"]).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("from 16 to 8192"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
