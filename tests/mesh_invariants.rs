@@ -195,3 +195,55 @@ proptest! {
         assert_on_iso_level(&field, &w);
     }
 }
+
+/// The paper's tool voxmap value (4× oversampling, two 2×2×2 box filters), for comparison.
+fn galyean_hughes_sphere(offset: Vec3, radius: f32) -> f32 {
+    const W: [f32; 3] = [0.25, 0.5, 0.25];
+    let mut acc = 0.0;
+    for (a, wa) in W.iter().enumerate() {
+        for (b, wb) in W.iter().enumerate() {
+            for (c, wc) in W.iter().enumerate() {
+                let tap = offset + (Vec3::new(a as f32, b as f32, c as f32) - 1.0) * 0.25;
+                if tap.length_squared() <= radius * radius {
+                    acc += wa * wb * wc;
+                }
+            }
+        }
+    }
+    acc
+}
+
+/// RMS and maximum angle (degrees) between mesh normals and the sphere's true normals.
+fn normal_errors(f: &Field, centre: Vec3) -> (f64, f64) {
+    let diff = mesh_all(f);
+    let (mut sum, mut max, mut n) = (0.0f64, 0.0f64, 0usize);
+    for (_, chunk) in &diff.upserted {
+        for v in &chunk.vertices {
+            let truth = (Vec3::from(v.position) - centre).normalize();
+            let angle = f64::from(Vec3::from(v.normal).dot(truth).clamp(-1.0, 1.0).acos().to_degrees());
+            sum += angle * angle;
+            max = max.max(angle);
+            n += 1;
+        }
+    }
+    ((sum / n as f64).sqrt(), max)
+}
+
+#[test]
+fn the_wide_band_gives_truer_normals_than_the_papers_filter() {
+    let centre_index = Vec3::new(0.37, -0.21, 0.13);
+    let radius = 9.3;
+    let mut paper = Field::new(0.001, 0.5);
+    let snapped = (centre_index * 4.0).round() / 4.0;
+    let reach = IVec3::splat(radius as i32 + 2);
+    paper.edit_box(-reach, reach, true, |p, d, _| {
+        *d = d.max(galyean_hughes_sphere(p.as_vec3() - snapped, radius))
+    });
+    let mut ours = Field::new(0.001, 0.5);
+    stamp_sphere(&mut ours, centre_index * 0.001, radius * 0.001, Action::Add, [1.0; 4]);
+    let (paper_rms, paper_max) = normal_errors(&paper, snapped * 0.001);
+    let (ours_rms, ours_max) = normal_errors(&ours, centre_index * 0.001);
+    eprintln!("normal error: paper rms {paper_rms:.2}° max {paper_max:.2}°, ours rms {ours_rms:.2}° max {ours_max:.2}°");
+    assert!(ours_rms * 4.0 < paper_rms, "rms {ours_rms:.2}° vs the paper's {paper_rms:.2}°");
+    assert!(ours_max < 2.0, "max {ours_max:.2}°");
+}

@@ -157,8 +157,16 @@ fn edge_vertex(
         n[axis] = if va >= iso { 1.0 } else { -1.0 };
         n
     };
+    // Colour is weighted by matter as well as by position: the empty end of an edge holds no
+    // clay, so its (meaningless) colour must not tint the surface.
     let (ca, cb) = (block.colour[a], block.colour[b]);
-    let colour = std::array::from_fn(|i| ca[i] + (cb[i] - ca[i]) * t);
+    let (wa, wb) = (va.max(0.0) * (1.0 - t), vb.max(0.0) * t);
+    let total = wa + wb;
+    let colour = if total > 0.0 {
+        std::array::from_fn(|i| (ca[i] * wa + cb[i] * wb) / total)
+    } else {
+        std::array::from_fn(|i| ca[i] + (cb[i] - ca[i]) * t)
+    };
     let index = out.vertices.len() as u32;
     out.vertices.push(Vertex { position: position.to_array(), normal: normal.to_array(), colour });
     scratch.edge_vertex[key] = index;

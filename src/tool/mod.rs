@@ -8,8 +8,5 @@ mod stamp;
 mod stroke;
 
 pub use shape::{PlacedSolid, Solid};
-pub use stamp::{
-    band_limited_sphere, rasterize_solid, snap_to_fine_grid, solid_density, stamp_sphere, Action, CsgOp,
-    SOLID_BAND_VOXELS, TOOL_OVERSAMPLING,
-};
+pub use stamp::{rasterize_solid, solid_density, stamp_sphere, Action, CsgOp, SOLID_BAND_VOXELS};
 pub use stroke::{Stroke, Tool};

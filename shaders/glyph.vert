@@ -1,0 +1,21 @@
+#version 450
+#extension GL_EXT_multiview : require
+#include "frame.glsl"
+
+layout(push_constant) uniform Glyph {
+    mat4 model;   // unit sphere -> world
+    vec4 colour;  // linear rgb, a = opacity
+} glyph;
+
+layout(location = 0) in vec3 in_position;
+layout(location = 1) in vec3 in_normal;
+
+layout(location = 0) out vec3 world_position;
+layout(location = 1) out vec3 world_normal;
+
+void main() {
+    vec4 p = glyph.model * vec4(in_position, 1.0);
+    world_position = p.xyz;
+    world_normal = transpose(inverse(mat3(glyph.model))) * in_normal;
+    gl_Position = frame.eyes[gl_ViewIndex].view_proj * p;
+}

@@ -1,0 +1,725 @@
+//! The stereo renderer: uploads mesh chunk diffs, draws a [`Frame`] in one multiview pass and
+//! reads both eyes back.
+//!
+//! One frame is in flight: `draw` waits for its frame to finish, so the host may rewrite the
+//! uniforms and the chunk arena between frames without per-frame copies or deferred releases.
+//! The window and XR swapchain targets, which overlap frames, will bring those.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::chunks::{ArenaStorage, ChunkArena};
+use super::environment::{build_radiance_cube, irradiance_sh9, reflection_lod, CubeMap};
+use super::gpu::buffer::{Buffer, MemoryUse};
+use super::gpu::device::Device;
+use super::gpu::image::{transition, Image, ImageDesc, Sampler};
+use super::gpu::instance::Instance;
+use super::gpu::pipeline::{DescriptorPool, Layout, Pipeline, PipelineDesc, PUSH_CONSTANT_BYTES};
+use super::shapes::{full_screen_quad, icosphere, unit_box};
+use super::target::StereoTarget;
+use super::{Environment, Frame, Light, RenderError, MAX_LIGHTS};
+use crate::math::Vec3;
+use crate::mesh::{MeshDiff, Vertex};
+
+macro_rules! spirv {
+    ($name:literal) => {
+        include_bytes!(concat!(env!("OUT_DIR"), "/", $name, ".spv"))
+    };
+}
+
+/// Spacing of the grid drawn on the stage walls, metres.
+const STAGE_GRID_M: f32 = 0.05;
+/// Quads per stage wall edge (see `shapes`: small triangles avoid clipping).
+const STAGE_SUBDIVISIONS: u32 = 32;
+/// Tools whose crosshairs the stage shows.
+const MAX_TOOLS: usize = 2;
+
+/// What to render into.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RendererDesc {
+    /// Width of each eye's image, pixels.
+    pub width: u32,
+    /// Height of each eye's image, pixels.
+    pub height: u32,
+    /// MSAA samples per pixel (1, 2, 4 or 8).
+    pub samples: u32,
+    /// Turn the Vulkan validation layer on.
+    pub validation: bool,
+}
+
+/// Both eyes' images, read back: 8-bit sRGB, top row first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StereoImage {
+    /// Left eye (multiview layer 0).
+    pub left: image::RgbaImage,
+    /// Right eye (multiview layer 1).
+    pub right: image::RgbaImage,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct EyeUniforms {
+    view_proj: [[f32; 4]; 4],
+    inv_view_proj: [[f32; 4]; 4],
+    position: [f32; 4],
+}
+
+/// Mirrors `FrameUniforms` in `shaders/include/frame.glsl` (std140: only vec4 and mat4).
+#[repr(C)]
+#[derive(Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct FrameUniforms {
+    eyes: [EyeUniforms; 2],
+    light_vector: [[f32; 4]; MAX_LIGHTS],
+    light_radiance: [[f32; 4]; MAX_LIGHTS],
+    sh: [[f32; 4]; 9],
+    material: [f32; 4],
+    background: [f32; 4],
+    params: [f32; 4],
+    tools: [[f32; 4]; MAX_TOOLS],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct StagePush {
+    min: [f32; 4],
+    max: [f32; 4],
+    colour: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GlyphPush {
+    model: [[f32; 4]; 4],
+    colour: [f32; 4],
+}
+
+const _: () = assert!(std::mem::size_of::<FrameUniforms>() == 640);
+const _: () = assert!(std::mem::size_of::<GlyphPush>() as u32 <= PUSH_CONSTANT_BYTES);
+
+/// The chunk arena's GPU buffers (host-visible, written in place between frames).
+struct ArenaBuffers {
+    vertices: Buffer,
+    indices: Buffer,
+    device: Arc<Device>,
+}
+
+impl ArenaStorage for ArenaBuffers {
+    type Error = RenderError;
+
+    fn reserve(&mut self, vertices: u32, indices: u32) -> Result<(), RenderError> {
+        let vertex_bytes = u64::from(vertices) * std::mem::size_of::<Vertex>() as u64;
+        let index_bytes = u64::from(indices) * 4;
+        if vertex_bytes > self.vertices.size {
+            let mut grown = Buffer::new(
+                &self.device,
+                vertex_bytes,
+                vk::BufferUsageFlags::VERTEX_BUFFER,
+                MemoryUse::Upload,
+            )?;
+            let old = self.vertices.size as usize;
+            grown.bytes_mut()[..old].copy_from_slice(self.vertices.bytes_mut());
+            self.vertices = grown;
+        }
+        if index_bytes > self.indices.size {
+            let mut grown = Buffer::new(
+                &self.device,
+                index_bytes,
+                vk::BufferUsageFlags::INDEX_BUFFER,
+                MemoryUse::Upload,
+            )?;
+            let old = self.indices.size as usize;
+            grown.bytes_mut()[..old].copy_from_slice(self.indices.bytes_mut());
+            self.indices = grown;
+        }
+        Ok(())
+    }
+
+    fn write_vertices(&mut self, at: u32, vertices: &[Vertex]) {
+        self.vertices.write(at as usize * std::mem::size_of::<Vertex>(), vertices);
+    }
+
+    fn write_indices(&mut self, at: u32, indices: &[u32]) {
+        self.indices.write(at as usize * 4, indices);
+    }
+}
+
+/// A fixed mesh in buffers of its own.
+///
+/// Each has its own buffers, bound at offset 0 and drawn from index 0: with multiview,
+/// lavapipe (Mesa 22.3) drops from the second view every draw that reads its vertices or
+/// indices at an offset (a binding offset, `firstIndex` or `vertexOffset`) and every draw
+/// that makes its vertices from `gl_VertexIndex` without buffers; only the left eye showed them.
+struct ShapeMesh {
+    vertices: Buffer,
+    indices: Buffer,
+    index_count: u32,
+}
+
+impl ShapeMesh {
+    fn new(device: &Arc<Device>, (vertices, indices): (Vec<Vertex>, Vec<u32>)) -> Result<Self, RenderError> {
+        let bytes = |n: usize| n as u64;
+        let mut v = Buffer::new(
+            device,
+            bytes(std::mem::size_of_val(vertices.as_slice())),
+            vk::BufferUsageFlags::VERTEX_BUFFER,
+            MemoryUse::Upload,
+        )?;
+        v.write(0, &vertices);
+        let mut i = Buffer::new(
+            device,
+            bytes(std::mem::size_of_val(indices.as_slice())),
+            vk::BufferUsageFlags::INDEX_BUFFER,
+            MemoryUse::Upload,
+        )?;
+        i.write(0, &indices);
+        Ok(Self { vertices: v, indices: i, index_count: indices.len() as u32 })
+    }
+}
+
+struct Shapes {
+    sphere: ShapeMesh,
+    cube: ShapeMesh,
+    triangle: ShapeMesh,
+}
+
+struct Pipelines {
+    background: Pipeline,
+    stage: Pipeline,
+    clay: Pipeline,
+    glyph: Pipeline,
+}
+
+/// The offscreen stereo renderer.
+///
+/// Field order is drop order (after `Drop::drop` waits for the device): pipelines and the
+/// descriptor pool, the target, buffers, the environment, layouts, and the device last.
+pub struct Renderer {
+    pipelines: Pipelines,
+    descriptors: DescriptorPool,
+    target: StereoTarget,
+    arena_buffers: ArenaBuffers,
+    arena: ChunkArena,
+    /// The fixed meshes: glyph sphere, stage box, full-screen triangle.
+    shapes: Shapes,
+    uniforms: Buffer,
+    readback: Buffer,
+    _radiance: Image,
+    _sampler: Sampler,
+    layout: Layout,
+    cube_size: u32,
+    sh: [Vec3; 9],
+    command_buffer: vk::CommandBuffer,
+    fence: vk::Fence,
+    drawn: bool,
+    device: Arc<Device>,
+}
+
+impl std::fmt::Debug for Renderer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Renderer")
+            .field("device", &self.device.info.name)
+            .field("extent", &self.target.extent)
+            .field("triangles", &self.arena.triangles())
+            .finish_non_exhaustive()
+    }
+}
+
+impl Renderer {
+    /// Picks a Vulkan device, builds the stereo target, the environment's cube map (scaled by
+    /// `environment_intensity`) and the pipelines.
+    pub fn new(
+        desc: &RendererDesc,
+        environment: &Environment,
+        environment_intensity: f32,
+    ) -> Result<Self, RenderError> {
+        let instance = Arc::new(Instance::new(desc.validation)?);
+        let device = Device::new(instance)?;
+        let target = StereoTarget::new(&device, desc.width, desc.height, desc.samples)?;
+        let layout = Layout::new(&device)?;
+
+        let cube_size = match environment {
+            Environment::Studio => 256,
+            Environment::Equirect { width, .. } => (width / 4).next_power_of_two().clamp(64, 1024),
+        };
+        let cube = build_radiance_cube(environment, environment_intensity, cube_size);
+        let sh = irradiance_sh9(&cube);
+        let radiance = upload_cube(&device, &cube)?;
+        let sampler = Sampler::linear(&device, cube.levels.len() as f32)?;
+
+        let uniforms = Buffer::new(
+            &device,
+            std::mem::size_of::<FrameUniforms>() as u64,
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            MemoryUse::Upload,
+        )?;
+        let descriptors = DescriptorPool::new(&device, &layout, uniforms.raw, radiance.view, sampler.raw)?;
+        let readback = Buffer::new(
+            &device,
+            u64::from(desc.width) * u64::from(desc.height) * 4 * 2,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryUse::Readback,
+        )?;
+
+        let shapes = Shapes {
+            sphere: ShapeMesh::new(&device, icosphere(3))?,
+            cube: ShapeMesh::new(&device, unit_box(STAGE_SUBDIVISIONS))?,
+            triangle: ShapeMesh::new(&device, full_screen_quad())?,
+        };
+
+        const INITIAL_VERTICES: u32 = 1 << 16;
+        const INITIAL_INDICES: u32 = 1 << 17;
+        let arena_buffers = ArenaBuffers {
+            vertices: Buffer::new(
+                &device,
+                u64::from(INITIAL_VERTICES) * std::mem::size_of::<Vertex>() as u64,
+                vk::BufferUsageFlags::VERTEX_BUFFER,
+                MemoryUse::Upload,
+            )?,
+            indices: Buffer::new(
+                &device,
+                u64::from(INITIAL_INDICES) * 4,
+                vk::BufferUsageFlags::INDEX_BUFFER,
+                MemoryUse::Upload,
+            )?,
+            device: device.clone(),
+        };
+
+        let make = |desc: PipelineDesc| {
+            Pipeline::new(&device, &desc, &layout, target.render_pass, target.extent, target.samples)
+        };
+        let base = PipelineDesc {
+            name: "background",
+            vertex: spirv!("background.vert"),
+            fragment: spirv!("background.frag"),
+            attributes: 1,
+            cull: vk::CullModeFlags::NONE,
+            depth_test: true,
+            depth_write: false,
+            blend: false,
+        };
+        let pipelines = Pipelines {
+            background: make(base)?,
+            stage: make(PipelineDesc {
+                name: "stage",
+                vertex: spirv!("stage.vert"),
+                fragment: spirv!("stage.frag"),
+                attributes: 2,
+                cull: vk::CullModeFlags::FRONT,
+                depth_test: true,
+                depth_write: true,
+                ..base
+            })?,
+            clay: make(PipelineDesc {
+                name: "clay",
+                vertex: spirv!("clay.vert"),
+                fragment: spirv!("clay.frag"),
+                attributes: 3,
+                cull: vk::CullModeFlags::BACK,
+                depth_test: true,
+                depth_write: true,
+                ..base
+            })?,
+            glyph: make(PipelineDesc {
+                name: "tool glyph",
+                vertex: spirv!("glyph.vert"),
+                fragment: spirv!("glyph.frag"),
+                attributes: 2,
+                cull: vk::CullModeFlags::BACK,
+                depth_test: true,
+                depth_write: false,
+                blend: true,
+            })?,
+        };
+
+        let command_buffer = device.command_buffer()?;
+        // SAFETY: a valid create info on a live device; destroyed in Drop.
+        let fence = unsafe { device.raw.create_fence(&vk::FenceCreateInfo::default(), None) }
+            .map_err(RenderError::vk("vkCreateFence"))?;
+
+        Ok(Self {
+            pipelines,
+            descriptors,
+            target,
+            arena_buffers,
+            arena: ChunkArena::new(INITIAL_VERTICES, INITIAL_INDICES),
+            shapes,
+            uniforms,
+            readback,
+            _radiance: radiance,
+            _sampler: sampler,
+            layout,
+            cube_size,
+            sh,
+            command_buffer,
+            fence,
+            drawn: false,
+            device,
+        })
+    }
+
+    /// The name of the Vulkan device in use.
+    pub fn device_name(&self) -> &str {
+        &self.device.info.name
+    }
+
+    /// Triangles of clay the renderer holds.
+    pub fn triangle_count(&self) -> usize {
+        self.arena.triangles()
+    }
+
+    /// Mesh chunks the renderer holds.
+    pub fn chunk_count(&self) -> usize {
+        self.arena.chunk_count()
+    }
+
+    /// Applies a mesh diff to the chunk buffers.
+    pub fn apply(&mut self, diff: &MeshDiff) -> Result<(), RenderError> {
+        self.arena.apply(diff, &mut self.arena_buffers)
+    }
+
+    /// The warnings and errors the validation layer reported since the last call (none when
+    /// it is off).
+    pub fn take_validation_messages(&self) -> Vec<String> {
+        self.device.instance.take_messages()
+    }
+
+    /// Whether the validation layer is on.
+    pub fn validation(&self) -> bool {
+        self.device.instance.validation()
+    }
+
+    fn write_uniforms(&mut self, frame: &Frame) {
+        let mut u = FrameUniforms::default();
+        for (eye, view) in u.eyes.iter_mut().zip(&frame.views.eyes) {
+            let view_proj = view.projection * view.view;
+            eye.view_proj = view_proj.to_cols_array_2d();
+            eye.inv_view_proj = view_proj.inverse().to_cols_array_2d();
+            eye.position = view.position_m.extend(1.0).to_array();
+        }
+        let lights = &frame.lights[..frame.lights.len().min(MAX_LIGHTS)];
+        for (i, light) in lights.iter().enumerate() {
+            let (vector, radiance) = match *light {
+                Light::Directional { direction, radiance } => (direction.extend(0.0), radiance),
+                Light::Point { position_m, radiance } => (position_m.extend(1.0), radiance),
+            };
+            u.light_vector[i] = vector.to_array();
+            u.light_radiance[i] = radiance.extend(0.0).to_array();
+        }
+        for (dst, c) in u.sh.iter_mut().zip(&self.sh) {
+            *dst = c.extend(0.0).to_array();
+        }
+        let m = &frame.material;
+        u.material = [m.shininess, m.specular, m.reflectivity, m.ambient];
+        u.background = frame.background.extend(if frame.show_environment { 1.0 } else { 0.0 }).to_array();
+        let tools = &frame.tools[..frame.tools.len().min(MAX_TOOLS)];
+        for (dst, t) in u.tools.iter_mut().zip(tools) {
+            *dst = t.model.w_axis.truncate().extend(t.model.x_axis.truncate().length()).to_array();
+        }
+        let stage_tools = if frame.stage.is_some() { tools.len() } else { 0 };
+        u.params = [
+            lights.len() as f32,
+            reflection_lod(m.shininess, self.cube_size),
+            stage_tools as f32,
+            STAGE_GRID_M,
+        ];
+        self.uniforms.write(0, std::slice::from_ref(&u));
+    }
+
+    /// Draws one stereo frame (both eyes in one multiview pass) and waits for it to finish.
+    pub fn draw(&mut self, frame: &Frame) -> Result<(), RenderError> {
+        self.write_uniforms(frame);
+        let d = &self.device.raw;
+        let cb = self.command_buffer;
+        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: the previous submission of `cb` finished (waited on below), so it can be
+        // re-recorded; every handle recorded is owned by `self` and outlives the submission.
+        unsafe {
+            d.begin_command_buffer(cb, &begin).map_err(RenderError::vk("vkBeginCommandBuffer"))?;
+            self.target.begin(cb, frame.background.extend(1.0).to_array());
+            d.cmd_bind_descriptor_sets(
+                cb,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.layout.pipeline,
+                0,
+                &[self.descriptors.set],
+                &[],
+            );
+            if let Some(stage) = &frame.stage {
+                let push = StagePush {
+                    min: stage.min_m.extend(0.0).to_array(),
+                    max: stage.max_m.extend(0.0).to_array(),
+                    colour: stage.colour.extend(1.0).to_array(),
+                };
+                d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, self.pipelines.stage.raw);
+                self.push(cb, &push);
+                self.draw_shape(cb, &self.shapes.cube);
+            }
+            if self.arena.draw_count() > 0 {
+                d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, self.pipelines.clay.raw);
+                d.cmd_bind_vertex_buffers(cb, 0, &[self.arena_buffers.vertices.raw], &[0]);
+                d.cmd_bind_index_buffer(cb, self.arena_buffers.indices.raw, 0, vk::IndexType::UINT32);
+                d.cmd_draw_indexed(cb, self.arena.draw_count(), 1, 0, 0, 0);
+            }
+            d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, self.pipelines.background.raw);
+            self.draw_shape(cb, &self.shapes.triangle);
+            if !frame.tools.is_empty() {
+                d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, self.pipelines.glyph.raw);
+                for tool in &frame.tools {
+                    let push =
+                        GlyphPush { model: tool.model.to_cols_array_2d(), colour: tool.colour.to_array() };
+                    self.push(cb, &push);
+                    self.draw_shape(cb, &self.shapes.sphere);
+                }
+            }
+            d.cmd_end_render_pass(cb);
+            d.end_command_buffer(cb).map_err(RenderError::vk("vkEndCommandBuffer"))?;
+            let cbs = [cb];
+            let submit = [vk::SubmitInfo::default().command_buffers(&cbs)];
+            d.queue_submit(self.device.queue, &submit, self.fence)
+                .map_err(RenderError::vk("vkQueueSubmit"))?;
+            d.wait_for_fences(&[self.fence], true, u64::MAX).map_err(RenderError::vk("vkWaitForFences"))?;
+            d.reset_fences(&[self.fence]).map_err(RenderError::vk("vkResetFences"))?;
+        }
+        self.drawn = true;
+        Ok(())
+    }
+
+    fn draw_shape(&self, cb: vk::CommandBuffer, shape: &ShapeMesh) {
+        // SAFETY: `cb` is recording inside the render pass; the buffers are live.
+        unsafe {
+            let d = &self.device.raw;
+            d.cmd_bind_vertex_buffers(cb, 0, &[shape.vertices.raw], &[0]);
+            d.cmd_bind_index_buffer(cb, shape.indices.raw, 0, vk::IndexType::UINT32);
+            d.cmd_draw_indexed(cb, shape.index_count, 1, 0, 0, 0);
+        }
+    }
+
+    fn push<T: bytemuck::Pod>(&self, cb: vk::CommandBuffer, value: &T) {
+        // SAFETY: `cb` is recording; the value fits the layout's push constant range.
+        unsafe {
+            self.device.raw.cmd_push_constants(
+                cb,
+                self.layout.pipeline,
+                vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+                0,
+                bytemuck::bytes_of(value),
+            )
+        };
+    }
+
+    /// Copies the last frame's two eyes to the host.
+    pub fn read_back(&mut self) -> Result<StereoImage, RenderError> {
+        if !self.drawn {
+            return Err(RenderError::NothingDrawn);
+        }
+        let extent = self.target.extent;
+        let image = self.target.output.raw;
+        let buffer = self.readback.raw;
+        let d = &self.device.raw;
+        self.device.submit_and_wait(|cb| {
+            let region = vk::BufferImageCopy::default()
+                .image_subresource(
+                    vk::ImageSubresourceLayers::default()
+                        .aspect_mask(vk::ImageAspectFlags::COLOR)
+                        .mip_level(0)
+                        .base_array_layer(0)
+                        .layer_count(2),
+                )
+                .image_extent(vk::Extent3D { width: extent.width, height: extent.height, depth: 1 });
+            let to_host = vk::BufferMemoryBarrier::default()
+                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+                .dst_access_mask(vk::AccessFlags::HOST_READ)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .buffer(buffer)
+                .offset(0)
+                .size(vk::WHOLE_SIZE);
+            // SAFETY: the render pass left the output in TRANSFER_SRC_OPTIMAL; the buffer
+            // holds both layers.
+            unsafe {
+                d.cmd_copy_image_to_buffer(
+                    cb,
+                    image,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    buffer,
+                    &[region],
+                );
+                d.cmd_pipeline_barrier(
+                    cb,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::PipelineStageFlags::HOST,
+                    vk::DependencyFlags::empty(),
+                    &[],
+                    &[to_host],
+                    &[],
+                );
+            }
+        })?;
+        let layer = (extent.width * extent.height * 4) as usize;
+        let bytes = self.readback.read();
+        let eye = |i: usize| {
+            image::RgbaImage::from_raw(
+                extent.width,
+                extent.height,
+                bytes[i * layer..(i + 1) * layer].to_vec(),
+            )
+            .expect("the readback buffer holds two whole layers")
+        };
+        Ok(StereoImage { left: eye(0), right: eye(1) })
+    }
+}
+
+impl Drop for Renderer {
+    fn drop(&mut self) {
+        // SAFETY: waiting for idle makes every submission finish; the fence was created from
+        // this device and is unused afterwards. The fields then drop in declaration order.
+        unsafe {
+            let _ = self.device.raw.device_wait_idle();
+            self.device.raw.destroy_fence(self.fence, None);
+        }
+    }
+}
+
+/// Uploads a cube map (all faces and levels) as a sampled RGBA16F cube image.
+fn upload_cube(device: &Arc<Device>, cube: &CubeMap) -> Result<Image, RenderError> {
+    let levels = cube.levels.len() as u32;
+    let desc = ImageDesc {
+        width: cube.size,
+        height: cube.size,
+        layers: 6,
+        mip_levels: levels,
+        format: vk::Format::R16G16B16A16_SFLOAT,
+        samples: vk::SampleCountFlags::TYPE_1,
+        usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+        cube: true,
+    };
+    let image = Image::new(device, desc)?;
+    let texels: usize = cube.levels.iter().map(|faces| faces.iter().map(Vec::len).sum::<usize>()).sum();
+    let mut staging =
+        Buffer::new(device, texels as u64 * 8, vk::BufferUsageFlags::TRANSFER_SRC, MemoryUse::Upload)?;
+    let mut regions = Vec::with_capacity(cube.levels.len());
+    let mut half: Vec<half::f16> = Vec::with_capacity(texels * 4);
+    for (level, faces) in cube.levels.iter().enumerate() {
+        let side = cube.level_size(level);
+        regions.push(
+            vk::BufferImageCopy::default()
+                .buffer_offset(half.len() as u64 * 2)
+                .image_subresource(
+                    vk::ImageSubresourceLayers::default()
+                        .aspect_mask(vk::ImageAspectFlags::COLOR)
+                        .mip_level(level as u32)
+                        .base_array_layer(0)
+                        .layer_count(6),
+                )
+                .image_extent(vk::Extent3D { width: side, height: side, depth: 1 }),
+        );
+        for face in faces {
+            half.extend(face.iter().flatten().map(|&v| half::f16::from_f32(v)));
+        }
+    }
+    staging.write(0, &half);
+    let range = desc.whole();
+    let d = &device.raw;
+    device.submit_and_wait(|cb| {
+        transition(
+            d,
+            cb,
+            image.raw,
+            range,
+            (vk::ImageLayout::UNDEFINED, vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty()),
+            (
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_WRITE,
+            ),
+        );
+        // SAFETY: the image is in TRANSFER_DST_OPTIMAL and the regions lie inside the staging
+        // buffer and the image.
+        unsafe {
+            d.cmd_copy_buffer_to_image(
+                cb,
+                staging.raw,
+                image.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &regions,
+            )
+        };
+        transition(
+            d,
+            cb,
+            image.raw,
+            range,
+            (
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_WRITE,
+            ),
+            (
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                vk::PipelineStageFlags::FRAGMENT_SHADER,
+                vk::AccessFlags::SHADER_READ,
+            ),
+        );
+    })?;
+    Ok(image)
+}
+
+/// What `argile info` shows of Vulkan: every device, and the one Argile would use and why.
+#[derive(Clone, Debug)]
+pub struct DeviceProbe {
+    /// Every physical device.
+    pub devices: Vec<super::DeviceInfo>,
+    /// The device chosen (index and why), or why none can be.
+    pub choice: Result<(usize, String), String>,
+}
+
+impl std::fmt::Display for DeviceProbe {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        for (i, d) in self.devices.iter().enumerate() {
+            writeln!(
+                f,
+                "  [{i}] {} ({}, Vulkan {}): multiview {} ({} views), MSAA samples {}{}",
+                d.name,
+                d.kind,
+                super::gpu::instance::version_string(d.api_version),
+                if d.multiview { "yes" } else { "no" },
+                d.max_multiview_views,
+                d.sample_list(),
+                d.unusable_because().map(|w| format!(" — unusable: {w}")).unwrap_or_default()
+            )?;
+        }
+        match &self.choice {
+            Ok((i, why)) => writeln!(f, "  would use [{i}] {}: {why}", self.devices[*i].name),
+            Err(e) => writeln!(f, "  {e}"),
+        }
+    }
+}
+
+/// Lists the Vulkan devices and says which one a renderer would use (honouring
+/// `ARGILE_DEVICE`), without creating a device.
+pub fn probe_devices() -> Result<DeviceProbe, RenderError> {
+    let instance = Instance::new(false)?;
+    let devices: Vec<super::DeviceInfo> =
+        super::gpu::device::enumerate(&instance.raw)?.into_iter().map(|(_, info)| info).collect();
+    let wanted = std::env::var(super::DEVICE_VARIABLE).ok();
+    let choice = super::choose_device(&devices, wanted.as_deref());
+    Ok(DeviceProbe { devices, choice })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_uniform_block_matches_std140() {
+        // Offsets in shaders/include/frame.glsl under std140 (vec4 and mat4 members only).
+        let u = FrameUniforms::default();
+        let base = std::ptr::from_ref(&u) as usize;
+        let offset = |p: *const u8| p as usize - base;
+        assert_eq!(offset(std::ptr::from_ref(&u.light_vector).cast()), 288);
+        assert_eq!(offset(std::ptr::from_ref(&u.sh).cast()), 416);
+        assert_eq!(offset(std::ptr::from_ref(&u.params).cast()), 592);
+        assert_eq!(offset(std::ptr::from_ref(&u.tools).cast()), 608);
+    }
+}

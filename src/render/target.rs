@@ -1,0 +1,244 @@
+//! The offscreen stereo target: a 2-layer colour image (layer 0 the left eye, layer 1 the
+//! right), multisampled colour and depth when MSAA is on, and the multiview render pass that
+//! draws both layers in one pass (view mask 0b11) and resolves the samples.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::gpu::device::Device;
+use super::gpu::image::{Image, ImageDesc};
+use super::RenderError;
+
+/// The format of the images read back: 8-bit sRGB, so the shaders write linear colour.
+pub(crate) const COLOUR_FORMAT: vk::Format = vk::Format::R8G8B8A8_SRGB;
+
+/// Both eyes' attachments and the render pass. Field order is drop order: the framebuffer
+/// and render pass go before the images they refer to.
+pub(crate) struct StereoTarget {
+    framebuffer: vk::Framebuffer,
+    pub(crate) render_pass: vk::RenderPass,
+    /// The single-sample image that is read back (the resolve target with MSAA).
+    pub(crate) output: Image,
+    /// Multisampled colour (MSAA only).
+    _msaa: Option<Image>,
+    _depth: Image,
+    pub(crate) extent: vk::Extent2D,
+    pub(crate) samples: vk::SampleCountFlags,
+    device: Arc<Device>,
+}
+
+fn depth_format(device: &Device) -> Result<vk::Format, RenderError> {
+    [vk::Format::D32_SFLOAT, vk::Format::X8_D24_UNORM_PACK32, vk::Format::D16_UNORM]
+        .into_iter()
+        .find(|&f| {
+            // SAFETY: a plain query.
+            let props =
+                unsafe { device.instance.raw.get_physical_device_format_properties(device.physical, f) };
+            props.optimal_tiling_features.contains(vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT)
+        })
+        .ok_or_else(|| RenderError::Unsupported(format!("{} offers no depth format", device.info.name)))
+}
+
+impl StereoTarget {
+    /// A target of `width`×`height` per eye with `samples` samples per pixel.
+    pub(crate) fn new(
+        device: &Arc<Device>,
+        width: u32,
+        height: u32,
+        samples: u32,
+    ) -> Result<Self, RenderError> {
+        let sample_flags = vk::SampleCountFlags::from_raw(samples);
+        if !samples.is_power_of_two() || !device.info.sample_counts.contains(sample_flags) {
+            return Err(RenderError::Unsupported(format!(
+                "{} cannot render with {samples} samples per pixel (it offers {})",
+                device.info.name,
+                device.info.sample_list()
+            )));
+        }
+        let msaa = samples > 1;
+        let depth_format = depth_format(device)?;
+        let base = ImageDesc {
+            width,
+            height,
+            layers: 2,
+            mip_levels: 1,
+            format: COLOUR_FORMAT,
+            samples: vk::SampleCountFlags::TYPE_1,
+            usage: vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+            cube: false,
+        };
+        let output = Image::new(device, base)?;
+        let msaa_image = if msaa {
+            Some(Image::new(
+                device,
+                ImageDesc { samples: sample_flags, usage: vk::ImageUsageFlags::COLOR_ATTACHMENT, ..base },
+            )?)
+        } else {
+            None
+        };
+        let depth = Image::new(
+            device,
+            ImageDesc {
+                format: depth_format,
+                samples: sample_flags,
+                usage: vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+                ..base
+            },
+        )?;
+
+        // Attachment 0: what the pass draws into (MSAA colour, or the output itself);
+        // attachment 1: depth; attachment 2 (MSAA only): the resolve into the output.
+        // The output ends in TRANSFER_SRC_OPTIMAL, ready to be read back.
+        let drawn = vk::AttachmentDescription::default()
+            .format(COLOUR_FORMAT)
+            .samples(sample_flags)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(if msaa { vk::AttachmentStoreOp::DONT_CARE } else { vk::AttachmentStoreOp::STORE })
+            .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+            .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .initial_layout(vk::ImageLayout::UNDEFINED)
+            .final_layout(if msaa {
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL
+            } else {
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL
+            });
+        let depth_attachment = vk::AttachmentDescription::default()
+            .format(depth_format)
+            .samples(sample_flags)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+            .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .initial_layout(vk::ImageLayout::UNDEFINED)
+            .final_layout(vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL);
+        let resolve = vk::AttachmentDescription::default()
+            .format(COLOUR_FORMAT)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .load_op(vk::AttachmentLoadOp::DONT_CARE)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+            .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .initial_layout(vk::ImageLayout::UNDEFINED)
+            .final_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL);
+        let mut attachments = vec![drawn, depth_attachment];
+        if msaa {
+            attachments.push(resolve);
+        }
+        let colour_ref =
+            [vk::AttachmentReference { attachment: 0, layout: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL }];
+        let depth_ref = vk::AttachmentReference {
+            attachment: 1,
+            layout: vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+        };
+        let resolve_ref =
+            [vk::AttachmentReference { attachment: 2, layout: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL }];
+        let mut subpass = vk::SubpassDescription::default()
+            .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+            .color_attachments(&colour_ref)
+            .depth_stencil_attachment(&depth_ref);
+        if msaa {
+            subpass = subpass.resolve_attachments(&resolve_ref);
+        }
+        let dependencies = [
+            // The previous frame's readback copy finishes before this frame writes the output.
+            vk::SubpassDependency::default()
+                .src_subpass(vk::SUBPASS_EXTERNAL)
+                .dst_subpass(0)
+                .src_stage_mask(
+                    vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS,
+                )
+                .dst_stage_mask(
+                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT
+                        | vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS,
+                )
+                .src_access_mask(
+                    vk::AccessFlags::TRANSFER_READ | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE,
+                )
+                .dst_access_mask(
+                    vk::AccessFlags::COLOR_ATTACHMENT_WRITE | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE,
+                ),
+            // The readback copy sees this frame's (resolved) colour.
+            vk::SubpassDependency::default()
+                .src_subpass(0)
+                .dst_subpass(vk::SUBPASS_EXTERNAL)
+                .src_stage_mask(vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT)
+                .dst_stage_mask(vk::PipelineStageFlags::TRANSFER)
+                .src_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE)
+                .dst_access_mask(vk::AccessFlags::TRANSFER_READ),
+        ];
+        // Single-pass stereo: both views drawn by every draw call, view i into layer i.
+        let view_masks = [0b11u32];
+        let correlation_masks = [0b11u32];
+        let mut multiview = vk::RenderPassMultiviewCreateInfo::default()
+            .view_masks(&view_masks)
+            .correlation_masks(&correlation_masks);
+        let subpasses = [subpass];
+        let info = vk::RenderPassCreateInfo::default()
+            .attachments(&attachments)
+            .subpasses(&subpasses)
+            .dependencies(&dependencies)
+            .push_next(&mut multiview);
+        let d = &device.raw;
+        // SAFETY: every array the create info points to lives across the call.
+        let render_pass =
+            unsafe { d.create_render_pass(&info, None) }.map_err(RenderError::vk("vkCreateRenderPass"))?;
+        let mut views = vec![msaa_image.as_ref().map_or(output.view, |m| m.view), depth.view];
+        if msaa {
+            views.push(output.view);
+        }
+        // With multiview the framebuffer has one layer; the views address both layers.
+        let fb_info = vk::FramebufferCreateInfo::default()
+            .render_pass(render_pass)
+            .attachments(&views)
+            .width(width)
+            .height(height)
+            .layers(1);
+        // SAFETY: the views are live 2-layer views matching the render pass's attachments.
+        let framebuffer = match unsafe { d.create_framebuffer(&fb_info, None) } {
+            Ok(f) => f,
+            Err(e) => {
+                // SAFETY: nothing uses the render pass yet.
+                unsafe { d.destroy_render_pass(render_pass, None) };
+                return Err(RenderError::vk("vkCreateFramebuffer")(e));
+            }
+        };
+        Ok(Self {
+            framebuffer,
+            render_pass,
+            output,
+            _msaa: msaa_image,
+            _depth: depth,
+            extent: vk::Extent2D { width, height },
+            samples: sample_flags,
+            device: device.clone(),
+        })
+    }
+
+    /// Begins the render pass, clearing colour to `clear` (linear RGBA) and depth to 1.
+    pub(crate) fn begin(&self, cb: vk::CommandBuffer, clear: [f32; 4]) {
+        let clear_values = [
+            vk::ClearValue { color: vk::ClearColorValue { float32: clear } },
+            vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } },
+            vk::ClearValue { color: vk::ClearColorValue { float32: clear } },
+        ];
+        let info = vk::RenderPassBeginInfo::default()
+            .render_pass(self.render_pass)
+            .framebuffer(self.framebuffer)
+            .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent: self.extent })
+            .clear_values(&clear_values);
+        // SAFETY: `cb` is recording outside a render pass; the framebuffer matches the pass.
+        unsafe { self.device.raw.cmd_begin_render_pass(cb, &info, vk::SubpassContents::INLINE) };
+    }
+}
+
+impl Drop for StereoTarget {
+    fn drop(&mut self) {
+        // SAFETY: the renderer waits for its frames before dropping the target; the images are
+        // dropped after this (field order).
+        unsafe {
+            self.device.raw.destroy_framebuffer(self.framebuffer, None);
+            self.device.raw.destroy_render_pass(self.render_pass, None);
+        }
+    }
+}
