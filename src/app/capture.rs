@@ -111,7 +111,10 @@ pub fn render_scene(scene: &Scene, options: &RenderOptions) -> Result<Vec<Writte
         });
     }
     bar.finish_and_clear();
-    let messages = renderer.take_validation_messages();
+    // Dropping the renderer first lets the layer report destruction problems (leaks) too.
+    let log = renderer.validation_log();
+    drop(renderer);
+    let messages = log.take();
     if !messages.is_empty() {
         anyhow::bail!(
             "the Vulkan validation layer reported {} problem(s):\n{}",

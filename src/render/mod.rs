@@ -29,7 +29,7 @@ mod shapes;
 mod target;
 
 pub use frame::*;
-pub use gpu::{choose_device, DeviceInfo, DeviceKind, DEVICE_VARIABLE};
+pub use gpu::{choose_device, DeviceInfo, DeviceKind, ValidationLog, DEVICE_VARIABLE};
 pub use renderer::{probe_devices, DeviceProbe, Renderer, RendererDesc, StereoImage};
 
 use ash::vk;

@@ -18,7 +18,7 @@ use super::gpu::instance::Instance;
 use super::gpu::pipeline::{DescriptorPool, Layout, Pipeline, PipelineDesc, PUSH_CONSTANT_BYTES};
 use super::shapes::{full_screen_quad, icosphere, unit_box};
 use super::target::StereoTarget;
-use super::{Environment, Frame, Light, RenderError, MAX_LIGHTS};
+use super::{Environment, Frame, Light, RenderError, ValidationLog, MAX_LIGHTS};
 use crate::math::Vec3;
 use crate::mesh::{MeshDiff, Vertex};
 
@@ -378,10 +378,10 @@ impl Renderer {
         self.arena.apply(diff, &mut self.arena_buffers)
     }
 
-    /// The warnings and errors the validation layer reported since the last call (none when
-    /// it is off).
-    pub fn take_validation_messages(&self) -> Vec<String> {
-        self.device.instance.take_messages()
+    /// The validation layer's log (always empty when the layer is off). Keep the handle to
+    /// read what is reported while the renderer is dropped.
+    pub fn validation_log(&self) -> ValidationLog {
+        self.device.instance.validation_log()
     }
 
     /// Whether the validation layer is on.
@@ -710,6 +710,27 @@ pub fn probe_devices() -> Result<DeviceProbe, RenderError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The log really receives what the layer says: an invalid call (a buffer of size 0) is
+    /// reported. Needs Vulkan and the validation layer; fails without them.
+    #[test]
+    fn validation_errors_reach_the_log() {
+        let instance = Arc::new(Instance::new(true).expect("a Vulkan instance with the validation layer"));
+        let log = instance.validation_log();
+        let device = Device::new(instance).expect("a Vulkan device");
+        let info = vk::BufferCreateInfo::default().size(0).usage(vk::BufferUsageFlags::VERTEX_BUFFER);
+        // SAFETY: deliberately invalid (size 0) to provoke the layer; the buffer, if the driver
+        // made one, is destroyed at once and never used.
+        unsafe {
+            if let Ok(b) = device.raw.create_buffer(&info, None) {
+                device.raw.destroy_buffer(b, None);
+            }
+        }
+        let messages = log.take();
+        assert!(messages.iter().any(|m| m.contains("size")), "the layer reported {messages:?}");
+        drop(device);
+        assert!(log.take().is_empty(), "a clean teardown reports nothing");
+    }
 
     #[test]
     fn the_uniform_block_matches_std140() {

@@ -12,6 +12,18 @@ const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 /// Messages the validation layer reported, shared with its callback.
 type MessageLog = Mutex<Vec<String>>;
 
+/// The validation layer's warnings and errors. A handle outlives the renderer, so problems
+/// reported while Vulkan objects are destroyed (leaks, wrong order) are read too.
+#[derive(Clone, Debug, Default)]
+pub struct ValidationLog(Arc<MessageLog>);
+
+impl ValidationLog {
+    /// The messages reported since the last call.
+    pub fn take(&self) -> Vec<String> {
+        std::mem::take(&mut *self.0.lock().unwrap_or_else(|p| p.into_inner()))
+    }
+}
+
 /// The loaded Vulkan library and an instance on it.
 ///
 /// Owns the instance and the debug messenger; `Drop` destroys the messenger, then the
@@ -21,7 +33,7 @@ pub(crate) struct Instance {
     /// The instance function table.
     pub(crate) raw: ash::Instance,
     /// The callback's user data points into this; dropped after the messenger.
-    messages: Arc<MessageLog>,
+    messages: ValidationLog,
     /// The loader; must outlive `raw`.
     _entry: ash::Entry,
 }
@@ -70,7 +82,7 @@ impl Instance {
             layers.push(VALIDATION_LAYER.as_ptr());
             extensions.push(ash::ext::debug_utils::NAME.as_ptr());
         }
-        let messages: Arc<MessageLog> = Arc::default();
+        let messages = ValidationLog::default();
         let app = vk::ApplicationInfo::default()
             .application_name(c"argile")
             .application_version(vk::make_api_version(0, 0, 1, 0))
@@ -88,7 +100,7 @@ impl Instance {
                     | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
             )
             .pfn_user_callback(Some(on_debug_message))
-            .user_data(Arc::as_ptr(&messages).cast_mut().cast());
+            .user_data(Arc::as_ptr(&messages.0).cast_mut().cast());
         let mut create = vk::InstanceCreateInfo::default()
             .application_info(&app)
             .enabled_layer_names(&layers)
@@ -124,9 +136,9 @@ impl Instance {
         self.debug.is_some()
     }
 
-    /// The warnings and errors the validation layer reported since the last call.
-    pub(crate) fn take_messages(&self) -> Vec<String> {
-        std::mem::take(&mut *self.messages.lock().unwrap_or_else(|p| p.into_inner()))
+    /// The validation layer's log (empty for good when the layer is off).
+    pub(crate) fn validation_log(&self) -> ValidationLog {
+        self.messages.clone()
     }
 }
 

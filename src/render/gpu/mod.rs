@@ -9,3 +9,4 @@ pub(crate) mod instance;
 pub(crate) mod pipeline;
 
 pub use device::{choose_device, DeviceInfo, DeviceKind, DEVICE_VARIABLE};
+pub use instance::ValidationLog;
