@@ -1,8 +1,24 @@
-//! Input devices: for now, which ones the station can see (`argile info`).
+//! Input devices: which ones the station can see (`argile info`), and the pure stages that
+//! turn device data into tool poses.
 //!
-//! Device identification is a pure function of vendor, product and usage ids, tested without
-//! hardware; enumeration goes through `hidapi` (3Dconnexion SpaceMice) and `gilrs` (gamepads).
-//! Knows nothing of the field or Vulkan.
+//! ```text
+//!  HID report bytes ──► spacemouse::parse_report ──► SpaceMouseState (latest raw axes, buttons)
+//!      ──► calibration::apply_calibration ──► SixDof (calibrated deflection)
+//!  tracked hand positions ──► smoothing (Galyean–Hughes predictive, One Euro)
+//!      ──► clutch (relative mode with gain) ──► tool pose
+//! ```
+//!
+//! Contract: every stage is a pure function or a small state machine fed plain values, tested
+//! without hardware on recorded-style data; device threads only read and forward bytes. Bad
+//! device data is an error value to count, never a panic. Calibration is TOML data
+//! (`calibration/*.toml`). Device identification is a pure function of vendor, product and
+//! usage ids; enumeration goes through `hidapi` (3Dconnexion SpaceMice) and `gilrs` (gamepads).
+//! Knows nothing of the field, meshes, the renderer or Vulkan.
+
+pub mod calibration;
+pub mod clutch;
+pub mod smoothing;
+pub mod spacemouse;
 
 /// 3Dconnexion's vendor ids: Logitech's (older devices) and 3Dconnexion's own.
 pub const SPACEMOUSE_VENDORS: [u16; 2] = [0x046d, 0x256f];
