@@ -17,7 +17,7 @@ use super::gpu::image::{transition, Image, ImageDesc, Sampler};
 use super::gpu::instance::Instance;
 use super::gpu::pipeline::{DescriptorPool, Layout, Pipeline, PipelineDesc, PUSH_CONSTANT_BYTES};
 use super::shapes::{full_screen_quad, icosphere, unit_box};
-use super::target::StereoTarget;
+use super::target::{StereoTarget, ViewPass, ViewPasses, VIEW_PASSES_VARIABLE};
 use super::{Environment, Frame, Light, RenderError, ValidationLog, MAX_LIGHTS};
 use crate::math::Vec3;
 use crate::mesh::{MeshDiff, Vertex};
@@ -30,8 +30,6 @@ macro_rules! spirv {
 
 /// Spacing of the grid drawn on the stage walls, metres.
 const STAGE_GRID_M: f32 = 0.05;
-/// Quads per stage wall edge (see `shapes`: small triangles avoid clipping).
-const STAGE_SUBDIVISIONS: u32 = 32;
 /// Tools whose crosshairs the stage shows.
 const MAX_TOOLS: usize = 2;
 
@@ -144,12 +142,7 @@ impl ArenaStorage for ArenaBuffers {
     }
 }
 
-/// A fixed mesh in buffers of its own.
-///
-/// Each has its own buffers, bound at offset 0 and drawn from index 0: with multiview,
-/// lavapipe (Mesa 22.3) drops from the second view every draw that reads its vertices or
-/// indices at an offset (a binding offset, `firstIndex` or `vertexOffset`) and every draw
-/// that makes its vertices from `gl_VertexIndex` without buffers; only the left eye showed them.
+/// A fixed mesh in buffers of its own, drawn whole.
 struct ShapeMesh {
     vertices: Buffer,
     indices: Buffer,
@@ -180,9 +173,10 @@ impl ShapeMesh {
 struct Shapes {
     sphere: ShapeMesh,
     cube: ShapeMesh,
-    triangle: ShapeMesh,
+    quad: ShapeMesh,
 }
 
+/// The pipelines of one view pass (a pipeline is made for one render pass).
 struct Pipelines {
     background: Pipeline,
     stage: Pipeline,
@@ -195,12 +189,13 @@ struct Pipelines {
 /// Field order is drop order (after `Drop::drop` waits for the device): pipelines and the
 /// descriptor pool, the target, buffers, the environment, layouts, and the device last.
 pub struct Renderer {
-    pipelines: Pipelines,
+    /// One set of pipelines per view pass of the target.
+    pipelines: Vec<Pipelines>,
     descriptors: DescriptorPool,
     target: StereoTarget,
     arena_buffers: ArenaBuffers,
     arena: ChunkArena,
-    /// The fixed meshes: glyph sphere, stage box, full-screen triangle.
+    /// The fixed meshes: glyph sphere, stage box, full-screen quad.
     shapes: Shapes,
     uniforms: Buffer,
     readback: Buffer,
@@ -235,7 +230,11 @@ impl Renderer {
     ) -> Result<Self, RenderError> {
         let instance = Arc::new(Instance::new(desc.validation)?);
         let device = Device::new(instance)?;
-        let target = StereoTarget::new(&device, desc.width, desc.height, desc.samples)?;
+        let wanted = std::env::var(VIEW_PASSES_VARIABLE).ok();
+        let view_passes =
+            ViewPasses::for_device(&device.info.name, wanted.as_deref()).map_err(RenderError::Unsupported)?;
+        tracing::debug!("stereo view passes: {view_passes:?}");
+        let target = StereoTarget::new(&device, desc.width, desc.height, desc.samples, view_passes)?;
         let layout = Layout::new(&device)?;
 
         let cube_size = match environment {
@@ -263,8 +262,8 @@ impl Renderer {
 
         let shapes = Shapes {
             sphere: ShapeMesh::new(&device, icosphere(3))?,
-            cube: ShapeMesh::new(&device, unit_box(STAGE_SUBDIVISIONS))?,
-            triangle: ShapeMesh::new(&device, full_screen_quad())?,
+            cube: ShapeMesh::new(&device, unit_box())?,
+            quad: ShapeMesh::new(&device, full_screen_quad())?,
         };
 
         const INITIAL_VERTICES: u32 = 1 << 16;
@@ -285,9 +284,8 @@ impl Renderer {
             device: device.clone(),
         };
 
-        let make = |desc: PipelineDesc| {
-            Pipeline::new(&device, &desc, &layout, target.render_pass, target.extent, target.samples)
-        };
+        // The background is drawn after the opaque geometry, at depth 1 with the depth test on,
+        // so only pixels nothing else covers are shaded.
         let base = PipelineDesc {
             name: "background",
             vertex: spirv!("background.vert"),
@@ -298,39 +296,45 @@ impl Renderer {
             depth_write: false,
             blend: false,
         };
-        let pipelines = Pipelines {
-            background: make(base)?,
-            stage: make(PipelineDesc {
-                name: "stage",
-                vertex: spirv!("stage.vert"),
-                fragment: spirv!("stage.frag"),
-                attributes: 2,
-                cull: vk::CullModeFlags::FRONT,
-                depth_test: true,
-                depth_write: true,
-                ..base
-            })?,
-            clay: make(PipelineDesc {
-                name: "clay",
-                vertex: spirv!("clay.vert"),
-                fragment: spirv!("clay.frag"),
-                attributes: 3,
-                cull: vk::CullModeFlags::BACK,
-                depth_test: true,
-                depth_write: true,
-                ..base
-            })?,
-            glyph: make(PipelineDesc {
-                name: "tool glyph",
-                vertex: spirv!("glyph.vert"),
-                fragment: spirv!("glyph.frag"),
-                attributes: 2,
-                cull: vk::CullModeFlags::BACK,
-                depth_test: true,
-                depth_write: false,
-                blend: true,
-            })?,
+        let pipelines_for = |pass: &ViewPass| -> Result<Pipelines, RenderError> {
+            let make = |desc: PipelineDesc| {
+                Pipeline::new(&device, &desc, &layout, pass.render_pass, target.extent, target.samples)
+            };
+            Ok(Pipelines {
+                background: make(base)?,
+                stage: make(PipelineDesc {
+                    name: "stage",
+                    vertex: spirv!("stage.vert"),
+                    fragment: spirv!("stage.frag"),
+                    attributes: 2,
+                    cull: vk::CullModeFlags::FRONT,
+                    depth_test: true,
+                    depth_write: true,
+                    ..base
+                })?,
+                clay: make(PipelineDesc {
+                    name: "clay",
+                    vertex: spirv!("clay.vert"),
+                    fragment: spirv!("clay.frag"),
+                    attributes: 3,
+                    cull: vk::CullModeFlags::BACK,
+                    depth_test: true,
+                    depth_write: true,
+                    ..base
+                })?,
+                glyph: make(PipelineDesc {
+                    name: "tool glyph",
+                    vertex: spirv!("glyph.vert"),
+                    fragment: spirv!("glyph.frag"),
+                    attributes: 2,
+                    cull: vk::CullModeFlags::BACK,
+                    depth_test: true,
+                    depth_write: false,
+                    blend: true,
+                })?,
+            })
         };
+        let pipelines = target.passes.iter().map(pipelines_for).collect::<Result<Vec<_>, _>>()?;
 
         let command_buffer = device.command_buffer()?;
         // SAFETY: a valid create info on a live device; destroyed in Drop.
@@ -436,7 +440,30 @@ impl Renderer {
         // re-recorded; every handle recorded is owned by `self` and outlives the submission.
         unsafe {
             d.begin_command_buffer(cb, &begin).map_err(RenderError::vk("vkBeginCommandBuffer"))?;
-            self.target.begin(cb, frame.background.extend(1.0).to_array());
+            for (pass, pipelines) in self.target.passes.iter().zip(&self.pipelines) {
+                self.target.begin(cb, pass, frame.background.extend(1.0).to_array());
+                self.record_pass(cb, pipelines, frame);
+                d.cmd_end_render_pass(cb);
+            }
+            d.end_command_buffer(cb).map_err(RenderError::vk("vkEndCommandBuffer"))?;
+            let cbs = [cb];
+            let submit = [vk::SubmitInfo::default().command_buffers(&cbs)];
+            d.queue_submit(self.device.queue, &submit, self.fence)
+                .map_err(RenderError::vk("vkQueueSubmit"))?;
+            d.wait_for_fences(&[self.fence], true, u64::MAX).map_err(RenderError::vk("vkWaitForFences"))?;
+            d.reset_fences(&[self.fence]).map_err(RenderError::vk("vkResetFences"))?;
+        }
+        self.drawn = true;
+        Ok(())
+    }
+
+    /// Records one view pass's draws: stage, clay, background (where nothing else is), then
+    /// the translucent tool glyphs.
+    fn record_pass(&self, cb: vk::CommandBuffer, pipelines: &Pipelines, frame: &Frame) {
+        let d = &self.device.raw;
+        // SAFETY: `cb` is recording inside a render pass these pipelines were made for; every
+        // buffer and set bound is owned by `self` and outlives the submission.
+        unsafe {
             d.cmd_bind_descriptor_sets(
                 cb,
                 vk::PipelineBindPoint::GRAPHICS,
@@ -451,20 +478,20 @@ impl Renderer {
                     max: stage.max_m.extend(0.0).to_array(),
                     colour: stage.colour.extend(1.0).to_array(),
                 };
-                d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, self.pipelines.stage.raw);
+                d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, pipelines.stage.raw);
                 self.push(cb, &push);
                 self.draw_shape(cb, &self.shapes.cube);
             }
             if self.arena.draw_count() > 0 {
-                d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, self.pipelines.clay.raw);
+                d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, pipelines.clay.raw);
                 d.cmd_bind_vertex_buffers(cb, 0, &[self.arena_buffers.vertices.raw], &[0]);
                 d.cmd_bind_index_buffer(cb, self.arena_buffers.indices.raw, 0, vk::IndexType::UINT32);
                 d.cmd_draw_indexed(cb, self.arena.draw_count(), 1, 0, 0, 0);
             }
-            d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, self.pipelines.background.raw);
-            self.draw_shape(cb, &self.shapes.triangle);
+            d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, pipelines.background.raw);
+            self.draw_shape(cb, &self.shapes.quad);
             if !frame.tools.is_empty() {
-                d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, self.pipelines.glyph.raw);
+                d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, pipelines.glyph.raw);
                 for tool in &frame.tools {
                     let push =
                         GlyphPush { model: tool.model.to_cols_array_2d(), colour: tool.colour.to_array() };
@@ -472,17 +499,7 @@ impl Renderer {
                     self.draw_shape(cb, &self.shapes.sphere);
                 }
             }
-            d.cmd_end_render_pass(cb);
-            d.end_command_buffer(cb).map_err(RenderError::vk("vkEndCommandBuffer"))?;
-            let cbs = [cb];
-            let submit = [vk::SubmitInfo::default().command_buffers(&cbs)];
-            d.queue_submit(self.device.queue, &submit, self.fence)
-                .map_err(RenderError::vk("vkQueueSubmit"))?;
-            d.wait_for_fences(&[self.fence], true, u64::MAX).map_err(RenderError::vk("vkWaitForFences"))?;
-            d.reset_fences(&[self.fence]).map_err(RenderError::vk("vkResetFences"))?;
         }
-        self.drawn = true;
-        Ok(())
     }
 
     fn draw_shape(&self, cb: vk::CommandBuffer, shape: &ShapeMesh) {

@@ -1,11 +1,7 @@
 //! The fixed meshes the renderer draws besides the clay: the tool glyph's sphere, the stage
 //! box and the background's full-screen triangle, packed into one static buffer.
 //!
-//! Lavapipe (Mesa 22.3) loses, in the second view of a multiview pass, every triangle that has
-//! to be clipped (one reaching far outside the viewport, or crossing the near plane): the
-//! right eye showed neither the stage nor a background drawn as one oversized triangle. So
-//! the background is a quad exactly covering clip space, and the stage walls are grids of
-//! small quads that stay within the rasteriser's guard band. GPUs clip both views alike.
+//! Every one is drawn from its own buffers at offset 0 (see `ShapeMesh` in the renderer).
 
 use std::collections::HashMap;
 
@@ -80,49 +76,32 @@ pub(crate) fn icosphere(levels: u32) -> (Vec<Vertex>, Vec<u32>) {
     (vertices, faces.into_iter().flatten().collect())
 }
 
-/// The unit box `[0, 1]³`, each face a grid of `n` × `n` quads (normals outward,
-/// counter-clockwise seen from outside): `6 (n + 1)²` vertices, `36 n²` indices.
-pub(crate) fn unit_box(n: u32) -> (Vec<Vertex>, Vec<u32>) {
-    let n = n.max(1);
-    let side = n + 1;
-    let mut vertices = Vec::with_capacity(6 * (side * side) as usize);
-    let mut indices = Vec::with_capacity(36 * (n * n) as usize);
+/// The unit box `[0, 1]³`: 24 vertices (4 per face, normals outward), 36 indices,
+/// counter-clockwise seen from outside.
+pub(crate) fn unit_box() -> (Vec<Vertex>, Vec<u32>) {
+    let mut vertices = Vec::with_capacity(24);
+    let mut indices = Vec::with_capacity(36);
     for axis in 0..3 {
         // Tangent axes in cyclic order: e_b × e_c = e_axis.
         let (b, c) = ((axis + 1) % 3, (axis + 2) % 3);
         for positive in [true, false] {
             let mut normal = Vec3::ZERO;
             normal[axis] = if positive { 1.0 } else { -1.0 };
+            // Counter-clockwise seen from the side the normal points to.
+            let corners = if positive {
+                [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+            } else {
+                [(0.0, 0.0), (0.0, 1.0), (1.0, 1.0), (1.0, 0.0)]
+            };
             let base = vertices.len() as u32;
-            for j in 0..side {
-                for i in 0..side {
-                    let mut p = Vec3::ZERO;
-                    p[axis] = if positive { 1.0 } else { 0.0 };
-                    p[b] = i as f32 / n as f32;
-                    p[c] = j as f32 / n as f32;
-                    vertices.push(Vertex {
-                        position: p.to_array(),
-                        normal: normal.to_array(),
-                        colour: [1.0; 4],
-                    });
-                }
+            for (u, v) in corners {
+                let mut p = Vec3::ZERO;
+                p[axis] = if positive { 1.0 } else { 0.0 };
+                p[b] = u;
+                p[c] = v;
+                vertices.push(Vertex { position: p.to_array(), normal: normal.to_array(), colour: [1.0; 4] });
             }
-            for j in 0..n {
-                for i in 0..n {
-                    let q = [
-                        base + j * side + i,
-                        base + j * side + i + 1,
-                        base + (j + 1) * side + i + 1,
-                        base + (j + 1) * side + i,
-                    ];
-                    // (b, c) grid order is counter-clockwise seen from +axis; reverse for −axis.
-                    if positive {
-                        indices.extend([q[0], q[1], q[2], q[0], q[2], q[3]]);
-                    } else {
-                        indices.extend([q[0], q[2], q[1], q[0], q[3], q[2]]);
-                    }
-                }
-            }
+            indices.extend([base, base + 1, base + 2, base, base + 2, base + 3]);
         }
     }
     (vertices, indices)
@@ -163,8 +142,8 @@ mod tests {
 
     #[test]
     fn the_box_is_the_closed_unit_cube_with_outward_counter_clockwise_faces() {
-        let (v, i) = unit_box(3);
-        assert_eq!((v.len(), i.len()), (6 * 16, 36 * 9));
+        let (v, i) = unit_box();
+        assert_eq!((v.len(), i.len()), (24, 36));
         let centre = Vec3::splat(0.5);
         let mut area = 0.0;
         for t in i.chunks(3) {
