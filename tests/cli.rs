@@ -42,8 +42,10 @@ fn bench_render_stereo_runs_on_the_vulkan_device() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8(out.stdout).unwrap();
     let lines: Vec<serde_json::Value> = text.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
-    assert_eq!(lines.len(), 2);
+    assert_eq!(lines.len(), 4, "two scenes, each with joint and split view passes");
     assert!(lines[1]["triangles"].as_u64().unwrap() >= 100_000);
+    let passes: Vec<&str> = lines.iter().map(|l| l["view_passes"].as_str().unwrap()).collect();
+    assert_eq!(passes, ["joint", "joint", "split", "split"]);
     assert!(lines.iter().all(|l| l["median_frame_ms"].as_f64().unwrap() > 0.0 && l["device"].is_string()));
 }
 

@@ -11,6 +11,7 @@ use super::playback::Playback;
 use crate::field::Field;
 use crate::math::{IVec3, Vec3};
 use crate::mesh::{mesh_all, remesh_dirty, ChunkMesh, MeshDiff};
+use crate::render::ViewPasses;
 use crate::scene::Scene;
 use crate::tool::{stamp_sphere, Action};
 
@@ -19,7 +20,8 @@ use crate::tool::{stamp_sphere, Action};
 pub enum Workload {
     /// A straight stroke of sphere stamps of radius 4, 8, 16 and 32 voxels into empty space.
     Stamp,
-    /// Stereo frames of the default scene and of a mesh of over a million triangles.
+    /// Stereo frames of the default scene and of a mesh of over a million triangles, with
+    /// both eyes in one multiview pass and with one pass per eye.
     RenderStereo,
 }
 
@@ -157,57 +159,65 @@ fn bench_render(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> {
     let hands = playback.hands();
     let (big, extent) = replicate(&sculpt, size.big_mesh_triangles, 0.3);
 
-    let mut renderer = renderer_for(&scene, None, false)?;
-    for (name, diff, frame_scene) in [
-        ("default", &sculpt, scene.clone()),
-        ("million-triangles", &big, {
-            let mut s = scene.clone();
-            s.rig.eye_m = Vec3::new(0.0, extent * 0.6, extent * 0.55);
-            s.rig.target_m = Vec3::new(0.0, 0.0, -extent * 0.45);
-            s.rig.convergence_m = (s.rig.target_m - s.rig.eye_m).length();
-            s.rig.far_m = extent * 4.0;
-            s.stage = None;
-            s
-        }),
-    ] {
-        // Replace whatever the previous mesh left.
-        let clear = MeshDiff {
-            removed: sculpt.upserted.iter().chain(&big.upserted).map(|(k, _)| *k).collect(),
-            ..MeshDiff::default()
-        };
-        renderer.apply(&clear)?;
-        renderer.apply(diff)?;
-        let frame = build_frame(&frame_scene, &hands, true);
-        for _ in 0..3 {
-            renderer.draw(&frame)?;
+    // Both ways of drawing the eyes, each in a renderer of its own, so that their ratio is
+    // measured in one run.
+    for view_passes in [ViewPasses::Joint, ViewPasses::Split] {
+        let mut renderer = renderer_for(&scene, None, false, Some(view_passes))?;
+        for (name, diff, frame_scene) in [
+            ("default", &sculpt, scene.clone()),
+            ("million-triangles", &big, {
+                let mut s = scene.clone();
+                s.rig.eye_m = Vec3::new(0.0, extent * 0.6, extent * 0.55);
+                s.rig.target_m = Vec3::new(0.0, 0.0, -extent * 0.45);
+                s.rig.convergence_m = (s.rig.target_m - s.rig.eye_m).length();
+                s.rig.far_m = extent * 4.0;
+                s.stage = None;
+                s
+            }),
+        ] {
+            // Replace whatever the previous mesh left.
+            let clear = MeshDiff {
+                removed: sculpt.upserted.iter().chain(&big.upserted).map(|(k, _)| *k).collect(),
+                ..MeshDiff::default()
+            };
+            renderer.apply(&clear)?;
+            renderer.apply(diff)?;
+            let frame = build_frame(&frame_scene, &hands, true);
+            for _ in 0..3 {
+                renderer.draw(&frame)?;
+            }
+            let mut frame_ms = Vec::with_capacity(size.frames);
+            for _ in 0..size.frames {
+                let t = Instant::now();
+                renderer.draw(&frame)?;
+                frame_ms.push(t.elapsed().as_secs_f64() * 1e3);
+            }
+            let mut readback_ms = Vec::new();
+            for _ in 0..size.frames.min(5) {
+                let t = Instant::now();
+                renderer.read_back()?;
+                readback_ms.push(t.elapsed().as_secs_f64() * 1e3);
+            }
+            let min_frame = frame_ms.iter().copied().fold(f64::INFINITY, f64::min);
+            emit(json!({
+                "workload": "render-stereo",
+                "scene": name,
+                "device": renderer.device_name(),
+                "view_passes": match view_passes {
+                    ViewPasses::Joint => "joint",
+                    ViewPasses::Split => "split",
+                },
+                "width_px": size.image_px,
+                "height_px": size.image_px,
+                "eyes": 2,
+                "samples": scene.output.samples,
+                "triangles": renderer.triangle_count(),
+                "frames": size.frames,
+                "median_frame_ms": median(frame_ms),
+                "min_frame_ms": min_frame,
+                "median_readback_ms": median(readback_ms),
+            }));
         }
-        let mut frame_ms = Vec::with_capacity(size.frames);
-        for _ in 0..size.frames {
-            let t = Instant::now();
-            renderer.draw(&frame)?;
-            frame_ms.push(t.elapsed().as_secs_f64() * 1e3);
-        }
-        let mut readback_ms = Vec::new();
-        for _ in 0..size.frames.min(5) {
-            let t = Instant::now();
-            renderer.read_back()?;
-            readback_ms.push(t.elapsed().as_secs_f64() * 1e3);
-        }
-        let min_frame = frame_ms.iter().copied().fold(f64::INFINITY, f64::min);
-        emit(json!({
-            "workload": "render-stereo",
-            "scene": name,
-            "device": renderer.device_name(),
-            "width_px": size.image_px,
-            "height_px": size.image_px,
-            "eyes": 2,
-            "samples": scene.output.samples,
-            "triangles": renderer.triangle_count(),
-            "frames": size.frames,
-            "median_frame_ms": median(frame_ms),
-            "min_frame_ms": min_frame,
-            "median_readback_ms": median(readback_ms),
-        }));
     }
     Ok(())
 }

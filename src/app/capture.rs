@@ -8,7 +8,7 @@ use super::environment::load_environment;
 use super::frame::build_frame;
 use super::playback::Playback;
 use crate::mesh::{mesh_all, remesh_dirty};
-use crate::render::{Renderer, RendererDesc, StereoImage};
+use crate::render::{Renderer, RendererDesc, StereoImage, ViewPasses};
 use crate::scene::Scene;
 use crate::stereo::{compose, Preview};
 
@@ -53,11 +53,17 @@ pub fn save_png_atomically(image: &image::RgbaImage, path: &Path) -> Result<()> 
     Ok(())
 }
 
-/// A renderer for a scene's output settings and environment.
-pub fn renderer_for(scene: &Scene, size_px: Option<(u32, u32)>, validation: bool) -> Result<Renderer> {
+/// A renderer for a scene's output settings and environment (`view_passes`: `None` lets the
+/// environment and the device choose).
+pub fn renderer_for(
+    scene: &Scene,
+    size_px: Option<(u32, u32)>,
+    validation: bool,
+    view_passes: Option<ViewPasses>,
+) -> Result<Renderer> {
     let environment = load_environment(&scene.environment.choice)?;
     let (width, height) = size_px.unwrap_or((scene.output.width_px, scene.output.height_px));
-    let desc = RendererDesc { width, height, samples: scene.output.samples, validation };
+    let desc = RendererDesc { width, height, samples: scene.output.samples, validation, view_passes };
     Ok(Renderer::new(&desc, &environment, scene.environment.intensity)?)
 }
 
@@ -70,7 +76,7 @@ pub fn render_scene(scene: &Scene, options: &RenderOptions) -> Result<Vec<Writte
         scene.output.width_px = w;
         scene.output.height_px = h;
     }
-    let mut renderer = renderer_for(&scene, None, options.validation)?;
+    let mut renderer = renderer_for(&scene, None, options.validation, None)?;
     tracing::info!("rendering {} on {}", scene.source, renderer.device_name());
     let mut playback = Playback::new(&scene);
     let initial = mesh_all(playback.field());

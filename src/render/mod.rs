@@ -30,7 +30,9 @@ mod target;
 
 pub use frame::*;
 pub use gpu::{choose_device, DeviceInfo, DeviceKind, ValidationLog, DEVICE_VARIABLE};
-pub use renderer::{probe_devices, DeviceProbe, Renderer, RendererDesc, StereoImage};
+pub use renderer::{
+    probe_devices, DeviceProbe, Renderer, RendererDesc, StereoImage, ViewPasses, VIEW_PASSES_VARIABLE,
+};
 
 use ash::vk;
 

@@ -17,7 +17,8 @@ use super::gpu::image::{transition, Image, ImageDesc, Sampler};
 use super::gpu::instance::Instance;
 use super::gpu::pipeline::{DescriptorPool, Layout, Pipeline, PipelineDesc, PUSH_CONSTANT_BYTES};
 use super::shapes::{full_screen_quad, icosphere, unit_box};
-use super::target::{StereoTarget, ViewPass, ViewPasses, VIEW_PASSES_VARIABLE};
+use super::target::{StereoTarget, ViewPass};
+pub use super::target::{ViewPasses, VIEW_PASSES_VARIABLE};
 use super::{Environment, Frame, Light, RenderError, ValidationLog, MAX_LIGHTS};
 use crate::math::Vec3;
 use crate::mesh::{MeshDiff, Vertex};
@@ -44,6 +45,9 @@ pub struct RendererDesc {
     pub samples: u32,
     /// Turn the Vulkan validation layer on.
     pub validation: bool,
+    /// How the eyes are drawn; `None` lets `ARGILE_VIEW_PASSES`, then the device, decide
+    /// ([`ViewPasses::for_device`]).
+    pub view_passes: Option<ViewPasses>,
 }
 
 /// Both eyes' images, read back: 8-bit sRGB, top row first.
@@ -230,9 +234,14 @@ impl Renderer {
     ) -> Result<Self, RenderError> {
         let instance = Arc::new(Instance::new(desc.validation)?);
         let device = Device::new(instance)?;
-        let wanted = std::env::var(VIEW_PASSES_VARIABLE).ok();
-        let view_passes =
-            ViewPasses::for_device(&device.info.name, wanted.as_deref()).map_err(RenderError::Unsupported)?;
+        let view_passes = match desc.view_passes {
+            Some(v) => v,
+            None => {
+                let wanted = std::env::var(VIEW_PASSES_VARIABLE).ok();
+                ViewPasses::for_device(&device.info.name, wanted.as_deref())
+                    .map_err(RenderError::Unsupported)?
+            }
+        };
         tracing::debug!("stereo view passes: {view_passes:?}");
         let target = StereoTarget::new(&device, desc.width, desc.height, desc.samples, view_passes)?;
         let layout = Layout::new(&device)?;
@@ -386,6 +395,15 @@ impl Renderer {
     /// read what is reported while the renderer is dropped.
     pub fn validation_log(&self) -> ValidationLog {
         self.device.instance.validation_log()
+    }
+
+    /// How the eyes are drawn.
+    pub fn view_passes(&self) -> ViewPasses {
+        if self.target.passes.len() == 1 {
+            ViewPasses::Joint
+        } else {
+            ViewPasses::Split
+        }
     }
 
     /// Whether the validation layer is on.
@@ -707,7 +725,20 @@ impl std::fmt::Display for DeviceProbe {
             )?;
         }
         match &self.choice {
-            Ok((i, why)) => writeln!(f, "  would use [{i}] {}: {why}", self.devices[*i].name),
+            Ok((i, why)) => {
+                let name = &self.devices[*i].name;
+                writeln!(f, "  would use [{i}] {name}: {why}")?;
+                let wanted = std::env::var(VIEW_PASSES_VARIABLE).ok();
+                match ViewPasses::for_device(name, wanted.as_deref()) {
+                    Ok(ViewPasses::Joint) => writeln!(f, "  stereo: both eyes in one multiview pass"),
+                    Ok(ViewPasses::Split) => writeln!(
+                        f,
+                        "  stereo: one multiview pass per eye (this driver loses clipped triangles in the \
+                         second view of a joint pass)"
+                    ),
+                    Err(e) => writeln!(f, "  {e}"),
+                }
+            }
             Err(e) => writeln!(f, "  {e}"),
         }
     }

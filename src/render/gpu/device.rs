@@ -119,9 +119,14 @@ pub fn choose_device(devices: &[DeviceInfo], override_: Option<&str>) -> Result<
         .filter(|(_, d)| d.unusable_because().is_none())
         .min_by_key(|(i, d)| (d.kind, *i));
     match best {
-        Some((i, d)) => {
-            Ok((i, format!("the first usable {} (discrete, then integrated GPUs, then software)", d.kind)))
-        }
+        Some((i, d)) => Ok((
+            i,
+            match d.kind {
+                DeviceKind::Discrete => "it is the first usable discrete GPU".to_owned(),
+                DeviceKind::Cpu => "no usable GPU was found, so Vulkan renders on the CPU".to_owned(),
+                kind => format!("no usable discrete GPU was found; it is the first usable {kind}"),
+            },
+        )),
         None => Err(format!(
             "no Vulkan device can run Argile: {}",
             devices
