@@ -12,3 +12,16 @@ pub use capture::{render_scene, renderer_for, save_png_atomically, RenderOptions
 pub use environment::{load_environment, EnvironmentError};
 pub use frame::{build_frame, world_lights};
 pub use playback::Playback;
+
+use crate::field::HistoryConfig;
+
+/// Where the station keeps its state between runs (undo spill files, recovery journals):
+/// `$XDG_STATE_HOME/argile` on Linux (else the platform's local data folder).
+pub fn state_dir() -> Option<std::path::PathBuf> {
+    dirs::state_dir().or_else(dirs::data_local_dir).map(|d| d.join("argile"))
+}
+
+/// The undo history's settings: the default budgets, spilling into the state folder.
+pub fn history_config() -> HistoryConfig {
+    HistoryConfig { spill_dir: state_dir().map(|d| d.join("undo")), ..HistoryConfig::default() }
+}

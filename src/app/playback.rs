@@ -27,6 +27,7 @@ impl<'s> Playback<'s> {
     /// The scene at time 0: its initial clay, rasterised into a new field.
     pub fn new(scene: &'s Scene) -> Self {
         let mut field = Field::new(scene.voxel_size_m, scene.iso);
+        field.set_history_config(super::history_config());
         for primitive in &scene.clay {
             rasterize_solid(&mut field, &primitive.solid, primitive.op, primitive.colour);
         }
@@ -85,6 +86,9 @@ impl<'s> Playback<'s> {
                 continue;
             }
             if stroke.as_ref().is_none_or(|(tool, _)| *tool != during.tool) {
+                if !self.field.in_stroke() {
+                    self.field.begin_stroke();
+                }
                 let mut s = Stroke::new(self.scene.tools[during.tool].tool);
                 s.move_to(&mut self.field, at_start.pose.position_m);
                 *stroke = Some((during.tool, s));
@@ -92,6 +96,13 @@ impl<'s> Playback<'s> {
             if let Some((_, s)) = stroke {
                 s.move_to(&mut self.field, at_end.pose.position_m);
             }
+        }
+        // The hands' strokes form one undo step while any of them draws.
+        let drawing = self.strokes.iter().any(Option::is_some);
+        if drawing && !self.field.in_stroke() {
+            self.field.begin_stroke();
+        } else if !drawing && self.field.in_stroke() {
+            self.field.end_stroke();
         }
         self.time_s = t;
     }
@@ -145,6 +156,20 @@ position_m = [0.1, 0.0, 0.0]
         }
         assert_eq!(a.field().density(IVec3::new(62, 0, 0)), 0.0);
         assert_eq!(a.hands()[0].1.position_m, Vec3::new(0.1, 0.0, 0.0));
+    }
+
+    #[test]
+    fn each_scripted_stroke_is_one_undo_step() {
+        let scene = Scene::default_scene();
+        let mut p = Playback::new(&scene);
+        let initial = p.field().clone();
+        p.advance_to(scene.captures[0].time_s, |_| {});
+        // The groove, then the toothpaste band.
+        assert_eq!(p.field().history_stats().undo_in_memory + usize::from(p.field().in_stroke()), 2);
+        let field = p.field_mut();
+        assert!(field.undo().unwrap() && field.undo().unwrap());
+        assert!(!field.undo().unwrap());
+        assert!(field.same_samples(&initial), "undoing both strokes gives back the initial clay");
     }
 
     #[test]

@@ -1,6 +1,6 @@
 //! The clay: a sparse density + colour field.
 //!
-//! Owns bricks, sampling, and the dirty set the mesher drains. Knows nothing of tools,
+//! Owns bricks, sampling, the dirty set the mesher drains, and the undo/redo history. Knows nothing of tools,
 //! meshes or Vulkan; depends only on `math`.
 //!
 //! Invariants:
@@ -12,9 +12,11 @@
 //! - after every edit, the dirty set holds every brick whose mesh reads a changed sample.
 
 mod brick;
+mod history;
 mod sample;
 mod tree;
 
 pub use brick::{split_index, Brick, BrickKey, Colour, BRICK_SIZE, BRICK_VOLUME, DEFAULT_COLOUR};
+pub use history::{HistoryConfig, HistoryError, HistoryStats, BRICK_BYTES};
 pub use sample::FieldReader;
 pub use tree::{bricks_reading, DirtySet, Field};

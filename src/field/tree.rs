@@ -3,6 +3,7 @@
 use std::collections::{HashMap, HashSet};
 
 use super::brick::{split_index, Brick, BrickKey, Colour, BRICK_SIZE, DEFAULT_COLOUR};
+use super::history::{History, HistoryConfig, HistoryError, HistoryStats, Step};
 use crate::math::{IVec3, VoxelTransform};
 
 /// Bricks whose mesh may have changed since the mesher last drained the set.
@@ -27,14 +28,31 @@ pub fn bricks_reading(lo: IVec3, hi: IVec3) -> (BrickKey, BrickKey) {
 /// 0.5); a lattice point with no brick has density 0 and [`DEFAULT_COLOUR`]; every edit marks
 /// the bricks whose mesh reads what it changed (see [`bricks_reading`]) in the dirty set.
 ///
+/// Edits made between [`Field::begin_stroke`] and [`Field::end_stroke`] form one undo step
+/// (see the `history` module).
+///
 /// This first version has a single resolution level; its API (lattice points, bricks, dirty
 /// set, world sampling) is the one the multi-level field keeps.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct Field {
     transform: VoxelTransform,
     iso: f32,
     bricks: HashMap<BrickKey, Brick>,
     dirty: DirtySet,
+    history: History,
+}
+
+impl Clone for Field {
+    /// A copy of the samples and the dirty set, with an empty history of the same settings.
+    fn clone(&self) -> Self {
+        Self {
+            transform: self.transform,
+            iso: self.iso,
+            bricks: self.bricks.clone(),
+            dirty: self.dirty.clone(),
+            history: History::new(self.history.config().clone()),
+        }
+    }
 }
 
 impl Field {
@@ -46,7 +64,82 @@ impl Field {
             iso,
             bricks: HashMap::new(),
             dirty: DirtySet::new(),
+            history: History::new(HistoryConfig::default()),
         }
+    }
+
+    /// Sets the undo history's limits and spill folder (steps already recorded are kept).
+    pub fn set_history_config(&mut self, config: HistoryConfig) {
+        let old = std::mem::replace(&mut self.history, History::new(config));
+        drop(old);
+    }
+
+    /// Opens a stroke: its edits become one undo step. A stroke still open is closed first,
+    /// and the redo steps are cleared.
+    pub fn begin_stroke(&mut self) {
+        self.history.begin();
+    }
+
+    /// Closes the open stroke, if any.
+    pub fn end_stroke(&mut self) {
+        self.history.end();
+    }
+
+    /// Whether a stroke is open.
+    pub fn in_stroke(&self) -> bool {
+        self.history.recording()
+    }
+
+    /// Undoes the newest stroke (closing an open one first). Returns whether there was one.
+    /// The restored bricks are marked dirty.
+    pub fn undo(&mut self) -> Result<bool, HistoryError> {
+        let Some(step) = self.history.pop_undo()? else { return Ok(false) };
+        let redo = self.swap_in(step);
+        self.history.push_redo(redo);
+        Ok(true)
+    }
+
+    /// Redoes the newest undone stroke. Returns whether there was one.
+    pub fn redo(&mut self) -> bool {
+        let Some(step) = self.history.pop_redo() else { return false };
+        let undo = self.swap_in(step);
+        self.history.push_undo(undo);
+        true
+    }
+
+    /// The undo history's counts.
+    pub fn history_stats(&self) -> HistoryStats {
+        self.history.stats()
+    }
+
+    /// Puts the step's bricks in place and returns the ones they replaced.
+    fn swap_in(&mut self, step: Step) -> Step {
+        let mut replaced = Step { bricks: Vec::with_capacity(step.bricks.len()) };
+        for (key, brick) in step.bricks {
+            let old = match brick {
+                Some(b) => self.bricks.insert(key, b),
+                None => self.bricks.remove(&key),
+            };
+            replaced.bricks.push((key, old));
+            let base = key * BRICK_SIZE;
+            self.mark_dirty(base, base + IVec3::splat(BRICK_SIZE - 1));
+        }
+        replaced
+    }
+
+    /// Whether both fields hold the same samples, bit for bit (same bricks, same values).
+    pub fn same_samples(&self, other: &Field) -> bool {
+        self.bricks.len() == other.bricks.len()
+            && self.bricks.iter().all(|(k, b)| {
+                other.bricks.get(k).is_some_and(|o| {
+                    b.density.iter().zip(o.density.iter()).all(|(x, y)| x.to_bits() == y.to_bits())
+                        && b.colour
+                            .iter()
+                            .flatten()
+                            .zip(o.colour.iter().flatten())
+                            .all(|(x, y)| x.to_bits() == y.to_bits())
+                })
+            })
     }
 
     /// Lattice ↔ world transform.
@@ -116,6 +209,9 @@ impl Field {
                     let base = key * s;
                     let a = lo.max(base) - base;
                     let b = hi.min(base + s - IVec3::ONE) - base;
+                    if create || self.bricks.contains_key(&key) {
+                        self.history.touch(key, self.bricks.get(&key));
+                    }
                     let brick = if create {
                         self.bricks.entry(key).or_default()
                     } else {
