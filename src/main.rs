@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use argile::app::{self, bench, RenderOptions};
+use argile::mesh::export::ExportFormat;
 use argile::scene::Scene;
 use argile::stereo::Preview;
 use clap::{Parser, Subcommand};
@@ -40,6 +41,23 @@ enum Command {
         /// Turn the Vulkan validation layer on (fails on any validation message).
         #[arg(long)]
         validation: bool,
+    },
+    /// Writes the clay of a scene, as it is at the end of its timeline, as a mesh file.
+    ///
+    /// OBJ and STL are written in millimetres, PLY and glTF (GLB) in metres. The mesh is
+    /// welded and indexed; PLY and GLB carry vertex colours.
+    Export {
+        /// The scene file (TOML, see scenes/README.md).
+        input: PathBuf,
+        /// The mesh format.
+        #[arg(long, short, value_enum)]
+        format: ExportFormat,
+        /// The file to write.
+        #[arg(long, short)]
+        out: PathBuf,
+        /// Replace the file if it exists.
+        #[arg(long)]
+        force: bool,
     },
     /// Lists the Vulkan devices, the OpenXR state and the input devices Argile sees.
     Info,
@@ -83,6 +101,16 @@ fn main() -> ExitCode {
         Some(Command::Render { scene, out, preview, size, validation }) => {
             render(&scene, out, preview, size, validation)
         }
+        Some(Command::Export { input, format, out, force }) => app::export(&input, format, &out, force, true)
+            .map(|s| {
+                println!(
+                    "wrote {} ({} vertices, {} triangles, {} bytes)",
+                    s.path.display(),
+                    s.vertices,
+                    s.triangles,
+                    s.bytes
+                )
+            }),
         Some(Command::Info) => info(),
         Some(Command::Bench { json, quick, workloads }) => run_bench(json, quick, &workloads),
     };

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 
 use super::environment::load_environment;
+use super::files::write_atomically;
 use super::frame::build_frame;
 use super::playback::Playback;
 use crate::mesh::{mesh_all, remesh_dirty};
@@ -40,17 +41,13 @@ pub struct WrittenCapture {
     pub preview: Option<PathBuf>,
 }
 
-/// Writes an image atomically: to a temporary file beside the target, then renamed over it.
+/// Writes an image as PNG atomically (see [`write_atomically`]), replacing an older one.
 pub fn save_png_atomically(image: &image::RgbaImage, path: &Path) -> Result<()> {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("image.png");
-    let temp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    image
-        .save_with_format(&temp, image::ImageFormat::Png)
-        .with_context(|| format!("cannot write {}", temp.display()))?;
-    std::fs::rename(&temp, path)
-        .with_context(|| format!("cannot move {} to {}", temp.display(), path.display()))?;
-    Ok(())
+    write_atomically(path, true, |w| {
+        image
+            .write_to(w, image::ImageFormat::Png)
+            .with_context(|| format!("cannot encode {}", path.display()))
+    })
 }
 
 /// A renderer for a scene's output settings and environment (`view_passes`: `None` lets the

@@ -5,11 +5,15 @@
 pub mod bench;
 mod capture;
 mod environment;
+mod export;
+mod files;
 mod frame;
 mod playback;
 
 pub use capture::{render_scene, renderer_for, save_png_atomically, RenderOptions, WrittenCapture};
 pub use environment::{load_environment, EnvironmentError};
+pub use export::{export, final_mesh, ExportSummary};
+pub use files::write_atomically;
 pub use frame::{build_frame, world_lights};
 pub use playback::Playback;
 

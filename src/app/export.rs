@@ -1,0 +1,71 @@
+//! `argile export`: a scene's final clay as a mesh file.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+
+use super::files::write_atomically;
+use super::playback::Playback;
+use crate::mesh::export::{write_mesh, ExportFormat};
+use crate::mesh::{mesh_all, weld, WeldedMesh};
+use crate::scene::Scene;
+
+/// What an export wrote.
+#[derive(Clone, Debug)]
+pub struct ExportSummary {
+    /// The file.
+    pub path: PathBuf,
+    /// Welded vertices.
+    pub vertices: usize,
+    /// Triangles.
+    pub triangles: usize,
+    /// Bytes written.
+    pub bytes: u64,
+}
+
+/// The surface of `scene`'s clay at the end of its timeline (after its last key and capture),
+/// welded into one indexed mesh; chunks in key order, so the same scene gives the same file.
+pub fn final_mesh(scene: &Scene) -> WeldedMesh {
+    let mut playback = Playback::new(scene);
+    let end = scene.captures.iter().map(|c| c.time_s).fold(scene.timeline.duration_s(), f32::max);
+    playback.advance_to(end, |_| {});
+    let mut diff = mesh_all(playback.field());
+    diff.upserted.sort_unstable_by_key(|(k, _)| k.to_array());
+    weld(diff.upserted.iter().map(|(_, m)| m))
+}
+
+/// Exports the scene file `input` as `format` to `out` (refusing to replace a file unless
+/// `overwrite`), with a progress bar when `progress`.
+pub fn export(
+    input: &Path,
+    format: ExportFormat,
+    out: &Path,
+    overwrite: bool,
+    progress: bool,
+) -> Result<ExportSummary> {
+    if !overwrite && out.exists() {
+        bail!("{} already exists; pass --force to replace it", out.display());
+    }
+    let scene = Scene::load(input)?;
+    let mesh = final_mesh(&scene);
+    if mesh.indices.is_empty() {
+        bail!(
+            "{}: the clay has no surface at the end of the timeline; there is nothing to export",
+            input.display()
+        );
+    }
+    let bar = if progress { indicatif::ProgressBar::new(1000) } else { indicatif::ProgressBar::hidden() };
+    bar.set_message(format!("writing {}", out.display()));
+    write_atomically(out, overwrite, |w| {
+        write_mesh(format, &mesh, w, &mut |f| bar.set_position((f * 1000.0) as u64))
+            .with_context(|| format!("cannot write {}", out.display()))
+    })?;
+    bar.finish_and_clear();
+    let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
+    Ok(ExportSummary {
+        path: out.to_path_buf(),
+        vertices: mesh.positions.len(),
+        triangles: mesh.triangle_count(),
+        bytes,
+    })
+}
