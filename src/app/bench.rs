@@ -20,6 +20,12 @@ use crate::tool::{stamp_sphere, Action};
 pub enum Workload {
     /// A straight stroke of sphere stamps of radius 4, 8, 16 and 32 voxels into empty space.
     Stamp,
+    /// Full extraction of the surface of a solid sphere of radius 100 voxels and of the field
+    /// a stroke of radius-16 stamps leaves, on one thread and on all.
+    MeshFull,
+    /// The incremental re-mesh after one stamp of radius 4, 8, 16 and 32 voxels carving the
+    /// surface of a sphere.
+    RemeshStamp,
     /// Stereo frames of the default scene and of a mesh of over a million triangles, with
     /// both eyes in one multiview pass and with one pass per eye.
     RenderStereo,
@@ -27,7 +33,8 @@ pub enum Workload {
 
 impl Workload {
     /// Every workload, in the order `argile bench` runs them.
-    pub const ALL: [Workload; 2] = [Workload::Stamp, Workload::RenderStereo];
+    pub const ALL: [Workload; 4] =
+        [Workload::Stamp, Workload::MeshFull, Workload::RemeshStamp, Workload::RenderStereo];
 }
 
 /// Sizes of the workloads.
@@ -43,15 +50,29 @@ pub struct BenchSize {
     pub frames: usize,
     /// Triangles the big render mesh reaches at least.
     pub big_mesh_triangles: usize,
+    /// Radius of the solid sphere the meshing workloads extract, voxels.
+    pub sphere_radius_voxels: f32,
 }
 
 impl BenchSize {
     /// The standard sizes.
-    pub const STANDARD: BenchSize =
-        BenchSize { stamps: 200, repetitions: 5, image_px: 1024, frames: 20, big_mesh_triangles: 1_000_000 };
+    pub const STANDARD: BenchSize = BenchSize {
+        stamps: 200,
+        repetitions: 5,
+        image_px: 1024,
+        frames: 20,
+        big_mesh_triangles: 1_000_000,
+        sphere_radius_voxels: 100.0,
+    };
     /// A small run that checks the workloads work (not for figures).
-    pub const QUICK: BenchSize =
-        BenchSize { stamps: 20, repetitions: 1, image_px: 128, frames: 2, big_mesh_triangles: 100_000 };
+    pub const QUICK: BenchSize = BenchSize {
+        stamps: 20,
+        repetitions: 1,
+        image_px: 128,
+        frames: 2,
+        big_mesh_triangles: 100_000,
+        sphere_radius_voxels: 24.0,
+    };
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -71,6 +92,8 @@ pub fn run(workloads: &[Workload], size: BenchSize, mut emit: impl FnMut(Value))
     for w in workloads {
         match w {
             Workload::Stamp => bench_stamp(size, &mut emit),
+            Workload::MeshFull => bench_mesh_full(size, &mut emit)?,
+            Workload::RemeshStamp => bench_remesh_stamp(size, &mut emit),
             Workload::RenderStereo => bench_render(size, &mut emit)?,
         }
     }
@@ -116,6 +139,97 @@ fn bench_stamp(size: BenchSize, emit: &mut impl FnMut(Value)) {
             "field_us_per_stamp_median": median(field_only),
             "field_and_mesh_us_per_stamp_median": median(with_mesh),
             "remeshed_triangles_per_stroke": remeshed_tris,
+        }));
+    }
+}
+
+/// A field holding a solid sphere of `radius` voxels (1 mm voxels), centred off the lattice.
+fn sphere_field(radius: f32) -> Field {
+    let mut field = Field::new(0.001, 0.5);
+    stamp_sphere(
+        &mut field,
+        Vec3::new(0.00031, -0.00017, 0.00023),
+        radius * 0.001,
+        Action::Add,
+        [0.7, 0.4, 0.2, 1.0],
+    );
+    field
+}
+
+/// Runs `work` on a pool of `threads` threads.
+fn on_threads<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> Result<T> {
+    Ok(rayon::ThreadPoolBuilder::new().num_threads(threads).build()?.install(work))
+}
+
+fn bench_mesh_full(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> {
+    let mut stroke_field = Field::new(0.001, 0.5);
+    for i in 0..size.stamps {
+        let centre = Vec3::new(i as f32 * 0.008, 0.0, 0.0);
+        stamp_sphere(&mut stroke_field, centre, 0.016, Action::Add, [0.7, 0.4, 0.2, 1.0]);
+    }
+    let sphere = sphere_field(size.sphere_radius_voxels);
+    for (name, field) in [("sphere", &sphere), ("stamp-add-16", &stroke_field)] {
+        let samples = field.brick_count() * crate::field::BRICK_VOLUME;
+        for threads in [1, rayon::current_num_threads()] {
+            let (ms, triangles) = on_threads(threads, || {
+                let _ = mesh_all(field);
+                let mut triangles = 0;
+                let times: Vec<f64> = (0..size.repetitions)
+                    .map(|_| {
+                        let t = Instant::now();
+                        let diff = mesh_all(field);
+                        let ms = t.elapsed().as_secs_f64() * 1e3;
+                        triangles = diff.upserted_triangles();
+                        ms
+                    })
+                    .collect();
+                (median(times), triangles)
+            })?;
+            emit(json!({
+                "workload": "mesh-full",
+                "field": name,
+                "sphere_radius_voxels": size.sphere_radius_voxels,
+                "threads": threads,
+                "repetitions": size.repetitions,
+                "median_ms": ms,
+                "triangles": triangles,
+                "stored_samples": samples,
+                "stored_samples_per_second": samples as f64 / (ms * 1e-3),
+            }));
+        }
+    }
+    Ok(())
+}
+
+fn bench_remesh_stamp(size: BenchSize, emit: &mut impl FnMut(Value)) {
+    let radius = size.sphere_radius_voxels;
+    for r in [4.0f32, 8.0, 16.0, 32.0] {
+        let mut field = sphere_field(radius);
+        let _ = mesh_all(&field);
+        field.take_dirty();
+        let stamps = size.stamps.min(100);
+        let mut times = Vec::with_capacity(stamps);
+        let mut bricks = 0;
+        for i in 0..stamps {
+            // Carving stamps walking over the sphere's surface, each on fresh clay.
+            let angle = i as f32 * 2.0 * r / radius;
+            let centre = Vec3::new(angle.cos(), 0.3 * (i as f32 * 0.37).sin(), angle.sin()).normalize()
+                * radius
+                * 0.001;
+            stamp_sphere(&mut field, centre, r * 0.001, Action::Remove, [0.0; 4]);
+            bricks += field.dirty().len();
+            let t = Instant::now();
+            let diff = remesh_dirty(&mut field);
+            times.push(t.elapsed().as_secs_f64() * 1e6);
+            std::hint::black_box(diff);
+        }
+        emit(json!({
+            "workload": "remesh-stamp",
+            "radius_voxels": r,
+            "stamps": stamps,
+            "threads": rayon::current_num_threads(),
+            "median_us": median(times),
+            "dirty_bricks_per_stamp": bricks as f64 / stamps as f64,
         }));
     }
 }
@@ -236,6 +350,20 @@ mod tests {
         keys.sort_unstable();
         keys.dedup();
         assert_eq!(keys.len(), big.upserted.len());
+    }
+
+    #[test]
+    fn meshing_workloads_report_triangles_and_times() {
+        let mut lines = Vec::new();
+        run(&[Workload::MeshFull, Workload::RemeshStamp], BenchSize::QUICK, |v| lines.push(v)).unwrap();
+        let full: Vec<_> = lines.iter().filter(|l| l["workload"] == "mesh-full").collect();
+        assert_eq!(full.len(), 4, "two fields, one thread and all");
+        assert!(full
+            .iter()
+            .all(|l| l["triangles"].as_u64().unwrap() > 1000 && l["median_ms"].as_f64().unwrap() > 0.0));
+        let remesh: Vec<_> = lines.iter().filter(|l| l["workload"] == "remesh-stamp").collect();
+        assert_eq!(remesh.len(), 4);
+        assert!(remesh.iter().all(|l| l["dirty_bricks_per_stamp"].as_f64().unwrap() >= 1.0));
     }
 
     #[test]

@@ -38,6 +38,9 @@ pub struct Field {
     transform: VoxelTransform,
     iso: f32,
     bricks: HashMap<BrickKey, Brick>,
+    /// Lowest and highest density of each stored brick, kept with every edit, so that whole
+    /// bricks can be classified (inside, outside, crossing the surface) without reading them.
+    ranges: HashMap<BrickKey, (f32, f32)>,
     dirty: DirtySet,
     history: History,
 }
@@ -49,6 +52,7 @@ impl Clone for Field {
             transform: self.transform,
             iso: self.iso,
             bricks: self.bricks.clone(),
+            ranges: self.ranges.clone(),
             dirty: self.dirty.clone(),
             history: History::new(self.history.config().clone()),
         }
@@ -63,6 +67,7 @@ impl Field {
             transform: VoxelTransform::new(voxel_size_m),
             iso,
             bricks: HashMap::new(),
+            ranges: HashMap::new(),
             dirty: DirtySet::new(),
             history: History::new(HistoryConfig::default()),
         }
@@ -117,8 +122,14 @@ impl Field {
         let mut replaced = Step { bricks: Vec::with_capacity(step.bricks.len()) };
         for (key, brick) in step.bricks {
             let old = match brick {
-                Some(b) => self.bricks.insert(key, b),
-                None => self.bricks.remove(&key),
+                Some(b) => {
+                    self.ranges.insert(key, density_range(&b));
+                    self.bricks.insert(key, b)
+                }
+                None => {
+                    self.ranges.remove(&key);
+                    self.bricks.remove(&key)
+                }
             };
             replaced.bricks.push((key, old));
             let base = key * BRICK_SIZE;
@@ -160,6 +171,11 @@ impl Field {
     /// The brick with this key, if stored.
     pub fn brick(&self, key: BrickKey) -> Option<&Brick> {
         self.bricks.get(&key)
+    }
+
+    /// The lowest and highest density of a stored brick (`None`: no brick, all samples 0).
+    pub fn density_range(&self, key: BrickKey) -> Option<(f32, f32)> {
+        self.ranges.get(&key).copied()
     }
 
     /// Keys of every stored brick, in no particular order.
@@ -229,8 +245,12 @@ impl Field {
                             }
                         }
                     }
-                    if brick.is_empty() {
+                    let range = density_range(brick);
+                    if range.1 == 0.0 {
                         self.bricks.remove(&key);
+                        self.ranges.remove(&key);
+                    } else {
+                        self.ranges.insert(key, range);
                     }
                 }
             }
@@ -261,6 +281,11 @@ impl Field {
     }
 }
 
+/// Lowest and highest density of a brick, in one pass.
+fn density_range(brick: &Brick) -> (f32, f32) {
+    brick.density.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &d| (lo.min(d), hi.max(d)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -280,8 +305,10 @@ mod tests {
         assert_eq!(f.density(IVec3::splat(-3)), 1.0);
         assert_eq!(f.density(IVec3::splat(-4)), 0.0);
         assert!((f.mass() - 216.0).abs() < 1e-9);
+        assert_eq!(f.density_range(IVec3::splat(-1)), Some((0.0, 1.0)));
         f.edit_box(IVec3::splat(-3), IVec3::splat(2), false, |_, d, _| *d = 0.0);
         assert_eq!(f.brick_count(), 0);
+        assert_eq!(f.density_range(IVec3::splat(-1)), None);
     }
 
     #[test]

@@ -58,6 +58,27 @@ pub fn mesh_brick(
     march_brick(block, field.iso(), field.transform(), scratch, out);
 }
 
+/// Whether brick `key` surely holds no triangle: the cells it meshes read bricks
+/// `key ..= key + 1` on each axis, and those are all inside the clay or all outside it.
+/// Decided from the field's per-brick density ranges, without reading a sample.
+pub fn surely_empty(field: &Field, key: BrickKey) -> bool {
+    let iso = field.iso();
+    let mut inside = 0;
+    for c in 0..8 {
+        let k = key + IVec3::new(c & 1, (c >> 1) & 1, (c >> 2) & 1);
+        match field.density_range(k) {
+            None => {}
+            Some((_, hi)) if hi < iso => {}
+            Some((lo, _)) if lo >= iso => inside += 1,
+            Some(_) => return false,
+        }
+        if inside != 0 && inside != c + 1 {
+            return false;
+        }
+    }
+    true
+}
+
 /// Re-meshes the given bricks in parallel: bricks with triangles are upserted, the others
 /// removed (removing a chunk the renderer does not hold is harmless).
 pub fn remesh<I: IntoIterator<Item = BrickKey>>(field: &Field, keys: I) -> MeshDiff {
@@ -65,6 +86,14 @@ pub fn remesh<I: IntoIterator<Item = BrickKey>>(field: &Field, keys: I) -> MeshD
     // A fixed order makes diffs (and so draw order and images) reproducible.
     keys.sort_unstable_by_key(|k| k.to_array());
     keys.dedup();
+    let mut diff = MeshDiff::default();
+    keys.retain(|&k| {
+        let empty = surely_empty(field, k);
+        if empty {
+            diff.removed.push(k);
+        }
+        !empty
+    });
     let meshes: Vec<(BrickKey, ChunkMesh)> = keys
         .par_iter()
         .map_init(
@@ -76,7 +105,6 @@ pub fn remesh<I: IntoIterator<Item = BrickKey>>(field: &Field, keys: I) -> MeshD
             },
         )
         .collect();
-    let mut diff = MeshDiff::default();
     for (key, mesh) in meshes {
         if mesh.is_empty() {
             diff.removed.push(key);
@@ -110,4 +138,36 @@ pub fn mesh_all(field: &Field) -> MeshDiff {
 pub fn remesh_dirty(field: &mut Field) -> MeshDiff {
     let dirty = field.take_dirty();
     remesh(field, dirty)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::Colour;
+
+    fn ball(radius: i32) -> Field {
+        let mut f = Field::new(0.001, 0.5);
+        let r = IVec3::splat(radius + 2);
+        let grey: Colour = [0.5; 4];
+        f.edit_box(-r, r, true, |p, d, c| {
+            *d = (0.5 - (p.as_vec3().length() - radius as f32) / 4.0).clamp(0.0, 1.0);
+            *c = grey;
+        });
+        f
+    }
+
+    #[test]
+    fn only_bricks_away_from_the_surface_are_surely_empty() {
+        let f = ball(30);
+        assert!(surely_empty(&f, IVec3::ZERO), "deep inside");
+        assert!(surely_empty(&f, IVec3::new(10, 0, 0)), "far outside");
+        // The surface crosses x = 30 on the axis: bricks 3 (24..31) and its lower neighbour.
+        assert!(!surely_empty(&f, IVec3::new(3, 0, 0)));
+        // Every brick with triangles is one the shortcut keeps.
+        for key in meshable_bricks(&f) {
+            let mut mesh = ChunkMesh::default();
+            mesh_brick(&f, key, &mut Block::default(), &mut MarchScratch::default(), &mut mesh);
+            assert!(mesh.is_empty() || !surely_empty(&f, key), "brick {key} has triangles");
+        }
+    }
 }
