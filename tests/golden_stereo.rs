@@ -124,6 +124,62 @@ fn toothpaste_stroke_matches_golden() {
     golden_case("toothpaste", "scenes/tests/toothpaste.toml", None);
 }
 
+#[test]
+fn tool_eraser_matches_golden() {
+    golden_tool_case("tool-eraser");
+}
+
+#[test]
+fn tool_heat_gun_matches_golden() {
+    golden_tool_case("tool-heat-gun");
+}
+
+#[test]
+fn tool_build_matches_golden() {
+    golden_tool_case("tool-build");
+}
+
+#[test]
+fn tool_paint_matches_golden() {
+    golden_tool_case("tool-paint");
+}
+
+#[test]
+fn tool_soft_paint_matches_golden() {
+    golden_tool_case("tool-soft-paint");
+}
+
+#[test]
+fn tool_smooth_matches_golden() {
+    golden_tool_case("tool-smooth");
+}
+
+#[test]
+fn tool_stamp_matches_golden() {
+    golden_tool_case("tool-stamp");
+}
+
+#[test]
+fn tool_inflate_matches_golden() {
+    golden_tool_case("tool-inflate");
+}
+
+#[test]
+fn tool_deflate_matches_golden() {
+    golden_tool_case("tool-deflate");
+}
+
+#[test]
+fn tool_freeform_matches_golden() {
+    golden_tool_case("tool-freeform");
+}
+
+/// A tool scene of `scenes/tests/` (one per action, shapes varied among them), rendered small
+/// (160×120 per eye).
+fn golden_tool_case(case: &str) {
+    golden_case(case, &format!("scenes/tests/{case}.toml"), None);
+}
+
 /// The stage seen from inside fills both eyes: no pixel of the magenta background may show
 /// (a driver that loses clipped triangles in one view leaves holes there).
 #[test]

@@ -1,6 +1,6 @@
 //! Building the renderer's per-frame snapshot from the scene and the playback state.
 
-use crate::math::{Mat4, Vec3, Vec4};
+use crate::math::{Mat4, Vec4};
 use crate::render::{Frame, Light, Material, Stage, ToolGlyph};
 use crate::scene::{Attachment, Scene, SceneLight};
 
@@ -40,8 +40,8 @@ pub fn build_frame(scene: &Scene, hands: &[(usize, crate::math::Pose)], show_too
             .map(|&(tool, pose)| {
                 let t = &scene.tools[tool];
                 ToolGlyph {
-                    model: pose.to_matrix() * Mat4::from_scale(Vec3::splat(t.tool.radius_m)),
-                    colour: Vec4::from(t.tool.colour).truncate().extend(t.glyph_opacity),
+                    model: pose.to_matrix() * Mat4::from_scale(t.half_extents_m()),
+                    colour: Vec4::from(t.colour).truncate().extend(t.glyph_opacity),
                 }
             })
             .collect()
@@ -68,6 +68,7 @@ pub fn build_frame(scene: &Scene, hands: &[(usize, crate::math::Pose)], show_too
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::Vec3;
 
     #[test]
     fn viewer_lights_follow_the_viewer() {
@@ -96,7 +97,7 @@ mod tests {
         let f = build_frame(&scene, &[(0, pose)], true);
         let g = f.tools[0];
         let edge = g.model.transform_point3(Vec3::X);
-        assert!((edge.x - (0.1 + scene.tools[0].tool.radius_m)).abs() < 1e-6);
+        assert!((edge.x - (0.1 + scene.tools[0].half_extents_m().x)).abs() < 1e-6);
         assert_eq!(g.colour.w, scene.tools[0].glyph_opacity);
         assert!(build_frame(&scene, &[(0, pose)], false).tools.is_empty());
     }

@@ -3,14 +3,18 @@
 
 use crate::field::Field;
 use crate::math::Pose;
-use crate::scene::{Hand, Scene};
-use crate::tool::{rasterize_solid, Stroke};
+use std::sync::Arc;
+
+use crate::scene::{Hand, Scene, SceneTool, SceneToolShape};
+use crate::tool::{rasterize_solid, Freeform, Stroke, Tool};
 
 /// The clay and the hands' strokes at the current time of a scene's timeline.
 #[derive(Debug)]
 pub struct Playback<'s> {
     scene: &'s Scene,
     field: Field,
+    /// The scene's tools, built once the initial clay is laid (freeform tools copy it).
+    tools: Vec<Tool>,
     /// The stroke each hand is drawing (left, right), with its tool index.
     strokes: [Option<(usize, Stroke)>; 2],
     time_s: f32,
@@ -31,7 +35,8 @@ impl<'s> Playback<'s> {
         for primitive in &scene.clay {
             rasterize_solid(&mut field, &primitive.solid, primitive.op, primitive.colour);
         }
-        let mut playback = Self { scene, field, strokes: [None, None], time_s: 0.0 };
+        let tools = scene.tools.iter().map(|t| build_tool(t, &field)).collect();
+        let mut playback = Self { scene, field, tools, strokes: [None, None], time_s: 0.0 };
         // Keys at time 0 with their action on stamp at once.
         playback.step_to(0.0);
         playback
@@ -89,12 +94,12 @@ impl<'s> Playback<'s> {
                 if !self.field.in_stroke() {
                     self.field.begin_stroke();
                 }
-                let mut s = Stroke::new(self.scene.tools[during.tool].tool);
-                s.move_to(&mut self.field, at_start.pose.position_m);
+                let mut s = Stroke::new(self.tools[during.tool].clone());
+                s.advance(&mut self.field, at_start.pose, 0.0);
                 *stroke = Some((during.tool, s));
             }
             if let Some((_, s)) = stroke {
-                s.move_to(&mut self.field, at_end.pose.position_m);
+                s.advance(&mut self.field, at_end.pose, t - previous);
             }
         }
         // The hands' strokes form one undo step while any of them draws.
@@ -107,6 +112,16 @@ impl<'s> Playback<'s> {
         self.time_s = t;
     }
 
+    /// The tools as built for this playback, in the scene's order.
+    pub fn tools(&self) -> &[Tool] {
+        &self.tools
+    }
+
+    /// The stroke a hand is drawing, if its action is on.
+    pub fn stroke(&self, hand: Hand) -> Option<&Stroke> {
+        self.strokes[slot(hand)].as_ref().map(|(_, s)| s)
+    }
+
     /// Where each hand holds which tool now: `(tool index, pose)` for the hands with keys.
     pub fn hands(&self) -> Vec<(usize, Pose)> {
         Hand::BOTH
@@ -115,6 +130,17 @@ impl<'s> Playback<'s> {
             .map(|s| (s.tool, s.pose))
             .collect()
     }
+}
+
+/// The tool a scene describes; a freeform one copies the clay in its region of `field`.
+pub fn build_tool(t: &SceneTool, field: &Field) -> Tool {
+    let shape = match &t.shape {
+        SceneToolShape::Shape(s) => s.clone(),
+        SceneToolShape::Freeform { min_m, max_m } => {
+            crate::tool::ToolShape::Freeform(Arc::new(Freeform::from_world_box(field, *min_m, *max_m)))
+        }
+    };
+    Tool { shape, scale: t.scale, action: t.action, colour: t.colour, spacing: t.spacing }
 }
 
 #[cfg(test)]

@@ -348,13 +348,38 @@ fn white() -> SceneColour {
 #[serde(rename_all = "snake_case")]
 pub(super) enum ToolShapeSpec {
     Sphere,
+    Ellipsoid,
+    Box,
+    Cylinder,
+    Torus,
+    Freeform,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
+#[serde(rename_all = "snake_case")]
+pub(super) enum FalloffSpec {
+    Wyvill,
+    Box,
 }
 
 #[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
 #[serde(rename_all = "snake_case")]
 pub(super) enum ActionSpec {
+    #[serde(alias = "toothpaste")]
     Add,
+    #[serde(alias = "eraser")]
     Remove,
+    #[serde(alias = "heat_gun", alias = "soft_eraser")]
+    SoftRemove,
+    Build,
+    Paint,
+    SoftPaint,
+    #[serde(alias = "sandpaper")]
+    Smooth,
+    #[serde(alias = "print")]
+    Stamp,
+    Inflate,
+    Deflate,
 }
 
 #[derive(Deserialize)]
@@ -363,8 +388,27 @@ pub(super) struct ToolSpec {
     pub name: String,
     #[serde(default = "sphere")]
     pub shape: ToolShapeSpec,
-    pub radius_m: f32,
+    pub radius_m: Option<f32>,
+    pub radii_m: Option<[f32; 3]>,
+    pub falloff: Option<FalloffSpec>,
+    pub size_m: Option<[f32; 3]>,
+    pub height_m: Option<f32>,
+    pub major_radius_m: Option<f32>,
+    pub minor_radius_m: Option<f32>,
+    pub region_min_m: Option<[f32; 3]>,
+    pub region_max_m: Option<[f32; 3]>,
+    #[serde(default = "unit_scale")]
+    pub scale: [f32; 3],
     pub action: ActionSpec,
+    pub rate_per_s: Option<f32>,
+    pub centre_weight: Option<f32>,
+    pub speed_m_per_s: Option<f32>,
+    pub s: Option<f32>,
+    pub m: Option<f32>,
+    pub r: Option<f32>,
+    pub k: Option<f32>,
+    pub n: Option<f32>,
+    pub falloff_m: Option<f32>,
     #[serde(default = "default_tool_colour")]
     pub colour: SceneColour,
     #[serde(default = "default_spacing")]
@@ -375,6 +419,9 @@ pub(super) struct ToolSpec {
 
 fn sphere() -> ToolShapeSpec {
     ToolShapeSpec::Sphere
+}
+fn unit_scale() -> [f32; 3] {
+    [1.0; 3]
 }
 fn default_tool_colour() -> SceneColour {
     SceneColour([0.5, 0.5, 0.5])

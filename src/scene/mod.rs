@@ -8,17 +8,19 @@
 mod colour;
 mod file;
 mod timeline;
+mod tool;
 
 use std::path::{Path, PathBuf};
 
 pub use colour::{parse_hex, SceneColour};
 pub use timeline::{Hand, HandState, Key, Timeline};
+pub use tool::SceneToolShape;
 
 use crate::field::Colour;
 use crate::math::{Pose, Quat, Vec3};
 use crate::stereo::StereoRig;
-use crate::tool::{Action, CsgOp, PlacedSolid, Solid, Tool};
-use file::{ActionSpec, AttachSpec, ClaySpec, EnvironmentKind, LightKind, OpSpec, SceneFile, ShapeKind};
+use crate::tool::{Action, CsgOp, PlacedSolid, Solid};
+use file::{AttachSpec, ClaySpec, EnvironmentKind, LightKind, OpSpec, SceneFile, ShapeKind};
 
 /// The scene `argile` renders when given none, embedded in the binary.
 pub const DEFAULT_SCENE_TOML: &str = include_str!("../../scenes/default.toml");
@@ -153,10 +155,25 @@ pub struct OutputSettings {
 pub struct SceneTool {
     /// Name keys refer to.
     pub name: String,
-    /// The tool.
-    pub tool: Tool,
+    /// Its shape (a freeform one is copied from the clay when playback starts).
+    pub shape: SceneToolShape,
+    /// Scale along the tool's local X, Y, Z axes.
+    pub scale: Vec3,
+    /// What it does.
+    pub action: Action,
+    /// Linear RGBA of the matter it adds or the paint it applies.
+    pub colour: Colour,
+    /// Distance between stamps, as a fraction of the tool's smallest half extent.
+    pub spacing: f32,
     /// Opacity of its glyph in renders.
     pub glyph_opacity: f32,
+}
+
+impl SceneTool {
+    /// Half the size of the tool's influence box along its local axes, scaled, metres.
+    pub fn half_extents_m(&self) -> Vec3 {
+        self.shape.half_extents_m() * self.scale
+    }
 }
 
 /// A moment at which a stereo pair is written.
@@ -235,9 +252,14 @@ pub(crate) fn line_column(text: &str, offset: usize) -> (usize, usize) {
     (line, column)
 }
 
-type At<'a> = dyn Fn(Option<std::ops::Range<usize>>, String) -> SceneError + 'a;
+pub(super) type At<'a> = dyn Fn(Option<std::ops::Range<usize>>, String) -> SceneError + 'a;
 
-fn positive(value: f32, what: &str, span: &std::ops::Range<usize>, at: &At<'_>) -> Result<f32, SceneError> {
+pub(super) fn positive(
+    value: f32,
+    what: &str,
+    span: &std::ops::Range<usize>,
+    at: &At<'_>,
+) -> Result<f32, SceneError> {
     if value.is_finite() && value > 0.0 {
         Ok(value)
     } else {
@@ -497,21 +519,33 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
         if tools.iter().any(|o| o.name == t.name) {
             return Err(at(Some(span), format!("a tool named `{}` is already defined", t.name)));
         }
-        // Sphere is the one shape this version stamps; the key exists so scenes name it.
-        let file::ToolShapeSpec::Sphere = t.shape;
-        let radius_m = positive(t.radius_m, "radius_m", &span, at)?;
+        let shape = tool::shape_of(t, &span, at)?;
+        let scale = Vec3::from(t.scale);
+        for c in t.scale {
+            if !(c.is_finite() && c > 0.0) {
+                return Err(at(
+                    Some(span),
+                    format!("scale must be three positive numbers, not {:?}", t.scale),
+                ));
+            }
+        }
         if !(0.05..=4.0).contains(&t.spacing) {
             return Err(at(
                 Some(span),
-                format!("spacing is a fraction of the radius between 0.05 and 4, not {}", t.spacing),
+                format!("spacing is a fraction of the tool's size between 0.05 and 4, not {}", t.spacing),
             ));
         }
-        let action = match t.action {
-            ActionSpec::Add => Action::Add,
-            ActionSpec::Remove => Action::Remove,
-        };
-        let tool = Tool { radius_m, action, colour: t.colour.with_alpha(1.0), spacing: t.spacing };
-        tools.push(SceneTool { name: t.name.clone(), tool, glyph_opacity: t.glyph_opacity.clamp(0.0, 1.0) });
+        let size_m = (shape.half_extents_m() * scale).min_element();
+        let action = tool::action_of(t, size_m, &span, at)?;
+        tools.push(SceneTool {
+            name: t.name.clone(),
+            shape,
+            scale,
+            action,
+            colour: t.colour.with_alpha(1.0),
+            spacing: t.spacing,
+            glyph_opacity: t.glyph_opacity.clamp(0.0, 1.0),
+        });
     }
 
     let mut keys = Vec::with_capacity(file.key.len());

@@ -102,3 +102,68 @@ fn captures_are_sorted_and_names_checked() {
     let (_, _, message) = err("[[capture]]\nname = \"../x\"\ntime_s = 1.0\n");
     assert!(message.contains("letters, digits"), "{message}");
 }
+
+const TOOL: &str = "[[tool]]\nname = \"t\"\n";
+
+#[test]
+fn every_tool_scene_of_the_tests_folder_loads() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tests");
+    let mut actions = std::collections::HashSet::new();
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        for t in &scene.tools {
+            actions.insert(std::mem::discriminant(&t.action));
+        }
+    }
+    assert_eq!(actions.len(), 10, "a scene for each of the ten actions");
+}
+
+#[test]
+fn tool_shapes_and_actions_take_their_parameters() {
+    let s = Scene::parse(
+        &format!("{TOOL}shape = \"ellipsoid\"\nradii_m = [0.01, 0.02, 0.03]\nfalloff = \"box\"\nscale = [1.0, 2.0, 1.0]\naction = \"heat_gun\"\nrate_per_s = 2.5\n"),
+        "t",
+        None,
+    )
+    .unwrap();
+    let t = &s.tools[0];
+    assert_eq!(t.action, Action::SoftRemove { rate_per_s: 2.5 });
+    assert_eq!(t.half_extents_m(), Vec3::new(0.01, 0.04, 0.03));
+    let s =
+        Scene::parse(&format!("{TOOL}radius_m = 0.01\naction = \"stamp\"\nn = 0.4\n"), "t", None).unwrap();
+    let Action::Stamp { deformation, falloff_m } = s.tools[0].action else { panic!("a stamp") };
+    assert_eq!(deformation.parameters().4, 0.4);
+    assert_eq!(falloff_m, 0.01);
+    let s = Scene::parse(
+        &format!("{TOOL}shape = \"freeform\"\nregion_min_m = [-0.1, -0.1, -0.1]\nregion_max_m = [0.1, 0.0, 0.1]\naction = \"add\"\n"),
+        "t",
+        None,
+    )
+    .unwrap();
+    assert_eq!(
+        s.tools[0].shape,
+        SceneToolShape::Freeform { min_m: Vec3::splat(-0.1), max_m: Vec3::new(0.1, 0.0, 0.1) }
+    );
+}
+
+#[test]
+fn tool_errors_name_the_line_and_what_to_change() {
+    let (line, column, message) =
+        err(&format!("\n\n{TOOL}radius_m = 0.01\naction = \"stamp\"\ns = 0.5\nm = 0.4\nr = 0.3\n"));
+    assert_eq!((line, column), (3, 1));
+    assert!(message.contains("s + m + r = 1.2") && message.contains("value range"), "{message}");
+    let (_, _, message) = err(&format!("{TOOL}radius_m = 0.01\naction = \"smooth\"\ncentre_weight = 30.0\n"));
+    assert!(message.contains("between 4 and 24"), "{message}");
+    let (_, _, message) = err(&format!("{TOOL}radius_m = 0.01\naction = \"paint\"\nrate_per_s = 1.0\n"));
+    assert!(message.contains("`rate_per_s` does not apply to action paint"), "{message}");
+    let (_, _, message) = err(&format!("{TOOL}shape = \"box\"\nradius_m = 0.01\naction = \"add\"\n"));
+    assert!(message.contains("`radius_m` does not apply to a box tool; it takes size_m"), "{message}");
+    let (_, _, message) = err(&format!("{TOOL}shape = \"torus\"\nmajor_radius_m = 0.01\naction = \"add\"\n"));
+    assert!(message.contains("needs `minor_radius_m`"), "{message}");
+    let (_, _, message) = err(&format!("{TOOL}radius_m = 0.01\nscale = [1.0, 0.0, 1.0]\naction = \"add\"\n"));
+    assert!(message.contains("scale must be three positive numbers"), "{message}");
+    let (line, _, message) = err(&format!("{TOOL}radius_m = 0.01\naction = \"polish\"\n"));
+    assert_eq!(line, 4);
+    assert!(message.contains("unknown variant `polish`"), "{message}");
+}

@@ -32,25 +32,16 @@
 //!     0            ╰──────────────────── signed distance d (voxels)
 //! ```
 
+use super::action::Action;
 use super::shape::PlacedSolid;
 use crate::field::{Colour, Field};
 use crate::math::{IVec3, Vec3};
-
-/// How a tool combines with the clay.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Action {
-    /// Deposits matter: `OBJECT ← max(OBJECT, TOOL)` (the additive tool; a moving one is
-    /// Ferley et al.'s toothpaste).
-    Add,
-    /// Cuts matter away: `OBJECT ← min(OBJECT, 1 − TOOL)` (the subtractive tool).
-    Remove,
-}
 
 /// Mixes the colour of `added` new matter into a sample that held `old_density` of matter.
 ///
 /// Colour is mass-weighted: the old matter keeps its colour, the new matter brings the tool's.
 #[inline]
-fn mix_in(colour: &mut Colour, old_density: f32, new_density: f32, tool: Colour) {
+pub(super) fn mix_in(colour: &mut Colour, old_density: f32, new_density: f32, tool: Colour) {
     if new_density <= old_density || new_density <= 0.0 {
         return;
     }
@@ -64,6 +55,8 @@ fn mix_in(colour: &mut Colour, old_density: f32, new_density: f32, tool: Colour)
 ///
 /// `centre_m` and `radius_m` are world-space; the centre is used as is (sub-voxel placement is
 /// continuous). Returns the lattice box the stamp covered (for callers that track work).
+/// [`Action::Add`] and [`Action::Remove`] run this dedicated kernel; other actions go through
+/// [`super::apply_tool`] with a sphere (rate actions acting for [`super::TICK_S`]).
 pub fn stamp_sphere(
     field: &mut Field,
     centre_m: Vec3,
@@ -88,6 +81,11 @@ pub fn stamp_sphere(
             let tool = solid_density(p.as_vec3().distance(centre) - radius);
             *d = d.min(1.0 - tool);
         }),
+        other => {
+            let tool = super::Tool::new(super::ToolShape::sphere(radius_m), other, colour);
+            let pose = crate::math::Pose { position_m: centre_m, ..Default::default() };
+            super::apply_tool(field, &tool, pose, super::TICK_S);
+        }
     }
     (lo, hi)
 }

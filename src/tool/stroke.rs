@@ -1,35 +1,83 @@
-//! Strokes: a tool dragged along a path leaves stamps at regular arc-length spacing.
+//! Tools and strokes: a tool dragged along a path leaves stamps at regular arc-length spacing,
+//! or, for rate actions, acts in fixed time ticks, so a stroke's result depends on the path
+//! and its timing, not on how often the caller samples them.
+//!
+//! ```text
+//!   per-stamp actions:   ●───●───●───●──▸     a stamp every spacing × size along the path
+//!   rate actions:        ●─●─●─●─●─●─●──▸     an application every TICK_S of held time, at the
+//!                        (faster motion → sparser)  pose interpolated at that instant
+//! ```
 
-use super::stamp::{stamp_sphere, Action};
+use super::action::Action;
+use super::apply::{apply_tool, StampCounters};
+use super::shapes::ToolShape;
 use crate::field::{Colour, Field};
-use crate::math::Vec3;
+use crate::math::{Pose, Vec3};
 
-/// A sculpting tool: a band-limited sphere with an action and a colour.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The time step of rate actions, seconds: they act once per tick of held time, whatever the
+/// caller's frame rate. 1/120 s keeps an inflating surface well under a voxel per tick at
+/// sculpting speeds (the explicit level-set step's stability limit).
+pub const TICK_S: f32 = 1.0 / 120.0;
+
+/// A sculpting tool: a shape scaled along its three axes, an action and a colour.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Tool {
-    /// Radius in metres.
-    pub radius_m: f32,
+    /// Shape in its local frame.
+    pub shape: ToolShape,
+    /// Scale along the local X, Y and Z axes (1 keeps the shape's own size).
+    pub scale: Vec3,
     /// What it does to the clay.
     pub action: Action,
-    /// Linear RGBA of the matter it adds.
+    /// Linear RGBA of the matter it adds or the paint it applies.
     pub colour: Colour,
-    /// Distance between stamps along a stroke, as a fraction of the radius.
+    /// Distance between stamps along a stroke, as a fraction of [`Tool::size_m`].
     pub spacing: f32,
 }
 
-/// A stroke in progress: remembers where the last stamp fell so that stamps stay evenly
-/// spaced whatever the frame or simulation rate.
+impl Tool {
+    /// A tool of unit scale and the default spacing (a quarter of its size).
+    pub fn new(shape: ToolShape, action: Action, colour: Colour) -> Self {
+        Self { shape, scale: Vec3::ONE, action, colour, spacing: 0.25 }
+    }
+
+    /// The tool's size for stamp spacing: its smallest half extent after scaling, metres (a
+    /// sphere's radius).
+    pub fn size_m(&self) -> f32 {
+        (self.shape.half_extents_m() * self.scale).min_element()
+    }
+
+    /// Half the size of the tool's influence box along its local axes after scaling, metres
+    /// (what a glyph of the tool spans).
+    pub fn half_extents_m(&self) -> Vec3 {
+        self.shape.half_extents_m() * self.scale
+    }
+}
+
+/// A stroke in progress: remembers where the last stamp fell and how much held time has not
+/// yet been applied.
 #[derive(Clone, Debug)]
 pub struct Stroke {
     tool: Tool,
-    last_stamp_m: Option<Vec3>,
+    last_stamp: Option<Pose>,
+    last_pose: Option<Pose>,
+    since_tick_s: f64,
     stamps: usize,
+    last_counters: StampCounters,
+    total: StampCounters,
 }
 
 impl Stroke {
-    /// Starts a stroke; nothing is stamped until the first [`Stroke::move_to`].
+    /// Starts a stroke; nothing is applied until the first [`Stroke::advance`].
     pub fn new(tool: Tool) -> Self {
-        Self { tool, last_stamp_m: None, stamps: 0 }
+        Self {
+            tool,
+            last_stamp: None,
+            last_pose: None,
+            since_tick_s: 0.0,
+            stamps: 0,
+            last_counters: StampCounters::default(),
+            total: StampCounters::default(),
+        }
     }
 
     /// The stroke's tool.
@@ -37,31 +85,76 @@ impl Stroke {
         &self.tool
     }
 
-    /// Stamps made so far.
+    /// Stamps (or ticks) applied so far.
     pub fn stamp_count(&self) -> usize {
         self.stamps
     }
 
-    /// Moves the tool to `position_m`, stamping along the straight path from the last stamp
-    /// every `spacing × radius`. The first call stamps at the position itself.
-    pub fn move_to(&mut self, field: &mut Field, position_m: Vec3) {
-        let step = (self.tool.spacing * self.tool.radius_m).max(field.transform().voxel_size_m * 0.25);
-        let Some(mut last) = self.last_stamp_m else {
-            self.stamp(field, position_m);
-            return;
-        };
-        let mut remaining = position_m - last;
-        // The tolerance keeps a stamp that lands on the target despite rounding.
-        while remaining.length() >= step * (1.0 - 1e-4) {
-            last += remaining.normalize() * step;
-            self.stamp(field, last);
-            remaining = position_m - last;
+    /// The counters of the latest stamp.
+    pub fn last_counters(&self) -> StampCounters {
+        self.last_counters
+    }
+
+    /// The counters summed over the stroke.
+    pub fn total_counters(&self) -> StampCounters {
+        self.total
+    }
+
+    /// Moves the tool to `pose`, `dt_s` seconds after the previous call, along the straight
+    /// path (spherical in rotation) from the previous pose.
+    ///
+    /// Per-stamp actions stamp every `spacing × size` of that path, the first call stamping at
+    /// `pose` itself; rate actions act once per [`TICK_S`] of time since the stroke began, at
+    /// the pose interpolated at that instant.
+    pub fn advance(&mut self, field: &mut Field, pose: Pose, dt_s: f32) {
+        if self.tool.action.is_rate_based() {
+            self.advance_in_time(field, pose, dt_s);
+        } else {
+            self.advance_along_path(field, pose);
         }
     }
 
-    fn stamp(&mut self, field: &mut Field, at: Vec3) {
-        stamp_sphere(field, at, self.tool.radius_m, self.tool.action, self.tool.colour);
-        self.last_stamp_m = Some(at);
+    fn advance_along_path(&mut self, field: &mut Field, pose: Pose) {
+        let step = (self.tool.spacing * self.tool.size_m()).max(field.transform().voxel_size_m * 0.25);
+        let Some(mut last) = self.last_stamp else {
+            self.stamp(field, pose, 0.0);
+            return;
+        };
+        let mut remaining = pose.position_m - last.position_m;
+        // The tolerance keeps a stamp that lands on the target despite rounding.
+        while remaining.length() >= step * (1.0 - 1e-4) {
+            let u = step / remaining.length();
+            last = last.lerp(&pose, u.min(1.0));
+            self.stamp(field, last, 0.0);
+            remaining = pose.position_m - last.position_m;
+        }
+    }
+
+    fn advance_in_time(&mut self, field: &mut Field, pose: Pose, dt_s: f32) {
+        let Some(from) = self.last_pose else {
+            self.last_pose = Some(pose);
+            return;
+        };
+        let dt = f64::from(dt_s.max(0.0));
+        let tick = f64::from(TICK_S);
+        // Time into this interval of the next tick; a tick within a microsecond of the
+        // interval's end belongs to it, so rounding in the callers' sums of time never moves a
+        // tick from one call to the next.
+        let mut t = tick - self.since_tick_s;
+        while t <= dt + 1e-6 {
+            let u = (t / dt).min(1.0) as f32;
+            self.stamp(field, from.lerp(&pose, u), TICK_S);
+            t += tick;
+        }
+        self.since_tick_s = (dt - (t - tick)).max(0.0);
+        self.last_pose = Some(pose);
+    }
+
+    fn stamp(&mut self, field: &mut Field, at: Pose, dt_s: f32) {
+        let c = apply_tool(field, &self.tool, at, dt_s);
+        self.last_counters = c;
+        self.total += c;
+        self.last_stamp = Some(at);
         self.stamps += 1;
     }
 }
@@ -70,21 +163,41 @@ impl Stroke {
 mod tests {
     use super::*;
 
+    fn at(x: f32) -> Pose {
+        Pose { position_m: Vec3::new(x, 0.0, 0.0), ..Pose::default() }
+    }
+
     #[test]
     fn stamps_are_evenly_spaced_whatever_the_step_size() {
-        let tool = Tool { radius_m: 0.004, action: Action::Add, colour: [1.0; 4], spacing: 0.25 };
+        let tool = Tool { spacing: 0.25, ..Tool::new(ToolShape::sphere(0.004), Action::Add, [1.0; 4]) };
         let mut coarse = Field::new(0.001, 0.5);
         let mut fine = Field::new(0.001, 0.5);
-        let mut a = Stroke::new(tool);
+        let mut a = Stroke::new(tool.clone());
         let mut b = Stroke::new(tool);
-        a.move_to(&mut coarse, Vec3::ZERO);
-        a.move_to(&mut coarse, Vec3::new(0.02, 0.0, 0.0));
-        b.move_to(&mut fine, Vec3::ZERO);
+        a.advance(&mut coarse, at(0.0), 0.0);
+        a.advance(&mut coarse, at(0.02), 1.0);
+        b.advance(&mut fine, at(0.0), 0.0);
         for i in 1..=37 {
-            b.move_to(&mut fine, Vec3::new(0.02 * i as f32 / 37.0, 0.0, 0.0));
+            b.advance(&mut fine, at(0.02 * i as f32 / 37.0), 1.0 / 37.0);
         }
         assert_eq!(a.stamp_count(), 21);
         assert_eq!(a.stamp_count(), b.stamp_count());
         assert!((coarse.mass() - fine.mass()).abs() < 1e-3 * coarse.mass());
+    }
+
+    #[test]
+    fn rate_actions_act_once_per_tick_of_held_time() {
+        let tool = Tool::new(ToolShape::sphere(0.004), Action::Build { rate_per_s: 0.5 }, [1.0; 4]);
+        let mut f = Field::new(0.001, 0.5);
+        let mut s = Stroke::new(tool);
+        s.advance(&mut f, at(0.0), 0.0);
+        // Held still for one second in uneven frames: 120 ticks, half the density at the core.
+        for dt in [0.3, 0.013, 0.2, 0.187, 0.3] {
+            s.advance(&mut f, at(0.0), dt);
+        }
+        assert_eq!(s.stamp_count(), 120);
+        assert!((f.density(crate::math::IVec3::ZERO) - 0.5).abs() < 1e-4);
+        let c = s.total_counters();
+        assert!(c.visited >= c.computed && c.computed >= c.dirtied && c.dirtied > 0 && c.bricks > 0);
     }
 }

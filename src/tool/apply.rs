@@ -1,0 +1,311 @@
+//! Applying a tool once (one stamp) at a pose: the per-sample pipeline and its counters.
+//!
+//! The walk follows Ferley et al. (1999, §3.2, Fig. 6–7): every lattice point of the tool's
+//! world bounding box is **visited**; those inside the tool's oriented local box are
+//! **computed** (the potential is evaluated there, in the tool's frame); those whose density
+//! or colour changed are **dirtied**. Lattice points map to the local frame by one affine map
+//! stepped along the rows, so a rotated or scaled tool costs no resampling.
+
+use std::ops::AddAssign;
+
+use super::action::Action;
+use super::shape::Solid;
+use super::shapes::ToolFrame;
+use super::shapes::ToolShape;
+use super::stamp::{mix_in, solid_density, SOLID_BAND_VOXELS};
+use super::stroke::Tool;
+use crate::field::{Colour, Field, FieldReader, BRICK_SIZE};
+use crate::math::{IVec3, Pose, Vec3};
+
+/// Work done by one stamp (or a sum of stamps), as in Ferley et al.'s performance table.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StampCounters {
+    /// Lattice points of the tool's world bounding box.
+    pub visited: u64,
+    /// Points inside the tool's oriented box, where the potential was evaluated.
+    pub computed: u64,
+    /// Points whose density or colour changed.
+    pub dirtied: u64,
+    /// Bricks whose samples the stamp walked.
+    pub bricks: u64,
+    /// Resolution level the stamp wrote (0: the finest; the only level so far).
+    pub level: u32,
+}
+
+impl AddAssign for StampCounters {
+    fn add_assign(&mut self, o: Self) {
+        self.visited += o.visited;
+        self.computed += o.computed;
+        self.dirtied += o.dirtied;
+        self.bricks += o.bricks;
+        self.level = self.level.max(o.level);
+    }
+}
+
+/// The lattice box a tool at `frame` may change, and the geometry to evaluate it.
+struct Footprint {
+    lo: IVec3,
+    hi: IVec3,
+    /// Local position of lattice point `lo`, and the local step per lattice unit on each axis.
+    origin: Vec3,
+    step: [Vec3; 3],
+    /// Half size of the local box where the potential can be non-zero.
+    local_half: Vec3,
+    /// Ramp width across hard edges, in the local frame.
+    band_local: f32,
+}
+
+fn footprint(field: &Field, tool: &Tool, frame: &ToolFrame) -> Footprint {
+    let t = *field.transform();
+    let h = t.voxel_size_m;
+    let band_m = match tool.action {
+        Action::Stamp { falloff_m, .. } => falloff_m.max(SOLID_BAND_VOXELS * h),
+        _ => SOLID_BAND_VOXELS * h,
+    };
+    let band_local = band_m / frame.min_scale();
+    let mut local_half = tool.shape.half_extents_m();
+    if tool.shape.is_hard_edged() {
+        local_half += Vec3::splat(0.5 * band_local);
+    }
+    let world = frame.world_bounds(local_half);
+    let lo = t.world_to_index(world.min).ceil().as_ivec3();
+    let hi = t.world_to_index(world.max).floor().as_ivec3();
+    let inv = frame.pose.rotation.inverse();
+    let to_local = |index: IVec3| frame.world_to_local(t.index_to_world(index.as_vec3()));
+    let origin = to_local(lo);
+    let step = [Vec3::X, Vec3::Y, Vec3::Z].map(|axis| inv * (axis * h) / frame.scale);
+    Footprint { lo, hi, origin, step, local_half, band_local }
+}
+
+/// A dense copy of density and colour over `lo − 1 ..= hi + 1`, for actions that read
+/// neighbours: they read the values before the stamp, whatever order the walk writes in.
+struct Snapshot {
+    lo: IVec3,
+    dims: IVec3,
+    density: Vec<f32>,
+    colour: Vec<Colour>,
+}
+
+impl Snapshot {
+    fn take(field: &Field, lo: IVec3, hi: IVec3) -> Self {
+        let (lo, hi) = (lo - IVec3::ONE, hi + IVec3::ONE);
+        let dims = hi - lo + IVec3::ONE;
+        let n = (dims.x * dims.y * dims.z) as usize;
+        let mut reader = FieldReader::new(field);
+        let (mut density, mut colour) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for z in lo.z..=hi.z {
+            for y in lo.y..=hi.y {
+                for x in lo.x..=hi.x {
+                    let p = IVec3::new(x, y, z);
+                    density.push(reader.density(p));
+                    colour.push(reader.colour(p));
+                }
+            }
+        }
+        Self { lo, dims, density, colour }
+    }
+
+    #[inline]
+    fn index(&self, p: IVec3) -> usize {
+        let q = p - self.lo;
+        (q.x + self.dims.x * (q.y + self.dims.y * q.z)) as usize
+    }
+
+    /// Density at `p` and at its six neighbours (−x, +x, −y, +y, −z, +z).
+    #[inline]
+    fn neighbourhood(&self, p: IVec3) -> (f32, [f32; 6]) {
+        let i = self.index(p);
+        let (sx, sy) = (1, self.dims.x as usize);
+        let sz = sy * self.dims.y as usize;
+        let d = &self.density;
+        (d[i], [d[i - sx], d[i + sx], d[i - sy], d[i + sy], d[i - sz], d[i + sz]])
+    }
+
+    /// Density-weighted mean colour of the six neighbours (the sample's own when they are
+    /// empty).
+    fn neighbour_colour(&self, p: IVec3) -> Colour {
+        let i = self.index(p);
+        let (sy, sz) = (self.dims.x as usize, (self.dims.x * self.dims.y) as usize);
+        let mut acc = [0.0f32; 4];
+        let mut w = 0.0;
+        for j in [i - 1, i + 1, i - sy, i + sy, i - sz, i + sz] {
+            let dj = self.density[j];
+            for (a, c) in acc.iter_mut().zip(self.colour[j]) {
+                *a += dj * c;
+            }
+            w += dj;
+        }
+        if w > 0.0 {
+            acc.map(|a| a / w)
+        } else {
+            self.colour[i]
+        }
+    }
+}
+
+#[inline]
+fn lerp_colour(c: &mut Colour, to: Colour, t: f32) {
+    for (a, b) in c.iter_mut().zip(to) {
+        *a += (b - *a) * t;
+    }
+}
+
+/// Applies `tool` once at `pose`; rate-based actions act for `dt_s` seconds (per-stamp
+/// actions ignore it). Returns the stamp's counters.
+///
+/// A uniformly scaled sphere adding or removing matter takes a sphere-only path that gives the
+/// same clay as [`super::stamp_sphere`] with fewer operations per sample.
+pub fn apply_tool(field: &mut Field, tool: &Tool, pose: Pose, dt_s: f32) -> StampCounters {
+    let frame = ToolFrame::new(pose, tool.scale);
+    if let (ToolShape::Solid(Solid::Sphere { radius_m }), Action::Add | Action::Remove) =
+        (&tool.shape, tool.action)
+    {
+        if tool.scale.x == tool.scale.y && tool.scale.y == tool.scale.z {
+            return sphere_fast_path(field, *radius_m * tool.scale.x, tool, pose);
+        }
+    }
+    let fp = footprint(field, tool, &frame);
+    let mut counters = StampCounters::default();
+    if fp.lo.cmpgt(fp.hi).any() {
+        return counters;
+    }
+    let snapshot = tool.action.reads_neighbours().then(|| Snapshot::take(field, fp.lo, fp.hi));
+    let dt_s = if dt_s.is_finite() { dt_s.max(0.0) } else { 0.0 };
+    let inv_h = 1.0 / field.transform().voxel_size_m;
+    let colour = tool.colour;
+    let action = tool.action;
+    let shape = &tool.shape;
+    let mut last_brick = None;
+    field.edit_box(fp.lo, fp.hi, action.may_create(), |p, d, c| {
+        counters.visited += 1;
+        let brick = p.div_euclid(IVec3::splat(BRICK_SIZE));
+        if last_brick != Some(brick) {
+            last_brick = Some(brick);
+            counters.bricks += 1;
+        }
+        let q = (p - fp.lo).as_vec3();
+        let local = fp.origin + fp.step[0] * q.x + fp.step[1] * q.y + fp.step[2] * q.z;
+        if local.abs().cmpgt(fp.local_half).any() {
+            return;
+        }
+        counters.computed += 1;
+        let t = shape.potential(local, fp.band_local);
+        if t <= 0.0 {
+            return;
+        }
+        let (old_d, old_c) = (*d, *c);
+        match action {
+            Action::Add => {
+                let new = d.max(t);
+                mix_in(c, *d, new, colour);
+                *d = new;
+            }
+            Action::Remove => *d = d.min(1.0 - t),
+            Action::SoftRemove { rate_per_s } => *d = (*d - rate_per_s * dt_s * t).clamp(0.0, 1.0),
+            Action::Build { rate_per_s } => {
+                let new = (*d + rate_per_s * dt_s * t).clamp(0.0, 1.0);
+                mix_in(c, *d, new, colour);
+                *d = new;
+            }
+            Action::Paint => lerp_colour(c, colour, t),
+            Action::SoftPaint { rate_per_s } => {
+                lerp_colour(c, colour, (rate_per_s * dt_s * t).clamp(0.0, 1.0))
+            }
+            Action::Smooth { centre_weight, rate_per_s } => {
+                let s = snapshot.as_ref().expect("smoothing takes a snapshot");
+                let (own, n) = s.neighbourhood(p);
+                let w = centre_weight.clamp(4.0, 24.0);
+                let avg = (w * own + n.iter().sum::<f32>()) / (w + 6.0);
+                let alpha = (rate_per_s * dt_s).clamp(0.0, 1.0) * t;
+                let new = (own + alpha * (avg - own)).clamp(0.0, 1.0);
+                if new > *d {
+                    mix_in(c, *d, new, s.neighbour_colour(p));
+                }
+                *d = new;
+            }
+            Action::Stamp { deformation, .. } => {
+                let new = (*d + deformation.contribution(t)).clamp(0.0, 1.0);
+                mix_in(c, *d, new, colour);
+                *d = new;
+            }
+            Action::Inflate { speed_m_per_s } | Action::Deflate { speed_m_per_s } => {
+                let s = snapshot.as_ref().expect("inflation takes a snapshot");
+                let (own, n) = s.neighbourhood(p);
+                let outwards = matches!(action, Action::Inflate { .. });
+                let grad = upwind_gradient(own, n, outwards);
+                let step = speed_m_per_s.max(0.0) * inv_h * dt_s * t * grad;
+                let mut new = if outwards { own + step } else { own - step }.clamp(0.0, 1.0);
+                // The ramp's ends creep a voxel per tick at vanishing amounts; an empty sample
+                // stays empty, and a full one full, until the change is meaningful.
+                if (own == 0.0 && new < MIN_LEVEL_CHANGE) || (own == 1.0 && new > 1.0 - MIN_LEVEL_CHANGE) {
+                    new = own;
+                }
+                if new > *d {
+                    mix_in(c, *d, new, s.neighbour_colour(p));
+                }
+                *d = new;
+            }
+        }
+        if !d.is_finite() {
+            *d = old_d;
+        }
+        if *d != old_d || *c != old_c {
+            counters.dirtied += 1;
+        }
+    });
+    counters
+}
+
+/// The least change inflation or deflation makes to an empty or a full sample (1/1024).
+const MIN_LEVEL_CHANGE: f32 = 1.0 / 1024.0;
+
+/// `|∇d|` per lattice unit by Godunov's upwind differences (Osher–Sethian): a surface moving
+/// outwards takes each axis's difference from the denser side, one moving inwards from the
+/// emptier side, so the update neither oscillates nor smears the ramp.
+#[inline]
+fn upwind_gradient(own: f32, n: [f32; 6], outwards: bool) -> f32 {
+    let mut g2 = 0.0;
+    for axis in 0..3 {
+        let (lo, hi) = (n[2 * axis], n[2 * axis + 1]);
+        let g = if outwards { (lo - own).max(hi - own) } else { (own - lo).max(own - hi) }.max(0.0);
+        g2 += g * g;
+    }
+    g2.sqrt()
+}
+
+/// The sphere's add/remove kernel: the arithmetic of [`stamp_sphere`] (distances in lattice
+/// units from the centre, no frame to map through), so both give bit-identical clay, plus the
+/// counters.
+fn sphere_fast_path(field: &mut Field, radius_m: f32, tool: &Tool, pose: Pose) -> StampCounters {
+    let transform = *field.transform();
+    let centre = transform.world_to_index(pose.position_m);
+    let radius = transform.metres_to_voxels(radius_m);
+    let reach = radius + 0.5 * SOLID_BAND_VOXELS;
+    let lo = (centre - Vec3::splat(reach)).ceil().as_ivec3();
+    let hi = (centre + Vec3::splat(reach)).floor().as_ivec3();
+    let mut counters = StampCounters::default();
+    let mut last_brick = None;
+    let (add, colour) = (tool.action == Action::Add, tool.colour);
+    field.edit_box(lo, hi, add, |p, d, c| {
+        counters.visited += 1;
+        counters.computed += 1;
+        let brick = p.div_euclid(IVec3::splat(BRICK_SIZE));
+        if last_brick != Some(brick) {
+            last_brick = Some(brick);
+            counters.bricks += 1;
+        }
+        let tool = solid_density(p.as_vec3().distance(centre) - radius);
+        let old = *d;
+        if add {
+            let new = d.max(tool);
+            mix_in(c, *d, new, colour);
+            *d = new;
+        } else {
+            *d = d.min(1.0 - tool);
+        }
+        if *d != old {
+            counters.dirtied += 1;
+        }
+    });
+    counters
+}
