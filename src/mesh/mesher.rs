@@ -7,7 +7,8 @@ use super::types::{ChunkMesh, MeshDiff};
 use crate::field::{Brick, BrickKey, Field, BRICK_SIZE, DEFAULT_COLOUR};
 use crate::math::IVec3;
 
-/// Copies brick `key`'s samples and apron into `block` (brick by brick, no per-sample lookup).
+/// Copies brick `key`'s samples and apron into `block`, row by row: within a brick and within
+/// the block, the samples of one (y, z) row are contiguous, so each row is one slice copy.
 pub fn gather_block(field: &Field, key: BrickKey, block: &mut Block) {
     let s = BRICK_SIZE;
     block.origin = key * s - IVec3::ONE;
@@ -20,23 +21,23 @@ pub fn gather_block(field: &Field, key: BrickKey, block: &mut Block) {
                 let base = nkey * s;
                 let a = lo.max(base);
                 let b = hi.min(base + IVec3::splat(s - 1));
+                let len = (b.x - a.x + 1) as usize;
                 let brick = field.brick(nkey);
                 for z in a.z..=b.z {
                     for y in a.y..=b.y {
-                        for x in a.x..=b.x {
-                            let p = IVec3::new(x, y, z);
-                            let q = (p - lo).as_uvec3();
-                            let dst = q.x as usize + BLOCK * (q.y as usize + BLOCK * q.z as usize);
-                            match brick {
-                                Some(brick) => {
-                                    let src = Brick::linear(p - base);
-                                    block.density[dst] = brick.density[src];
-                                    block.colour[dst] = brick.colour[src];
-                                }
-                                None => {
-                                    block.density[dst] = 0.0;
-                                    block.colour[dst] = DEFAULT_COLOUR;
-                                }
+                        let q = (IVec3::new(a.x, y, z) - lo).as_uvec3();
+                        let dst = q.x as usize + BLOCK * (q.y as usize + BLOCK * q.z as usize);
+                        let (density, colour) =
+                            (&mut block.density[dst..dst + len], &mut block.colour[dst..dst + len]);
+                        match brick {
+                            Some(brick) => {
+                                let src = Brick::linear(IVec3::new(a.x, y, z) - base);
+                                density.copy_from_slice(&brick.density[src..src + len]);
+                                colour.copy_from_slice(&brick.colour[src..src + len]);
+                            }
+                            None => {
+                                density.fill(0.0);
+                                colour.fill(DEFAULT_COLOUR);
                             }
                         }
                     }
