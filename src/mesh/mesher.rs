@@ -2,49 +2,45 @@
 
 use rayon::prelude::*;
 
-use super::march::{march_brick, Block, MarchScratch, BLOCK};
+use super::march::{march_brick, Block, MarchScratch, Neighbourhood, BLOCK};
 use super::types::{ChunkMesh, MeshDiff};
-use crate::field::{Brick, BrickKey, Field, BRICK_SIZE, DEFAULT_COLOUR};
+use crate::field::{Brick, BrickKey, Field, BRICK_SIZE};
 use crate::math::IVec3;
 
-/// Copies brick `key`'s samples and apron into `block`, row by row: within a brick and within
-/// the block, the samples of one (y, z) row are contiguous, so each row is one slice copy.
-pub fn gather_block(field: &Field, key: BrickKey, block: &mut Block) {
+/// Copies brick `key`'s densities and apron into `block`, row by row (within a brick and
+/// within the block, the samples of one (y, z) row are contiguous, so each row is one slice
+/// copy). Returns the bricks it read, for the kernel's colour look-ups.
+pub fn gather_block<'f>(field: &'f Field, key: BrickKey, block: &mut Block) -> Neighbourhood<'f> {
+    let around = Neighbourhood::new(field, key);
     let s = BRICK_SIZE;
     block.origin = key * s - IVec3::ONE;
     let lo = block.origin;
     let hi = lo + IVec3::splat(BLOCK as i32 - 1);
-    for nz in -1..=1 {
-        for ny in -1..=1 {
-            for nx in -1..=1 {
-                let nkey = key + IVec3::new(nx, ny, nz);
-                let base = nkey * s;
-                let a = lo.max(base);
-                let b = hi.min(base + IVec3::splat(s - 1));
-                let len = (b.x - a.x + 1) as usize;
-                let brick = field.brick(nkey);
-                for z in a.z..=b.z {
-                    for y in a.y..=b.y {
-                        let q = (IVec3::new(a.x, y, z) - lo).as_uvec3();
-                        let dst = q.x as usize + BLOCK * (q.y as usize + BLOCK * q.z as usize);
-                        let (density, colour) =
-                            (&mut block.density[dst..dst + len], &mut block.colour[dst..dst + len]);
-                        match brick {
-                            Some(brick) => {
-                                let src = Brick::linear(IVec3::new(a.x, y, z) - base);
-                                density.copy_from_slice(&brick.density[src..src + len]);
-                                colour.copy_from_slice(&brick.colour[src..src + len]);
-                            }
-                            None => {
-                                density.fill(0.0);
-                                colour.fill(DEFAULT_COLOUR);
-                            }
-                        }
+    for (i, brick) in around.bricks.iter().enumerate() {
+        let i = i as i32;
+        let base = (key + IVec3::new(i % 3 - 1, (i / 3) % 3 - 1, i / 9 - 1)) * s;
+        let a = lo.max(base);
+        let b = hi.min(base + IVec3::splat(s - 1));
+        if a.cmpgt(b).any() {
+            continue;
+        }
+        let len = (b.x - a.x + 1) as usize;
+        for z in a.z..=b.z {
+            for y in a.y..=b.y {
+                let q = (IVec3::new(a.x, y, z) - lo).as_uvec3();
+                let dst = q.x as usize + BLOCK * (q.y as usize + BLOCK * q.z as usize);
+                let row = &mut block.density[dst..dst + len];
+                match brick {
+                    Some(brick) => {
+                        let src = Brick::linear(IVec3::new(a.x, y, z) - base);
+                        row.copy_from_slice(&brick.density[src..src + len]);
                     }
+                    None => row.fill(0.0),
                 }
             }
         }
     }
+    around
 }
 
 /// Meshes one brick into `out`, reusing the caller's buffers.
@@ -55,8 +51,8 @@ pub fn mesh_brick(
     scratch: &mut MarchScratch,
     out: &mut ChunkMesh,
 ) {
-    gather_block(field, key, block);
-    march_brick(block, field.iso(), field.transform(), scratch, out);
+    let around = gather_block(field, key, block);
+    march_brick(block, &around, field.iso(), field.transform(), scratch, out);
 }
 
 /// Whether brick `key` surely holds no triangle: the cells it meshes read bricks

@@ -34,7 +34,7 @@ mod types;
 mod weld;
 
 pub use cases::{case_table, CORNER_OFFSETS, EDGES};
-pub use march::{march_brick, Block, MarchScratch, BLOCK, BLOCK_VOLUME};
+pub use march::{march_brick, Block, MarchScratch, Neighbourhood, BLOCK, BLOCK_VOLUME};
 pub use mesher::{gather_block, mesh_all, mesh_brick, meshable_bricks, remesh, remesh_dirty};
 pub use types::*;
 pub use weld::{weld, WeldedMesh};
