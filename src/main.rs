@@ -179,9 +179,12 @@ fn info() -> Result<()> {
     if input.devices.is_empty() {
         println!("  none found (no SpaceMouse, no gamepad)");
     }
+    let mapping = argile::input::motion::MappingTable::default();
     for d in &input.devices {
-        println!("  {}: {} ({})", d.kind, d.name, d.location);
+        println!("  {}: {} ({}), drives the {}", d.kind, d.name, d.location, mapping.target(d.class).name());
     }
+    let mouse = argile::input::motion::DeviceClass::Mouse;
+    println!("  mouse: the window's pointer, drives the {}", mapping.target(mouse).name());
     for p in &input.problems {
         println!("  {p}");
     }

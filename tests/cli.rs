@@ -23,6 +23,10 @@ fn info_lists_vulkan_openxr_and_input_without_a_display() {
         "{text}"
     );
     assert!(text.contains("multiview"), "the Vulkan section names the multiview capability: {text}");
+    assert!(
+        text.contains("mouse: the window's pointer, drives the scene"),
+        "each input names its target: {text}"
+    );
 }
 
 #[test]

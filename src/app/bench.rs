@@ -29,12 +29,20 @@ pub enum Workload {
     /// Stereo frames of the default scene and of a mesh of over a million triangles, with
     /// both eyes in one multiview pass and with one pass per eye.
     RenderStereo,
+    /// The per-frame cost of desk input (mailbox drain, calibration, smoothing, integration,
+    /// gamepad mapping, trackball) with 1, 2 and 4 SpaceMice and as many gamepads.
+    InputFrame,
 }
 
 impl Workload {
     /// Every workload, in the order `argile bench` runs them.
-    pub const ALL: [Workload; 4] =
-        [Workload::Stamp, Workload::MeshFull, Workload::RemeshStamp, Workload::RenderStereo];
+    pub const ALL: [Workload; 5] = [
+        Workload::Stamp,
+        Workload::MeshFull,
+        Workload::RemeshStamp,
+        Workload::RenderStereo,
+        Workload::InputFrame,
+    ];
 }
 
 /// Sizes of the workloads.
@@ -52,6 +60,8 @@ pub struct BenchSize {
     pub big_mesh_triangles: usize,
     /// Radius of the solid sphere the meshing workloads extract, voxels.
     pub sphere_radius_voxels: f32,
+    /// Timed input frames per device set.
+    pub input_frames: usize,
 }
 
 impl BenchSize {
@@ -63,6 +73,7 @@ impl BenchSize {
         frames: 20,
         big_mesh_triangles: 1_000_000,
         sphere_radius_voxels: 100.0,
+        input_frames: 20_000,
     };
     /// A small run that checks the workloads work (not for figures).
     pub const QUICK: BenchSize = BenchSize {
@@ -72,6 +83,7 @@ impl BenchSize {
         frames: 2,
         big_mesh_triangles: 100_000,
         sphere_radius_voxels: 24.0,
+        input_frames: 200,
     };
 }
 
@@ -95,6 +107,7 @@ pub fn run(workloads: &[Workload], size: BenchSize, mut emit: impl FnMut(Value))
             Workload::MeshFull => bench_mesh_full(size, &mut emit)?,
             Workload::RemeshStamp => bench_remesh_stamp(size, &mut emit),
             Workload::RenderStereo => bench_render(size, &mut emit)?,
+            Workload::InputFrame => bench_input(size, &mut emit),
         }
     }
     Ok(())
@@ -234,6 +247,92 @@ fn bench_remesh_stamp(size: BenchSize, emit: &mut impl FnMut(Value)) {
     }
 }
 
+/// Desk input at 90 frames per second with `spacemice` SpaceMice and `gamepads` pads: before
+/// each frame (untimed) the reader's share is simulated by publishing three reports' worth of
+/// state per SpaceMouse and, every 45th frame, a button edge; the frame itself (timed) is what
+/// the frame loop pays: `DeskInput::update` (drain, calibration, One Euro, integration), the
+/// gamepads' mapping and a trackball step.
+fn bench_input(size: BenchSize, emit: &mut impl FnMut(Value)) {
+    use crate::input::calibration::SpaceMouseCalibration;
+    use crate::input::desk::{DeskInput, FrameInput};
+    use crate::input::gamepad::{GamepadCalibration, GamepadMapper, GamepadMotion, Source};
+    use crate::input::motion::{MappingTable, Rates};
+    use crate::input::mouse::{trackball_rotation, TrackballKind};
+    use crate::input::reader::{DeviceId, DeviceInfo, Mailbox, ReaderEvent};
+    use crate::input::spacemouse::{ButtonChange, SpaceMouseState};
+    use crate::math::{Quat, Vec2};
+
+    for (spacemice, gamepads) in [(1usize, 0usize), (2, 2), (4, 4)] {
+        let mailbox = Mailbox::new(256);
+        let mut desk =
+            DeskInput::new(SpaceMouseCalibration::shipped(), MappingTable::default(), Rates::default());
+        let pad_calibration = GamepadCalibration::shipped();
+        let mut pads = vec![GamepadMapper::default(); gamepads];
+        let mut motions = vec![GamepadMotion::default(); gamepads];
+        let mut states = vec![SpaceMouseState::default(); spacemice];
+        for d in 0..spacemice {
+            let info = DeviceInfo { path: format!("bench-{d}"), name: "bench".into() };
+            mailbox.push_event(ReaderEvent::Connected { id: DeviceId(d as u64), info });
+        }
+        let mut actions = Vec::with_capacity(64);
+        let dt = 1.0 / 90.0;
+        let mut times = Vec::with_capacity(size.input_frames);
+        for frame in 0..size.input_frames {
+            let phase = frame as f32 * 0.05;
+            for (d, state) in states.iter_mut().enumerate() {
+                for k in 0..3 {
+                    let v = ((phase + (d + k) as f32 * 0.3).sin() * 300.0) as i16;
+                    state.axes.0 = [v, -v / 2, v / 3, v / 4, -v, v / 5];
+                    mailbox.publish_state(DeviceId(d as u64), *state);
+                }
+                if frame % 45 == 0 {
+                    let buttons = state.buttons ^ 1;
+                    let change = ButtonChange {
+                        pressed: buttons & !state.buttons,
+                        released: state.buttons & !buttons,
+                    };
+                    state.buttons = buttons;
+                    mailbox.push_event(ReaderEvent::Buttons { id: DeviceId(d as u64), change, buttons });
+                }
+            }
+            actions.clear();
+            let start = Instant::now();
+            for (p, (pad, motion)) in pads.iter_mut().zip(motions.iter_mut()).enumerate() {
+                pad.set_value(Source::LeftStickX, (phase + p as f32).sin());
+                pad.set_value(Source::RightStickY, (phase * 0.7).cos());
+                *motion = pad.motion(&pad_calibration);
+            }
+            let from = Vec2::new(phase.sin() * 0.5, 0.1);
+            let turn = trackball_rotation(from, from + Vec2::new(0.01, 0.0), TrackballKind::Shoemake);
+            let input = FrameInput {
+                t_s: f64::from(frame as u32) * f64::from(dt),
+                dt_s: dt,
+                view_rotation: Quat::IDENTITY,
+                gamepads: &motions,
+                mouse_turn: turn,
+            };
+            desk.update(Some(&mailbox), &input, &mut actions);
+            times.push(start.elapsed().as_secs_f64() * 1e6);
+        }
+        let sorted = {
+            let mut t = times.clone();
+            t.sort_by(f64::total_cmp);
+            t
+        };
+        let p99 = sorted.get(sorted.len() * 99 / 100).copied().unwrap_or(f64::NAN);
+        emit(json!({
+            "workload": "input-frame",
+            "spacemice": spacemice,
+            "gamepads": gamepads,
+            "mouse": true,
+            "frames": size.input_frames,
+            "us_per_frame_median": median(times),
+            "us_per_frame_p99": p99,
+            "tool_moved_m": desk.poses.get(crate::input::motion::Target::Tool).position_m.length(),
+        }));
+    }
+}
+
 /// Copies of `mesh` on a square grid on the XZ plane until the total reaches `triangles`.
 fn replicate(mesh: &MeshDiff, triangles: usize, spacing_m: f32) -> (MeshDiff, f32) {
     let per_copy = mesh.upserted_triangles().max(1);
@@ -364,6 +463,18 @@ mod tests {
         let remesh: Vec<_> = lines.iter().filter(|l| l["workload"] == "remesh-stamp").collect();
         assert_eq!(remesh.len(), 4);
         assert!(remesh.iter().all(|l| l["dirty_bricks_per_stamp"].as_f64().unwrap() >= 1.0));
+    }
+
+    #[test]
+    fn input_workload_reports_every_device_set_and_moves_the_tool() {
+        let mut lines = Vec::new();
+        run(&[Workload::InputFrame], BenchSize::QUICK, |v| lines.push(v)).unwrap();
+        assert_eq!(lines.len(), 3);
+        for l in &lines {
+            assert_eq!(l["workload"], "input-frame");
+            assert!(l["us_per_frame_median"].as_f64().unwrap() > 0.0);
+            assert!(l["tool_moved_m"].as_f64().unwrap() > 0.0, "the SpaceMice moved the tool: {l}");
+        }
     }
 
     #[test]

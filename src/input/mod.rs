@@ -6,6 +6,11 @@
 //!      ──► calibration::apply_calibration ──► SixDof (calibrated deflection)
 //!  tracked hand positions ──► smoothing (Galyean–Hughes predictive, One Euro)
 //!      ──► clutch (relative mode with gain) ──► tool pose
+//!
+//!  reader thread (hidapi, or the spacenavd socket) ──► Mailbox (bounded, newest state wins)
+//!  gilrs events ──► gamepad::GamepadMapper ──► GamepadMotion + actions
+//!  mouse events ──► mouse::MouseNavigator (trackball, distance, 3D cursor)
+//!      ──► desk::DeskInput (per frame) ──► motion::integrate ──► the mapped Target's pose
 //! ```
 //!
 //! Contract: every stage is a pure function or a small state machine fed plain values, tested
@@ -17,8 +22,16 @@
 
 pub mod calibration;
 pub mod clutch;
+pub mod desk;
+pub mod gamepad;
+pub mod motion;
+pub mod mouse;
+pub mod reader;
 pub mod smoothing;
 pub mod spacemouse;
+pub mod spacenav;
+
+use motion::DeviceClass;
 
 /// 3Dconnexion's vendor ids: Logitech's (older devices) and 3Dconnexion's own.
 pub const SPACEMOUSE_VENDORS: [u16; 2] = [0x046d, 0x256f];
@@ -60,10 +73,21 @@ pub fn is_spacemouse(vendor: u16, product: u16, usage_page: u16, usage: u16) -> 
             || (usage_page == GENERIC_DESKTOP && usage == MULTI_AXIS_CONTROLLER))
 }
 
+/// The name to show for a HID device: the known model, else what the device says, else its
+/// vendor and product ids.
+pub fn hid_device_name(d: &hidapi::DeviceInfo) -> String {
+    spacemouse_model(d.vendor_id(), d.product_id())
+        .map(str::to_owned)
+        .or_else(|| d.product_string().map(str::to_owned))
+        .unwrap_or_else(|| format!("{:04x}:{:04x}", d.vendor_id(), d.product_id()))
+}
+
 /// An input device the station can use.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SeenDevice {
-    /// What kind: "SpaceMouse" or "gamepad".
+    /// Its family, which decides the target it drives (see [`motion::MappingTable`]).
+    pub class: DeviceClass,
+    /// What kind: "SpaceMouse", "SpaceMouse (spacenavd)" or "gamepad".
     pub kind: &'static str,
     /// Its name.
     pub name: String,
@@ -87,23 +111,31 @@ pub fn probe() -> InputReport {
         Ok(api) => {
             for d in api.device_list() {
                 if is_spacemouse(d.vendor_id(), d.product_id(), d.usage_page(), d.usage()) {
-                    let name = spacemouse_model(d.vendor_id(), d.product_id())
-                        .map(str::to_owned)
-                        .or_else(|| d.product_string().map(str::to_owned))
-                        .unwrap_or_else(|| format!("{:04x}:{:04x}", d.vendor_id(), d.product_id()));
+                    let name = hid_device_name(d);
                     let location = d.path().to_string_lossy().into_owned();
                     if !report.devices.iter().any(|s| s.location == location) {
-                        report.devices.push(SeenDevice { kind: "SpaceMouse", name, location });
+                        let class = DeviceClass::SpaceMouse;
+                        report.devices.push(SeenDevice { class, kind: "SpaceMouse", name, location });
                     }
                 }
             }
         }
         Err(e) => report.problems.push(format!("cannot enumerate HID devices (SpaceMouse): {e}")),
     }
+    let socket = std::path::Path::new(spacenav::DEFAULT_SOCKET);
+    if spacenav::SpacenavSource::socket_present(socket) {
+        report.devices.push(SeenDevice {
+            class: DeviceClass::SpaceMouse,
+            kind: "SpaceMouse (spacenavd)",
+            name: "spacenavd".into(),
+            location: socket.display().to_string(),
+        });
+    }
     match gilrs::Gilrs::new() {
         Ok(gilrs) => {
             for (id, pad) in gilrs.gamepads() {
                 report.devices.push(SeenDevice {
+                    class: DeviceClass::Gamepad,
                     kind: "gamepad",
                     name: pad.name().to_owned(),
                     location: format!("gamepad {id}"),

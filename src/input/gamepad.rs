@@ -1,0 +1,610 @@
+//! Gamepads over gilrs: sticks and triggers as rate controls for a target (translation,
+//! rotation, tool size), buttons as actions, rumble as contact feedback.
+//!
+//! ```text
+//!  gilrs::EventType ──► GamepadMapper::handle ──► source values (sticks, triggers, d-pad)
+//!                                            └──► ActionEvent (button → action, from the file)
+//!  source values ──► GamepadMapper::motion(calibration) ──► GamepadMotion { SixDof, size rate }
+//! ```
+//!
+//! The mapping is data (`calibration/gamepad.toml`, layered like the SpaceMouse file: a user
+//! file names only what it changes; unknown keys are refused with file, line and column).
+//! [`GamepadMapper`] is a pure state machine over `gilrs::EventType` values; [`Gamepads`] only
+//! drains gilrs' queue into one mapper per pad (tests insert events into that queue).
+//! A pad that disconnects releases its held actions, so a stroke in progress ends cleanly.
+
+use std::path::Path;
+use std::time::Duration;
+
+use gilrs::{Axis, Button, EventType, GamepadId, Gilrs};
+use serde::Deserialize;
+use toml::Spanned;
+
+use super::calibration::{CalibrationError, SixDof};
+use super::motion::{ActionEvent, DeviceClass, InputAction};
+use crate::math::Vec3;
+use crate::scene::line_column;
+
+/// The shipped mapping, embedded in the binary; `calibration/gamepad.toml` documents every key.
+pub const SHIPPED_GAMEPAD_TOML: &str = include_str!("../../calibration/gamepad.toml");
+
+/// A value a pad reports, as named in the mapping file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Source {
+    /// Left stick, right positive.
+    LeftStickX,
+    /// Left stick, up positive.
+    LeftStickY,
+    /// Right stick, right positive.
+    RightStickX,
+    /// Right stick, up positive.
+    RightStickY,
+    /// Left analog trigger, 0 to 1.
+    LeftTrigger,
+    /// Right analog trigger, 0 to 1.
+    RightTrigger,
+    /// Right trigger minus left trigger.
+    Triggers,
+    /// D-pad, right positive (−1, 0 or 1).
+    DpadX,
+    /// D-pad, up positive.
+    DpadY,
+    /// Drives nothing.
+    None,
+}
+
+/// Names of the outputs, in [`GamepadCalibration::axes`] order.
+pub const GAMEPAD_OUTPUTS: [&str; 7] = ["tx", "ty", "tz", "rx", "ry", "rz", "size"];
+
+/// Names of the mappable buttons, in [`GamepadCalibration::buttons`] order.
+pub const GAMEPAD_BUTTONS: [&str; 15] = [
+    "south",
+    "east",
+    "west",
+    "north",
+    "left_bumper",
+    "right_bumper",
+    "select",
+    "start",
+    "mode",
+    "left_thumb",
+    "right_thumb",
+    "dpad_up",
+    "dpad_down",
+    "dpad_left",
+    "dpad_right",
+];
+
+const BUTTONS: [Button; 15] = [
+    Button::South,
+    Button::East,
+    Button::West,
+    Button::North,
+    Button::LeftTrigger,
+    Button::RightTrigger,
+    Button::Select,
+    Button::Start,
+    Button::Mode,
+    Button::LeftThumb,
+    Button::RightThumb,
+    Button::DPadUp,
+    Button::DPadDown,
+    Button::DPadLeft,
+    Button::DPadRight,
+];
+
+/// How one output is driven.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GamepadAxis {
+    /// The source value.
+    pub from: Source,
+    /// Flip the sign.
+    pub invert: bool,
+    /// The output's own gain.
+    pub sensitivity: f32,
+}
+
+/// A validated gamepad mapping.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GamepadCalibration {
+    /// Fraction of the travel that reads as zero.
+    pub dead_zone: f32,
+    /// Response curve exponent.
+    pub curve_exponent: f32,
+    /// Gain of every output.
+    pub sensitivity: f32,
+    /// `tx ty tz rx ry rz size`, see [`GAMEPAD_OUTPUTS`].
+    pub axes: [GamepadAxis; 7],
+    /// Action of each button, see [`GAMEPAD_BUTTONS`].
+    pub buttons: [InputAction; 15],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GamepadFile {
+    dead_zone: Option<Spanned<f32>>,
+    curve_exponent: Option<Spanned<f32>>,
+    sensitivity: Option<Spanned<f32>>,
+    axes: Option<AxesFile>,
+    buttons: Option<ButtonsFile>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct AxesFile {
+    tx: Option<AxisFile>,
+    ty: Option<AxisFile>,
+    tz: Option<AxisFile>,
+    rx: Option<AxisFile>,
+    ry: Option<AxisFile>,
+    rz: Option<AxisFile>,
+    size: Option<AxisFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AxisFile {
+    from: Source,
+    #[serde(default)]
+    invert: bool,
+    sensitivity: Option<Spanned<f32>>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct ButtonsFile {
+    south: Option<InputAction>,
+    east: Option<InputAction>,
+    west: Option<InputAction>,
+    north: Option<InputAction>,
+    left_bumper: Option<InputAction>,
+    right_bumper: Option<InputAction>,
+    select: Option<InputAction>,
+    start: Option<InputAction>,
+    mode: Option<InputAction>,
+    left_thumb: Option<InputAction>,
+    right_thumb: Option<InputAction>,
+    dpad_up: Option<InputAction>,
+    dpad_down: Option<InputAction>,
+    dpad_left: Option<InputAction>,
+    dpad_right: Option<InputAction>,
+}
+
+impl GamepadCalibration {
+    /// The shipped mapping (`calibration/gamepad.toml`, embedded).
+    pub fn shipped() -> Self {
+        Self::parse_layer(SHIPPED_GAMEPAD_TOML, "calibration/gamepad.toml", None)
+            .expect("the shipped gamepad mapping is valid (tested)")
+    }
+
+    /// Loads a mapping file, layered over the shipped defaults.
+    pub fn load(path: &Path) -> Result<Self, CalibrationError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| CalibrationError::Read { path: path.to_owned(), source })?;
+        Self::parse_layer(&text, &path.display().to_string(), Some(&Self::shipped()))
+    }
+
+    /// Parses mapping text over `base`; without a base every key must be present. `name` is
+    /// used in messages.
+    pub fn parse_layer(text: &str, name: &str, base: Option<&Self>) -> Result<Self, CalibrationError> {
+        let at = |span: Option<std::ops::Range<usize>>, message: String| {
+            let (line, column) = span.map_or((1, 1), |s| line_column(text, s.start));
+            CalibrationError::Invalid { path: name.to_owned(), line, column, message }
+        };
+        let file: GamepadFile = toml::from_str(text).map_err(|e| at(e.span(), e.message().to_owned()))?;
+        let missing = |key: &str| at(None, format!("`{key}` is missing (a complete mapping needs it)"));
+        let number = |value: Option<Spanned<f32>>,
+                      key: &str,
+                      range: std::ops::RangeInclusive<f32>,
+                      fallback: Option<f32>|
+         -> Result<f32, CalibrationError> {
+            match value {
+                Some(v) if range.contains(v.get_ref()) => Ok(*v.get_ref()),
+                Some(v) => Err(at(
+                    Some(v.span()),
+                    format!(
+                        "`{key}` must be between {} and {}, not {}",
+                        range.start(),
+                        range.end(),
+                        v.get_ref()
+                    ),
+                )),
+                None => fallback.ok_or_else(|| missing(key)),
+            }
+        };
+        let dead_zone = number(file.dead_zone, "dead_zone", 0.0..=0.95, base.map(|b| b.dead_zone))?;
+        let curve_exponent =
+            number(file.curve_exponent, "curve_exponent", 0.2..=5.0, base.map(|b| b.curve_exponent))?;
+        let sensitivity = number(file.sensitivity, "sensitivity", 0.0..=100.0, base.map(|b| b.sensitivity))?;
+
+        let a = file.axes.unwrap_or_default();
+        let given = [a.tx, a.ty, a.tz, a.rx, a.ry, a.rz, a.size];
+        let mut axes = [GamepadAxis { from: Source::None, invert: false, sensitivity: 1.0 }; 7];
+        for (i, entry) in given.into_iter().enumerate() {
+            let out = GAMEPAD_OUTPUTS[i];
+            axes[i] = match entry {
+                Some(e) => GamepadAxis {
+                    from: e.from,
+                    invert: e.invert,
+                    sensitivity: number(
+                        e.sensitivity,
+                        &format!("axes.{out}.sensitivity"),
+                        0.0..=100.0,
+                        Some(1.0),
+                    )?,
+                },
+                None => base.map(|b| b.axes[i]).ok_or_else(|| missing(&format!("axes.{out}")))?,
+            };
+        }
+
+        let b = file.buttons.unwrap_or_default();
+        let given = [
+            b.south,
+            b.east,
+            b.west,
+            b.north,
+            b.left_bumper,
+            b.right_bumper,
+            b.select,
+            b.start,
+            b.mode,
+            b.left_thumb,
+            b.right_thumb,
+            b.dpad_up,
+            b.dpad_down,
+            b.dpad_left,
+            b.dpad_right,
+        ];
+        let mut buttons = [InputAction::None; 15];
+        for (i, entry) in given.into_iter().enumerate() {
+            buttons[i] = match entry {
+                Some(action) => action,
+                None => base
+                    .map(|b| b.buttons[i])
+                    .ok_or_else(|| missing(&format!("buttons.{}", GAMEPAD_BUTTONS[i])))?,
+            };
+        }
+        Ok(Self { dead_zone, curve_exponent, sensitivity, axes, buttons })
+    }
+
+    /// The action bound to `button`, if it is mappable.
+    pub fn action(&self, button: Button) -> Option<InputAction> {
+        BUTTONS.iter().position(|&b| b == button).map(|i| self.buttons[i])
+    }
+}
+
+/// What a pad's sticks and triggers ask for this frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GamepadMotion {
+    /// Translation and rotation rates (view frame), as a SpaceMouse's [`SixDof`].
+    pub six: SixDof,
+    /// Tool size rate: a signed fraction of full speed.
+    pub size_rate: f32,
+}
+
+/// The pure gamepad mapping: folds gilrs events into source values and actions.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GamepadMapper {
+    /// Source values, indexed like [`Source`] up to `DpadY` (`Triggers` is derived).
+    values: [f32; 9],
+    dpad: [bool; 4],
+    held: u32,
+    /// Events ignored as not mappable or out of range.
+    pub ignored_events: u64,
+}
+
+const LSX: usize = 0;
+const LSY: usize = 1;
+const RSX: usize = 2;
+const RSY: usize = 3;
+const LT: usize = 4;
+const RT: usize = 5;
+const DX: usize = 7;
+const DY: usize = 8;
+
+impl GamepadMapper {
+    /// Folds one event in, appending the actions it causes to `actions`.
+    pub fn handle(
+        &mut self,
+        event: &EventType,
+        calibration: &GamepadCalibration,
+        actions: &mut Vec<ActionEvent>,
+    ) {
+        match *event {
+            EventType::AxisChanged(axis, value, _) => {
+                if !value.is_finite() {
+                    self.ignored_events += 1;
+                    return;
+                }
+                let value = value.clamp(-1.0, 1.0);
+                let slot = match axis {
+                    Axis::LeftStickX => LSX,
+                    Axis::LeftStickY => LSY,
+                    Axis::RightStickX => RSX,
+                    Axis::RightStickY => RSY,
+                    // Pads that report triggers as axes.
+                    Axis::LeftZ => LT,
+                    Axis::RightZ => RT,
+                    Axis::DPadX => DX,
+                    Axis::DPadY => DY,
+                    Axis::Unknown => {
+                        self.ignored_events += 1;
+                        return;
+                    }
+                };
+                self.values[slot] = if slot == LT || slot == RT { value.max(0.0) } else { value };
+            }
+            EventType::ButtonChanged(button, value, _) => {
+                let slot = match button {
+                    Button::LeftTrigger2 => LT,
+                    Button::RightTrigger2 => RT,
+                    // Digital buttons report their value too; their press/release is what counts.
+                    _ => return,
+                };
+                if value.is_finite() {
+                    self.values[slot] = value.clamp(0.0, 1.0);
+                } else {
+                    self.ignored_events += 1;
+                }
+            }
+            EventType::ButtonPressed(button, _) => self.button(button, true, calibration, actions),
+            EventType::ButtonReleased(button, _) => self.button(button, false, calibration, actions),
+            EventType::Disconnected => self.release_all(calibration, actions),
+            // Connection, repeats, dropped and effect events carry no control value.
+            _ => {}
+        }
+    }
+
+    fn button(
+        &mut self,
+        button: Button,
+        down: bool,
+        calibration: &GamepadCalibration,
+        actions: &mut Vec<ActionEvent>,
+    ) {
+        if let Some(d) = [Button::DPadUp, Button::DPadDown, Button::DPadLeft, Button::DPadRight]
+            .iter()
+            .position(|&b| b == button)
+        {
+            self.dpad[d] = down;
+            let v = |on: bool| if on { 1.0 } else { 0.0 };
+            self.values[DY] = v(self.dpad[0]) - v(self.dpad[1]);
+            self.values[DX] = v(self.dpad[3]) - v(self.dpad[2]);
+        }
+        let Some(index) = BUTTONS.iter().position(|&b| b == button) else {
+            self.ignored_events += 1;
+            return;
+        };
+        let bit = 1u32 << index;
+        // Only edges count: a repeated press or a release without a press does nothing.
+        if down == (self.held & bit != 0) {
+            return;
+        }
+        self.held ^= bit;
+        let action = calibration.buttons[index];
+        if action != InputAction::None {
+            actions.push(ActionEvent { action, pressed: down, device: DeviceClass::Gamepad });
+        }
+    }
+
+    /// Releases every held button and centres every control (the pad went away).
+    pub fn release_all(&mut self, calibration: &GamepadCalibration, actions: &mut Vec<ActionEvent>) {
+        for (index, &action) in calibration.buttons.iter().enumerate() {
+            if self.held & (1 << index) != 0 && action != InputAction::None {
+                actions.push(ActionEvent { action, pressed: false, device: DeviceClass::Gamepad });
+            }
+        }
+        *self = Self { ignored_events: self.ignored_events, ..Self::default() };
+    }
+
+    /// Sets a control directly, as a replay or a scripted pad does (`Triggers` and `None`
+    /// cannot be set: the first is derived, the second is nothing). Values are clamped to the
+    /// control's range; a value that is not finite is ignored.
+    pub fn set_value(&mut self, source: Source, value: f32) {
+        if !value.is_finite() {
+            return;
+        }
+        let (slot, low) = match source {
+            Source::LeftStickX => (LSX, -1.0),
+            Source::LeftStickY => (LSY, -1.0),
+            Source::RightStickX => (RSX, -1.0),
+            Source::RightStickY => (RSY, -1.0),
+            Source::LeftTrigger => (LT, 0.0),
+            Source::RightTrigger => (RT, 0.0),
+            Source::DpadX => (DX, -1.0),
+            Source::DpadY => (DY, -1.0),
+            Source::Triggers | Source::None => return,
+        };
+        self.values[slot] = value.clamp(low, 1.0);
+    }
+
+    /// The value of a source now.
+    pub fn value(&self, source: Source) -> f32 {
+        match source {
+            Source::LeftStickX => self.values[LSX],
+            Source::LeftStickY => self.values[LSY],
+            Source::RightStickX => self.values[RSX],
+            Source::RightStickY => self.values[RSY],
+            Source::LeftTrigger => self.values[LT],
+            Source::RightTrigger => self.values[RT],
+            Source::Triggers => self.values[RT] - self.values[LT],
+            Source::DpadX => self.values[DX],
+            Source::DpadY => self.values[DY],
+            Source::None => 0.0,
+        }
+    }
+
+    /// The motion the controls ask for, through the calibration's dead zone, curve and gains.
+    pub fn motion(&self, calibration: &GamepadCalibration) -> GamepadMotion {
+        let mut out = [0.0f32; 7];
+        for (o, axis) in out.iter_mut().zip(&calibration.axes) {
+            let v = self.value(axis.from).clamp(-1.0, 1.0);
+            let dz = calibration.dead_zone;
+            let m = if v.abs() <= dz { 0.0 } else { (v.abs() - dz) / (1.0 - dz) };
+            let shaped = m.powf(calibration.curve_exponent) * calibration.sensitivity * axis.sensitivity;
+            let signed = shaped.copysign(v);
+            *o = if axis.invert { -signed } else { signed };
+            if m == 0.0 {
+                *o = 0.0;
+            }
+        }
+        GamepadMotion {
+            six: SixDof {
+                translation: Vec3::new(out[0], out[1], out[2]),
+                rotation: Vec3::new(out[3], out[4], out[5]),
+            },
+            size_rate: out[6],
+        }
+    }
+}
+
+/// How strongly to rumble for a tool `depth_m` inside the clay: nothing outside, rising
+/// linearly to full strength at `full_depth_m`.
+pub fn contact_strength(depth_m: f32, full_depth_m: f32) -> f32 {
+    if !(depth_m.is_finite() && full_depth_m.is_finite() && full_depth_m > 0.0) {
+        return 0.0;
+    }
+    (depth_m / full_depth_m).clamp(0.0, 1.0)
+}
+
+/// Every connected gamepad, through gilrs.
+pub struct Gamepads {
+    gilrs: Gilrs,
+    calibration: GamepadCalibration,
+    pads: Vec<(GamepadId, GamepadMapper)>,
+    /// The last rumble of each pad: gilrs stops an effect when it is dropped.
+    effects: Vec<(GamepadId, gilrs::ff::Effect)>,
+}
+
+impl std::fmt::Debug for Gamepads {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Gamepads").field("pads", &self.pads).finish_non_exhaustive()
+    }
+}
+
+impl Gamepads {
+    /// Opens gilrs. Where the platform has no gamepad support, gilrs still gives a context
+    /// that sees no pad; that is used.
+    pub fn new(calibration: GamepadCalibration) -> Result<Self, String> {
+        let gilrs = match gilrs::GilrsBuilder::new().build() {
+            Ok(g) => g,
+            Err(gilrs::Error::NotImplemented(g)) => g,
+            Err(e) => return Err(format!("cannot open the gamepad library: {e}")),
+        };
+        Ok(Self::with_gilrs(gilrs, calibration))
+    }
+
+    /// Wraps an existing gilrs context.
+    pub fn with_gilrs(gilrs: Gilrs, calibration: GamepadCalibration) -> Self {
+        Self { gilrs, calibration, pads: Vec::new(), effects: Vec::new() }
+    }
+
+    /// The gilrs context (to insert events, or to list pads).
+    pub fn gilrs_mut(&mut self) -> &mut Gilrs {
+        &mut self.gilrs
+    }
+
+    /// Drains gilrs' queue into the pads' mappers; appends the actions caused.
+    pub fn poll(&mut self, actions: &mut Vec<ActionEvent>) {
+        while let Some(event) = self.gilrs.next_event() {
+            let index = match self.pads.iter().position(|(id, _)| *id == event.id) {
+                Some(i) => i,
+                None => {
+                    self.pads.push((event.id, GamepadMapper::default()));
+                    self.pads.len() - 1
+                }
+            };
+            self.pads[index].1.handle(&event.event, &self.calibration, actions);
+            if event.event == EventType::Disconnected {
+                self.pads.swap_remove(index);
+                self.effects.retain(|(id, _)| *id != event.id);
+            }
+        }
+    }
+
+    /// The motion of every pad that has sent events.
+    pub fn motions(&self) -> impl Iterator<Item = (GamepadId, GamepadMotion)> + '_ {
+        self.pads.iter().map(|(id, m)| (*id, m.motion(&self.calibration)))
+    }
+
+    /// The mapper of pad `id`.
+    pub fn mapper(&self, id: GamepadId) -> Option<&GamepadMapper> {
+        self.pads.iter().find(|(p, _)| *p == id).map(|(_, m)| m)
+    }
+
+    /// Rumbles pad `id` at `strength` (0 to 1, see [`contact_strength`]) for `duration`, as
+    /// contact feedback. Returns whether an effect was started: `false`, doing nothing, when
+    /// the pad is not connected, has no force feedback, or `strength` is zero.
+    pub fn rumble(&mut self, id: GamepadId, strength: f32, duration: Duration) -> bool {
+        use gilrs::ff::{BaseEffect, BaseEffectType, EffectBuilder, Repeat, Replay, Ticks};
+        let strength = if strength.is_finite() { strength.clamp(0.0, 1.0) } else { 0.0 };
+        let supported = self.gilrs.connected_gamepad(id).is_some_and(|p| p.is_ff_supported());
+        if !supported || strength == 0.0 {
+            return false;
+        }
+        let ticks = Ticks::from_ms(u32::try_from(duration.as_millis()).unwrap_or(u32::MAX));
+        let magnitude = (strength * f32::from(u16::MAX)) as u16;
+        let effect = EffectBuilder::new()
+            .add_effect(BaseEffect {
+                kind: BaseEffectType::Strong { magnitude },
+                scheduling: Replay { play_for: ticks, ..Default::default() },
+                envelope: Default::default(),
+            })
+            .repeat(Repeat::For(ticks))
+            .gamepads(&[id])
+            .finish(&mut self.gilrs);
+        match effect.and_then(|e| e.play().map(|()| e)) {
+            Ok(e) => {
+                self.effects.retain(|(p, _)| *p != id);
+                self.effects.push((id, e));
+                true
+            }
+            Err(e) => {
+                tracing::debug!("rumble on gamepad {id} refused: {e}");
+                false
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shipped_mapping_is_complete() {
+        let c = GamepadCalibration::shipped();
+        assert_eq!(c.action(Button::South), Some(InputAction::Stroke));
+        assert_eq!(c.action(Button::LeftTrigger2), None, "analog triggers are axes, not actions");
+        assert_eq!(c.axes[6].from, Source::DpadY);
+        assert!(c.dead_zone > 0.0);
+    }
+
+    #[test]
+    fn user_files_layer_and_errors_name_the_place() {
+        let base = GamepadCalibration::shipped();
+        let c = GamepadCalibration::parse_layer(
+            "dead_zone = 0.3\n[buttons]\nsouth = \"clutch\"\n",
+            "mine.toml",
+            Some(&base),
+        )
+        .unwrap();
+        assert_eq!(c.dead_zone, 0.3);
+        assert_eq!(c.action(Button::South), Some(InputAction::Clutch));
+        assert_eq!(c.action(Button::East), base.action(Button::East));
+
+        let err = |text: &str| {
+            GamepadCalibration::parse_layer(text, "mine.toml", Some(&base)).unwrap_err().to_string()
+        };
+        let e = err("dead_zone = 0.1\n[axes]\ntx = { from = \"left_stik_x\" }\n");
+        assert!(e.starts_with("mine.toml:3:15:") && e.contains("left_stik_x"), "{e}");
+        let e = err("[buttons]\nsouth = \"stroke\"\nsouht = \"undo\"\n");
+        assert!(e.starts_with("mine.toml:3:1:") && e.contains("souht"), "{e}");
+        let e = err("curve_exponent = 9.0\n");
+        assert!(e.starts_with("mine.toml:1:18:") && e.contains("between 0.2 and 5"), "{e}");
+        let e =
+            GamepadCalibration::parse_layer("dead_zone = 0.1\n", "alone.toml", None).unwrap_err().to_string();
+        assert!(e.contains("curve_exponent") && e.contains("missing"), "{e}");
+    }
+}
