@@ -57,6 +57,48 @@ pub enum CalibrationError {
     },
 }
 
+/// A calibration or mapping file being read over a base layer: errors name the file, line and
+/// column; values are range-checked; absent keys fall back to the base.
+pub(crate) struct Layer<'t> {
+    /// The file's text.
+    pub(crate) text: &'t str,
+    /// The file's name, for messages.
+    pub(crate) name: &'t str,
+    /// What the file is ("calibration", "mapping"), for messages.
+    pub(crate) what: &'t str,
+}
+
+impl Layer<'_> {
+    /// An error at `span` of the text (the file's start when unknown).
+    pub(crate) fn at(&self, span: Option<std::ops::Range<usize>>, message: String) -> CalibrationError {
+        let (line, column) = span.map_or((1, 1), |s| line_column(self.text, s.start));
+        CalibrationError::Invalid { path: self.name.to_owned(), line, column, message }
+    }
+
+    /// The error for a key that neither the file nor a base gives.
+    pub(crate) fn missing(&self, key: &str) -> CalibrationError {
+        self.at(None, format!("`{key}` is missing (a complete {} needs it)", self.what))
+    }
+
+    /// A number within `range`, else `fallback` when absent.
+    pub(crate) fn number(
+        &self,
+        value: Option<Spanned<f32>>,
+        key: &str,
+        range: std::ops::RangeInclusive<f32>,
+        fallback: Option<f32>,
+    ) -> Result<f32, CalibrationError> {
+        match value {
+            Some(v) if range.contains(v.get_ref()) => Ok(*v.get_ref()),
+            Some(v) => Err(self.at(
+                Some(v.span()),
+                format!("`{key}` must be between {} and {}, not {}", range.start(), range.end(), v.get_ref()),
+            )),
+            None => fallback.ok_or_else(|| self.missing(key)),
+        }
+    }
+}
+
 /// One of the device's raw axes, in report order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -223,41 +265,20 @@ impl SpaceMouseCalibration {
 
     /// Parses calibration text over `base`; without a base every key must be present.
     pub fn parse_layer(text: &str, name: &str, base: Option<&Self>) -> Result<Self, CalibrationError> {
-        let at = |span: Option<std::ops::Range<usize>>, message: String| {
-            let (line, column) = span.map_or((1, 1), |s| line_column(text, s.start));
-            CalibrationError::Invalid { path: name.to_owned(), line, column, message }
-        };
-        let file: CalibrationFile = toml::from_str(text).map_err(|e| at(e.span(), e.message().to_owned()))?;
-        let missing = |key: &str| at(None, format!("`{key}` is missing (a complete calibration needs it)"));
-
-        let number = |value: Option<Spanned<f32>>,
-                      key: &str,
-                      range: std::ops::RangeInclusive<f32>,
-                      fallback: Option<f32>|
-         -> Result<f32, CalibrationError> {
-            match value {
-                Some(v) if range.contains(v.get_ref()) => Ok(*v.get_ref()),
-                Some(v) => Err(at(
-                    Some(v.span()),
-                    format!(
-                        "`{key}` must be between {} and {}, not {}",
-                        range.start(),
-                        range.end(),
-                        v.get_ref()
-                    ),
-                )),
-                None => fallback.ok_or_else(|| missing(key)),
-            }
-        };
-        let full_scale = number(file.full_scale, "full_scale", 1.0..=32767.0, base.map(|b| b.full_scale))?;
-        let dead_zone = number(file.dead_zone, "dead_zone", 0.0..=0.95, base.map(|b| b.dead_zone))?;
+        let layer = Layer { text, name, what: "calibration" };
+        let file: CalibrationFile =
+            toml::from_str(text).map_err(|e| layer.at(e.span(), e.message().to_owned()))?;
+        let full_scale =
+            layer.number(file.full_scale, "full_scale", 1.0..=32767.0, base.map(|b| b.full_scale))?;
+        let dead_zone = layer.number(file.dead_zone, "dead_zone", 0.0..=0.95, base.map(|b| b.dead_zone))?;
         let curve_exponent =
-            number(file.curve_exponent, "curve_exponent", 0.2..=5.0, base.map(|b| b.curve_exponent))?;
-        let sensitivity = number(file.sensitivity, "sensitivity", 0.0..=100.0, base.map(|b| b.sensitivity))?;
+            layer.number(file.curve_exponent, "curve_exponent", 0.2..=5.0, base.map(|b| b.curve_exponent))?;
+        let sensitivity =
+            layer.number(file.sensitivity, "sensitivity", 0.0..=100.0, base.map(|b| b.sensitivity))?;
         let dominant_axis = match (file.dominant_axis, base) {
             (Some(d), _) => d,
             (None, Some(b)) => b.dominant_axis,
-            (None, None) => return Err(missing("dominant_axis")),
+            (None, None) => return Err(layer.missing("dominant_axis")),
         };
 
         let given = file.axes.unwrap_or_default();
@@ -270,18 +291,22 @@ impl SpaceMouseCalibration {
                 Some(e) => {
                     spans[i] = Some(e.span());
                     let e = e.into_inner();
-                    let sensitivity =
-                        number(e.sensitivity, &format!("axes.{out}.sensitivity"), 0.0..=100.0, Some(1.0))?;
+                    let sensitivity = layer.number(
+                        e.sensitivity,
+                        &format!("axes.{out}.sensitivity"),
+                        0.0..=100.0,
+                        Some(1.0),
+                    )?;
                     AxisCalibration { from: e.from, invert: e.invert, sensitivity }
                 }
-                None => base.map(|b| b.axes[i]).ok_or_else(|| missing(&format!("axes.{out}")))?,
+                None => base.map(|b| b.axes[i]).ok_or_else(|| layer.missing(&format!("axes.{out}")))?,
             };
         }
         // Two outputs fed by one raw axis is almost always a typo; the unfed axis would be dead.
         for i in 0..6 {
             if let Some(j) = (0..i).find(|&j| axes[j].from == axes[i].from) {
                 let span = spans[i].clone().or_else(|| spans[j].clone());
-                return Err(at(
+                return Err(layer.at(
                     span,
                     format!(
                         "raw axis `{}` drives both `{}` and `{}`; each output needs its own raw axis",

@@ -20,10 +20,9 @@ use gilrs::{Axis, Button, EventType, GamepadId, Gilrs};
 use serde::Deserialize;
 use toml::Spanned;
 
-use super::calibration::{CalibrationError, SixDof};
+use super::calibration::{CalibrationError, Layer, SixDof};
 use super::motion::{ActionEvent, DeviceClass, InputAction};
 use crate::math::Vec3;
-use crate::scene::line_column;
 
 /// The shipped mapping, embedded in the binary; `calibration/gamepad.toml` documents every key.
 pub const SHIPPED_GAMEPAD_TOML: &str = include_str!("../../calibration/gamepad.toml");
@@ -188,35 +187,14 @@ impl GamepadCalibration {
     /// Parses mapping text over `base`; without a base every key must be present. `name` is
     /// used in messages.
     pub fn parse_layer(text: &str, name: &str, base: Option<&Self>) -> Result<Self, CalibrationError> {
-        let at = |span: Option<std::ops::Range<usize>>, message: String| {
-            let (line, column) = span.map_or((1, 1), |s| line_column(text, s.start));
-            CalibrationError::Invalid { path: name.to_owned(), line, column, message }
-        };
-        let file: GamepadFile = toml::from_str(text).map_err(|e| at(e.span(), e.message().to_owned()))?;
-        let missing = |key: &str| at(None, format!("`{key}` is missing (a complete mapping needs it)"));
-        let number = |value: Option<Spanned<f32>>,
-                      key: &str,
-                      range: std::ops::RangeInclusive<f32>,
-                      fallback: Option<f32>|
-         -> Result<f32, CalibrationError> {
-            match value {
-                Some(v) if range.contains(v.get_ref()) => Ok(*v.get_ref()),
-                Some(v) => Err(at(
-                    Some(v.span()),
-                    format!(
-                        "`{key}` must be between {} and {}, not {}",
-                        range.start(),
-                        range.end(),
-                        v.get_ref()
-                    ),
-                )),
-                None => fallback.ok_or_else(|| missing(key)),
-            }
-        };
-        let dead_zone = number(file.dead_zone, "dead_zone", 0.0..=0.95, base.map(|b| b.dead_zone))?;
+        let layer = Layer { text, name, what: "mapping" };
+        let file: GamepadFile =
+            toml::from_str(text).map_err(|e| layer.at(e.span(), e.message().to_owned()))?;
+        let dead_zone = layer.number(file.dead_zone, "dead_zone", 0.0..=0.95, base.map(|b| b.dead_zone))?;
         let curve_exponent =
-            number(file.curve_exponent, "curve_exponent", 0.2..=5.0, base.map(|b| b.curve_exponent))?;
-        let sensitivity = number(file.sensitivity, "sensitivity", 0.0..=100.0, base.map(|b| b.sensitivity))?;
+            layer.number(file.curve_exponent, "curve_exponent", 0.2..=5.0, base.map(|b| b.curve_exponent))?;
+        let sensitivity =
+            layer.number(file.sensitivity, "sensitivity", 0.0..=100.0, base.map(|b| b.sensitivity))?;
 
         let a = file.axes.unwrap_or_default();
         let given = [a.tx, a.ty, a.tz, a.rx, a.ry, a.rz, a.size];
@@ -227,14 +205,14 @@ impl GamepadCalibration {
                 Some(e) => GamepadAxis {
                     from: e.from,
                     invert: e.invert,
-                    sensitivity: number(
+                    sensitivity: layer.number(
                         e.sensitivity,
                         &format!("axes.{out}.sensitivity"),
                         0.0..=100.0,
                         Some(1.0),
                     )?,
                 },
-                None => base.map(|b| b.axes[i]).ok_or_else(|| missing(&format!("axes.{out}")))?,
+                None => base.map(|b| b.axes[i]).ok_or_else(|| layer.missing(&format!("axes.{out}")))?,
             };
         }
 
@@ -262,7 +240,7 @@ impl GamepadCalibration {
                 Some(action) => action,
                 None => base
                     .map(|b| b.buttons[i])
-                    .ok_or_else(|| missing(&format!("buttons.{}", GAMEPAD_BUTTONS[i])))?,
+                    .ok_or_else(|| layer.missing(&format!("buttons.{}", GAMEPAD_BUTTONS[i])))?,
             };
         }
         Ok(Self { dead_zone, curve_exponent, sensitivity, axes, buttons })
