@@ -20,6 +20,9 @@ use crate::tool::{stamp_sphere, Action};
 pub enum Workload {
     /// A straight stroke of sphere stamps of radius 4, 8, 16 and 32 voxels into empty space.
     Stamp,
+    /// A stroke of removing sphere stamps of radius 4, 8, 16 and 32 voxels across the surface
+    /// of a solid sphere of radius 100 voxels.
+    StampCarve,
     /// Full extraction of the surface of a solid sphere of radius 100 voxels and of the field
     /// a stroke of radius-16 stamps leaves, on one thread and on all.
     MeshFull,
@@ -104,6 +107,7 @@ pub fn run(workloads: &[Workload], size: BenchSize, mut emit: impl FnMut(Value))
     for w in workloads {
         match w {
             Workload::Stamp => bench_stamp(size, &mut emit),
+            Workload::StampCarve => bench_stamp_carve(size, &mut emit),
             Workload::MeshFull => bench_mesh_full(size, &mut emit)?,
             Workload::RemeshStamp => bench_remesh_stamp(size, &mut emit),
             Workload::RenderStereo => bench_render(size, &mut emit)?,
@@ -113,32 +117,47 @@ pub fn run(workloads: &[Workload], size: BenchSize, mut emit: impl FnMut(Value))
     Ok(())
 }
 
-/// One stroke of `n` stamps of radius `r` voxels along +X, spacing r/2, into an empty field;
-/// returns (µs per stamp for the field update, µs per stamp with re-meshing, triangles).
-fn stroke(n: usize, r: f32, remesh: bool) -> (f64, usize) {
-    let voxel = 0.001;
-    let mut field = Field::new(voxel, 0.5);
+/// One stroke of `n` stamps of radius `r` voxels along +X, spacing r/2, into `field` (from
+/// `start`, lattice units), re-meshing after each stamp when `remesh`; returns (µs per stamp,
+/// triangles re-meshed).
+fn stroke_into(
+    field: &mut Field,
+    start: Vec3,
+    n: usize,
+    r: f32,
+    action: Action,
+    remesh: bool,
+) -> (f64, usize) {
+    let voxel = field.transform().voxel_size_m;
     let mut triangles = 0;
-    let start = Instant::now();
+    let begin = Instant::now();
     for i in 0..n {
-        let centre = Vec3::new(i as f32 * 0.5 * r * voxel, 0.0, 0.0);
-        stamp_sphere(&mut field, centre, r * voxel, Action::Add, [0.7, 0.4, 0.2, 1.0]);
+        let centre = (start + Vec3::new(i as f32 * 0.5 * r, 0.0, 0.0)) * voxel;
+        stamp_sphere(field, centre, r * voxel, action, [0.7, 0.4, 0.2, 1.0]);
         if remesh {
-            let diff = remesh_dirty(&mut field);
-            triangles += diff.upserted_triangles();
+            triangles += remesh_dirty(field).upserted_triangles();
         }
     }
-    (start.elapsed().as_secs_f64() * 1e6 / n as f64, triangles)
+    (begin.elapsed().as_secs_f64() * 1e6 / n as f64, triangles)
+}
+
+/// A stroke into an empty field; returns (µs per stamp, triangles re-meshed, the field).
+fn stroke(n: usize, r: f32, remesh: bool) -> (f64, usize, Field) {
+    let mut field = Field::new(0.001, 0.5);
+    let (us, triangles) = stroke_into(&mut field, Vec3::ZERO, n, r, Action::Add, remesh);
+    (us, triangles, field)
 }
 
 fn bench_stamp(size: BenchSize, emit: &mut impl FnMut(Value)) {
     for r in [4.0f32, 8.0, 16.0, 32.0] {
         let field_only: Vec<f64> = (0..size.repetitions).map(|_| stroke(size.stamps, r, false).0).collect();
         let mut remeshed_tris = 0;
+        let mut memory = (0, 0);
         let with_mesh: Vec<f64> = (0..size.repetitions)
             .map(|_| {
-                let (t, tris) = stroke(size.stamps, r, true);
+                let (t, tris, field) = stroke(size.stamps, r, true);
                 remeshed_tris = tris;
+                memory = (field.memory_bytes(), field.band_samples());
                 t
             })
             .collect();
@@ -152,6 +171,39 @@ fn bench_stamp(size: BenchSize, emit: &mut impl FnMut(Value)) {
             "field_us_per_stamp_median": median(field_only),
             "field_and_mesh_us_per_stamp_median": median(with_mesh),
             "remeshed_triangles_per_stroke": remeshed_tris,
+            "field_bytes": memory.0,
+            "band_samples": memory.1,
+            "bytes_per_band_sample": memory.0 as f64 / memory.1.max(1) as f64,
+        }));
+    }
+}
+
+/// Removing strokes across the surface of a solid sphere of `sphere_radius_voxels`: the line
+/// runs along +X at 95 % of the radius above the centre, so it enters and leaves the clay.
+fn bench_stamp_carve(size: BenchSize, emit: &mut impl FnMut(Value)) {
+    let sphere = sphere_field(size.sphere_radius_voxels);
+    for r in [4.0f32, 8.0, 16.0, 32.0] {
+        let length = size.stamps as f32 * 0.5 * r;
+        let start = Vec3::new(-0.5 * length, 0.0, 0.95 * size.sphere_radius_voxels);
+        let mut carved = 0.0;
+        let times: Vec<f64> = (0..size.repetitions)
+            .map(|_| {
+                let mut field = sphere.clone();
+                let before = field.mass();
+                let (us, _) = stroke_into(&mut field, start, size.stamps, r, Action::Remove, false);
+                carved = before - field.mass();
+                us
+            })
+            .collect();
+        emit(json!({
+            "workload": "stamp-carve",
+            "radius_voxels": r,
+            "sphere_radius_voxels": size.sphere_radius_voxels,
+            "stamps": size.stamps,
+            "spacing_voxels": r / 2.0,
+            "repetitions": size.repetitions,
+            "field_us_per_stamp_median": median(times),
+            "carved_samples": carved,
         }));
     }
 }
@@ -480,11 +532,17 @@ mod tests {
     #[test]
     fn stamp_workload_reports_every_radius() {
         let mut lines = Vec::new();
-        run(&[Workload::Stamp], BenchSize::QUICK, |v| lines.push(v)).unwrap();
-        assert_eq!(lines.len(), 4);
-        for l in &lines {
+        run(&[Workload::Stamp, Workload::StampCarve], BenchSize::QUICK, |v| lines.push(v)).unwrap();
+        assert_eq!(lines.len(), 8);
+        for l in &lines[..4] {
             assert!(l["field_us_per_stamp_median"].as_f64().unwrap() > 0.0);
             assert!(l["remeshed_triangles_per_stroke"].as_u64().unwrap() > 0);
+            let per_sample = l["bytes_per_band_sample"].as_f64().unwrap();
+            assert!(per_sample > 20.0, "every stored sample costs 20 bytes: {per_sample}");
+        }
+        for l in &lines[4..] {
+            assert_eq!(l["workload"], "stamp-carve");
+            assert!(l["carved_samples"].as_f64().unwrap() > 0.0, "the stroke crosses the clay: {l}");
         }
     }
 }

@@ -195,6 +195,21 @@ impl Field {
         self.bricks.get(&key).map_or(DEFAULT_COLOUR, |b| b.colour[Brick::linear(local)])
     }
 
+    /// Bytes the samples take in memory: the bricks' densities and colours plus the per-brick
+    /// bookkeeping (map entries and density ranges), not counting the undo history.
+    pub fn memory_bytes(&self) -> usize {
+        let per_brick = super::history::BRICK_BYTES
+            + std::mem::size_of::<(BrickKey, Brick)>()
+            + std::mem::size_of::<(BrickKey, (f32, f32))>();
+        self.bricks.len() * per_brick
+    }
+
+    /// Samples strictly between empty and full: the band around the surface (what a narrow-band
+    /// level set such as OpenVDB's stores as active voxels).
+    pub fn band_samples(&self) -> usize {
+        self.bricks.values().map(|b| b.density.iter().filter(|&&d| d > 0.0 && d < 1.0).count()).sum()
+    }
+
     /// Total matter in the field, in sample units (sum of densities).
     pub fn mass(&self) -> f64 {
         self.bricks.values().map(Brick::mass).sum()
