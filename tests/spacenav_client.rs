@@ -105,15 +105,18 @@ fn daemon_events_reach_the_reader_and_a_restart_is_a_replug() {
         })
         .collect();
     let name = "SpaceMouse (spacenavd)";
-    assert_eq!(
-        shape,
-        [
-            format!("connected 1 {name}"),
-            "buttons 1 1".into(),
-            "buttons 1 0".into(),
-            "lost 1 0".into(),
-            format!("connected 2 {name}")
-        ]
+    // The daemon removes its socket right after its last writes: a rescan may see the socket
+    // gone before the release is read. Either way the button ends up released: by the release
+    // itself, or by the lost event, which releases what was held.
+    let released_then_lost = ["buttons 1 0".to_owned(), "lost 1 0".to_owned()];
+    let lost_holding = ["lost 1 1".to_owned()];
+    let middle = &shape[2..shape.len() - 1];
+    assert!(
+        shape.len() >= 4
+            && shape[..2] == [format!("connected 1 {name}"), "buttons 1 1".to_owned()]
+            && (middle == released_then_lost || middle == lost_holding)
+            && shape[shape.len() - 1] == format!("connected 2 {name}"),
+        "{shape:?}"
     );
     let state = last.expect("the second session's motion arrived");
     assert_eq!(state.axes, RawAxes([-90, 0, 0, 0, 0, 12]));
