@@ -39,8 +39,9 @@ pub enum Workload {
 
 impl Workload {
     /// Every workload, in the order `argile bench` runs them.
-    pub const ALL: [Workload; 5] = [
+    pub const ALL: [Workload; 6] = [
         Workload::Stamp,
+        Workload::StampCarve,
         Workload::MeshFull,
         Workload::RemeshStamp,
         Workload::RenderStereo,
@@ -179,12 +180,13 @@ fn bench_stamp(size: BenchSize, emit: &mut impl FnMut(Value)) {
 }
 
 /// Removing strokes across the surface of a solid sphere of `sphere_radius_voxels`: the line
-/// runs along +X at 95 % of the radius above the centre, so it enters and leaves the clay.
+/// runs along +X through the centre with its midpoint on the surface, so half the stamps cut
+/// into the clay and half leave it.
 fn bench_stamp_carve(size: BenchSize, emit: &mut impl FnMut(Value)) {
     let sphere = sphere_field(size.sphere_radius_voxels);
     for r in [4.0f32, 8.0, 16.0, 32.0] {
         let length = size.stamps as f32 * 0.5 * r;
-        let start = Vec3::new(-0.5 * length, 0.0, 0.95 * size.sphere_radius_voxels);
+        let start = Vec3::new(size.sphere_radius_voxels - 0.5 * length, 0.0, 0.0);
         let mut carved = 0.0;
         let times: Vec<f64> = (0..size.repetitions)
             .map(|_| {
@@ -490,6 +492,13 @@ fn bench_render(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_workload_runs_by_default() {
+        for w in <Workload as clap::ValueEnum>::value_variants() {
+            assert!(Workload::ALL.contains(w), "{w:?} is missing from Workload::ALL");
+        }
+    }
 
     #[test]
     fn replication_reaches_the_triangle_count_with_distinct_keys() {
