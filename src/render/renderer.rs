@@ -111,30 +111,8 @@ impl ArenaStorage for ArenaBuffers {
 
     fn reserve(&mut self, vertices: u32, indices: u32) -> Result<(), RenderError> {
         let vertex_bytes = u64::from(vertices) * std::mem::size_of::<Vertex>() as u64;
-        let index_bytes = u64::from(indices) * 4;
-        if vertex_bytes > self.vertices.size {
-            let mut grown = Buffer::new(
-                &self.device,
-                vertex_bytes,
-                vk::BufferUsageFlags::VERTEX_BUFFER,
-                MemoryUse::Upload,
-            )?;
-            let old = self.vertices.size as usize;
-            grown.bytes_mut()[..old].copy_from_slice(self.vertices.bytes_mut());
-            self.vertices = grown;
-        }
-        if index_bytes > self.indices.size {
-            let mut grown = Buffer::new(
-                &self.device,
-                index_bytes,
-                vk::BufferUsageFlags::INDEX_BUFFER,
-                MemoryUse::Upload,
-            )?;
-            let old = self.indices.size as usize;
-            grown.bytes_mut()[..old].copy_from_slice(self.indices.bytes_mut());
-            self.indices = grown;
-        }
-        Ok(())
+        grow(&self.device, &mut self.vertices, vertex_bytes, vk::BufferUsageFlags::VERTEX_BUFFER)?;
+        grow(&self.device, &mut self.indices, u64::from(indices) * 4, vk::BufferUsageFlags::INDEX_BUFFER)
     }
 
     fn write_vertices(&mut self, at: u32, vertices: &[Vertex]) {
@@ -146,6 +124,23 @@ impl ArenaStorage for ArenaBuffers {
     }
 }
 
+/// Replaces `buffer` by one of at least `bytes` with the same contents at the same offsets (no
+/// frame is in flight between frames, so the old one can go at once).
+fn grow(
+    device: &Arc<Device>,
+    buffer: &mut Buffer,
+    bytes: u64,
+    usage: vk::BufferUsageFlags,
+) -> Result<(), RenderError> {
+    if bytes > buffer.size {
+        let mut grown = Buffer::new(device, bytes, usage, MemoryUse::Upload)?;
+        let old = buffer.size as usize;
+        grown.bytes_mut()[..old].copy_from_slice(buffer.bytes_mut());
+        *buffer = grown;
+    }
+    Ok(())
+}
+
 /// A fixed mesh in buffers of its own, drawn whole.
 struct ShapeMesh {
     vertices: Buffer,
@@ -155,22 +150,16 @@ struct ShapeMesh {
 
 impl ShapeMesh {
     fn new(device: &Arc<Device>, (vertices, indices): (Vec<Vertex>, Vec<u32>)) -> Result<Self, RenderError> {
-        let bytes = |n: usize| n as u64;
-        let mut v = Buffer::new(
-            device,
-            bytes(std::mem::size_of_val(vertices.as_slice())),
-            vk::BufferUsageFlags::VERTEX_BUFFER,
-            MemoryUse::Upload,
-        )?;
-        v.write(0, &vertices);
-        let mut i = Buffer::new(
-            device,
-            bytes(std::mem::size_of_val(indices.as_slice())),
-            vk::BufferUsageFlags::INDEX_BUFFER,
-            MemoryUse::Upload,
-        )?;
-        i.write(0, &indices);
-        Ok(Self { vertices: v, indices: i, index_count: indices.len() as u32 })
+        let upload = |bytes: &[u8], usage| -> Result<Buffer, RenderError> {
+            let mut buffer = Buffer::new(device, bytes.len() as u64, usage, MemoryUse::Upload)?;
+            buffer.write(0, bytes);
+            Ok(buffer)
+        };
+        Ok(Self {
+            vertices: upload(bytemuck::cast_slice(&vertices), vk::BufferUsageFlags::VERTEX_BUFFER)?,
+            indices: upload(bytemuck::cast_slice(&indices), vk::BufferUsageFlags::INDEX_BUFFER)?,
+            index_count: indices.len() as u32,
+        })
     }
 }
 

@@ -1,7 +1,7 @@
 //! The fixed meshes the renderer draws besides the clay: the tool glyph's sphere, the stage
-//! box and the background's full-screen triangle, packed into one static buffer.
+//! box and the background's full-screen quad.
 //!
-//! Every one is drawn from its own buffers at offset 0 (see `ShapeMesh` in the renderer).
+//! Each is drawn whole from buffers of its own (see `ShapeMesh` in the renderer).
 
 use std::collections::HashMap;
 
