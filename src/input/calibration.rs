@@ -18,7 +18,7 @@
 //! A calibration file is layered over the shipped defaults: a user file names only the keys it
 //! changes. Unknown keys are refused and every error names the file, line and column.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde::Deserialize;
 use toml::Spanned;
@@ -31,31 +31,9 @@ use crate::scene::line_column;
 /// every key.
 pub const SHIPPED_SPACEMOUSE_TOML: &str = include_str!("../../calibration/spacemouse.toml");
 
-/// A problem with a calibration file; the message names the file and, where it can, line and
-/// column.
-#[derive(Debug, thiserror::Error)]
-pub enum CalibrationError {
-    /// The file cannot be read.
-    #[error("cannot read calibration file {path}: {source}")]
-    Read {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
-    /// The file is not a valid calibration (syntax, unknown key, value out of range).
-    #[error("{path}:{line}:{column}: {message}")]
-    Invalid {
-        /// The file.
-        path: String,
-        /// 1-based line.
-        line: usize,
-        /// 1-based column.
-        column: usize,
-        /// What is wrong and what to do.
-        message: String,
-    },
-}
+/// A problem with a calibration or mapping file; the message names the file and, where it
+/// can, the line and column.
+pub type CalibrationError = crate::scene::FileError;
 
 /// A calibration or mapping file being read over a base layer: errors name the file, line and
 /// column; values are range-checked; absent keys fall back to the base.
@@ -253,8 +231,11 @@ impl SpaceMouseCalibration {
 
     /// Loads a calibration file, layered over the shipped defaults.
     pub fn load(path: &Path) -> Result<Self, CalibrationError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| CalibrationError::Read { path: path.to_owned(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| CalibrationError::Read {
+            kind: "calibration",
+            path: path.to_owned(),
+            source,
+        })?;
         Self::parse(&text, &path.display().to_string())
     }
 

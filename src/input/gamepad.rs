@@ -179,8 +179,11 @@ impl GamepadCalibration {
 
     /// Loads a mapping file, layered over the shipped defaults.
     pub fn load(path: &Path) -> Result<Self, CalibrationError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| CalibrationError::Read { path: path.to_owned(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| CalibrationError::Read {
+            kind: "gamepad mapping",
+            path: path.to_owned(),
+            source,
+        })?;
         Self::parse_layer(&text, &path.display().to_string(), Some(&Self::shipped()))
     }
 

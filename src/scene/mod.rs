@@ -25,18 +25,21 @@ use file::{AttachSpec, ClaySpec, EnvironmentKind, LightKind, OpSpec, SceneFile, 
 /// The scene `argile` renders when given none, embedded in the binary.
 pub const DEFAULT_SCENE_TOML: &str = include_str!("../../scenes/default.toml");
 
-/// A problem with a scene file; the message names the file and, where it can, line and column.
+/// A problem with a TOML file the station reads (a scene, a calibration or mapping file): the
+/// message names the file and, where it can, the line and column.
 #[derive(Debug, thiserror::Error)]
-pub enum SceneError {
+pub enum FileError {
     /// The file cannot be read.
-    #[error("cannot read scene file {path}: {source}")]
+    #[error("cannot read {kind} file {path}: {source}")]
     Read {
+        /// What the file is ("scene", "calibration", ...).
+        kind: &'static str,
         /// The file.
         path: PathBuf,
         /// Why.
         source: std::io::Error,
     },
-    /// The file is not valid for the scene format (syntax, unknown key, bad value).
+    /// The file is not valid for its format (syntax, unknown key, bad value).
     #[error("{path}:{line}:{column}: {message}")]
     Invalid {
         /// The file.
@@ -49,6 +52,9 @@ pub enum SceneError {
         message: String,
     },
 }
+
+/// A problem with a scene file.
+pub type SceneError = FileError;
 
 /// A solid of the initial clay.
 #[derive(Clone, Debug, PartialEq)]
@@ -221,8 +227,11 @@ pub struct Scene {
 impl Scene {
     /// Loads and validates a scene file.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| SceneError::Read { path: path.to_owned(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+            kind: "scene",
+            path: path.to_owned(),
+            source,
+        })?;
         Scene::parse(&text, &path.display().to_string(), path.parent())
     }
 
