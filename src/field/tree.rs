@@ -1,12 +1,15 @@
 //! The field's storage: bricks keyed by signed brick coordinates, plus the dirty set.
 
-use std::collections::{HashMap, HashSet};
+use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 
 use super::brick::{split_index, Brick, BrickKey, Colour, BRICK_SIZE, DEFAULT_COLOUR};
 use super::history::{History, HistoryConfig, HistoryError, HistoryStats, Step};
 use crate::math::{IVec3, VoxelTransform};
 
 /// Bricks whose mesh may have changed since the mesher last drained the set.
+///
+/// Brick maps and sets hash with FxHash: keys are small integer triples chosen by the field,
+/// not by an adversary, and the default SipHash cost several percent of meshing.
 pub type DirtySet = HashSet<BrickKey>;
 
 /// Every brick whose mesh reads lattice point `p`.
@@ -66,9 +69,9 @@ impl Field {
         Self {
             transform: VoxelTransform::new(voxel_size_m),
             iso,
-            bricks: HashMap::new(),
-            ranges: HashMap::new(),
-            dirty: DirtySet::new(),
+            bricks: HashMap::default(),
+            ranges: HashMap::default(),
+            dirty: DirtySet::default(),
             history: History::new(HistoryConfig::default()),
         }
     }

@@ -91,14 +91,15 @@ pub fn remesh<I: IntoIterator<Item = BrickKey>>(field: &Field, keys: I) -> MeshD
         }
         !empty
     });
+    // Each worker marches into buffers it keeps across bricks (they grow once to the largest
+    // chunk), and a chunk leaves with vectors of exactly its size: one allocation each.
     let meshes: Vec<(BrickKey, ChunkMesh)> = keys
         .par_iter()
         .map_init(
-            || (Block::default(), MarchScratch::default()),
-            |(block, scratch), &key| {
-                let mut mesh = ChunkMesh::default();
-                mesh_brick(field, key, block, scratch, &mut mesh);
-                (key, mesh)
+            || (Block::default(), MarchScratch::default(), ChunkMesh::default()),
+            |(block, scratch, work), &key| {
+                mesh_brick(field, key, block, scratch, work);
+                (key, ChunkMesh { vertices: work.vertices.clone(), indices: work.indices.clone() })
             },
         )
         .collect();
