@@ -55,6 +55,12 @@ fn assert_closed_and_oriented(w: &Welded) {
     }
 }
 
+/// V − E + F of a closed welded mesh (2 for a sphere's topology, 0 for a torus's).
+fn euler_characteristic(w: &Welded) -> i64 {
+    let edges = w.triangles.len() * 3 / 2;
+    w.positions.len() as i64 - edges as i64 + w.triangles.len() as i64
+}
+
 fn area_and_volume(w: &Welded) -> (f32, f32) {
     let mut area = 0.0;
     let mut volume = 0.0;
@@ -109,6 +115,7 @@ fn a_sphere_straddling_brick_seams_is_closed_with_the_right_area_and_volume() {
     let w = full_mesh(&f);
     assert_closed_and_oriented(&w);
     assert_on_iso_level(&f, &w);
+    assert_eq!(euler_characteristic(&w), 2, "a sphere's topology");
     let (area, volume) = area_and_volume(&w);
     let pi = std::f32::consts::PI;
     assert!((area / (4.0 * pi * r * r) - 1.0).abs() < 0.02, "area {area}");
@@ -123,17 +130,18 @@ fn a_sphere_straddling_brick_seams_is_closed_with_the_right_area_and_volume() {
 
 #[test]
 fn torus_and_box_are_closed_and_on_the_iso_level() {
-    for solid in [
-        Solid::Torus { major_m: 0.02, minor_m: 0.0065 },
-        Solid::Box { half_m: Vec3::new(0.0113, 0.0171, 0.0093) },
-        Solid::RoundedBox { half_m: Vec3::new(0.02, 0.01, 0.015), corner_m: 0.004 },
-        Solid::Cylinder { radius_m: 0.009, half_height_m: 0.013 },
-        Solid::Bar { half_length_m: 0.03, radius_m: 0.006 },
+    for (solid, euler) in [
+        (Solid::Torus { major_m: 0.02, minor_m: 0.0065 }, 0),
+        (Solid::Box { half_m: Vec3::new(0.0113, 0.0171, 0.0093) }, 2),
+        (Solid::RoundedBox { half_m: Vec3::new(0.02, 0.01, 0.015), corner_m: 0.004 }, 2),
+        (Solid::Cylinder { radius_m: 0.009, half_height_m: 0.013 }, 2),
+        (Solid::Bar { half_length_m: 0.03, radius_m: 0.006 }, 2),
     ] {
         let f = solid_field(solid, 0.001, Vec3::new(0.0031, 0.0007, -0.0049));
         let w = full_mesh(&f);
         assert!(!w.triangles.is_empty(), "{solid:?}");
         assert_closed_and_oriented(&w);
+        assert_eq!(euler_characteristic(&w), euler, "{solid:?}: V − E + F");
         assert_on_iso_level(&f, &w);
         let (_, volume) = area_and_volume(&w);
         assert!(volume > 0.0, "{solid:?}: outward orientation gives a positive volume");
