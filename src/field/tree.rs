@@ -229,6 +229,20 @@ impl Field {
         lo: IVec3,
         hi: IVec3,
         create: bool,
+        edit: impl FnMut(IVec3, &mut f32, &mut Colour),
+    ) {
+        self.edit_region(lo, hi, create, |_, _| true, edit);
+    }
+
+    /// [`Field::edit_box`] for edits that may leave whole parts of the box unchanged:
+    /// `reaches(a, b)` says whether the edit can change a point of the box `a ..= b` (one
+    /// brick's share of `lo ..= hi`); where it cannot, the brick is neither created nor walked.
+    pub fn edit_region(
+        &mut self,
+        lo: IVec3,
+        hi: IVec3,
+        create: bool,
+        reaches: impl Fn(IVec3, IVec3) -> bool,
         mut edit: impl FnMut(IVec3, &mut f32, &mut Colour),
     ) {
         if lo.cmpgt(hi).any() {
@@ -243,6 +257,9 @@ impl Field {
                     let base = key * s;
                     let a = lo.max(base) - base;
                     let b = hi.min(base + s - IVec3::ONE) - base;
+                    if !reaches(base + a, base + b) {
+                        continue;
+                    }
                     if create || self.bricks.contains_key(&key) {
                         self.history.touch(key, self.bricks.get(&key));
                     }

@@ -70,14 +70,18 @@ pub fn stamp_sphere(
     let reach = radius + 0.5 * SOLID_BAND_VOXELS;
     let lo = (centre - Vec3::splat(reach)).ceil().as_ivec3();
     let hi = (centre + Vec3::splat(reach)).floor().as_ivec3();
+    // A brick's share of the box matters only if its nearest point is within the tool's reach
+    // (the corners of the box lie outside the sphere).
+    let reaches =
+        |a: IVec3, b: IVec3| centre.clamp(a.as_vec3(), b.as_vec3()).distance_squared(centre) <= reach * reach;
     match action {
-        Action::Add => field.edit_box(lo, hi, true, |p, d, c| {
+        Action::Add => field.edit_region(lo, hi, true, reaches, |p, d, c| {
             let tool = solid_density(p.as_vec3().distance(centre) - radius);
             let new = d.max(tool);
             mix_in(c, *d, new, colour);
             *d = new;
         }),
-        Action::Remove => field.edit_box(lo, hi, false, |p, d, _| {
+        Action::Remove => field.edit_region(lo, hi, false, reaches, |p, d, _| {
             let tool = solid_density(p.as_vec3().distance(centre) - radius);
             *d = d.min(1.0 - tool);
         }),
