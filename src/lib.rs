@@ -42,6 +42,7 @@
 pub mod app;
 pub mod field;
 pub mod input;
+pub mod io;
 pub mod math;
 pub mod mesh;
 pub mod render;

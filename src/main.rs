@@ -42,12 +42,24 @@ enum Command {
         #[arg(long)]
         validation: bool,
     },
-    /// Writes the clay of a scene, as it is at the end of its timeline, as a mesh file.
+    /// Plays a scene to the end of its timeline and saves its clay as a sculpt (`.argile`).
+    Save {
+        /// The scene file (TOML, see scenes/README.md).
+        scene: PathBuf,
+        /// The sculpt file to write (`.argile`).
+        #[arg(long, short)]
+        out: PathBuf,
+        /// Replace the file if it exists.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Writes the clay of a scene (as it is at the end of its timeline) or of a saved sculpt
+    /// (`.argile`) as a mesh file.
     ///
     /// OBJ and STL are written in millimetres, PLY and glTF (GLB) in metres. The mesh is
     /// welded and indexed; PLY and GLB carry vertex colours.
     Export {
-        /// The scene file (TOML, see scenes/README.md).
+        /// The scene file (TOML, see scenes/README.md) or sculpt file (`.argile`).
         input: PathBuf,
         /// The mesh format.
         #[arg(long, short, value_enum)]
@@ -111,6 +123,8 @@ fn main() -> ExitCode {
                     s.bytes
                 )
             }),
+        Some(Command::Save { scene, out, force }) => app::save_scene_sculpt(&scene, &out, force)
+            .map(|s| println!("wrote {} ({} bricks, {} bytes)", s.path.display(), s.bricks, s.bytes)),
         Some(Command::Info) => info(),
         Some(Command::Bench { json, quick, workloads }) => run_bench(json, quick, &workloads),
     };

@@ -6,6 +6,8 @@ use anyhow::{bail, Context, Result};
 
 use super::files::write_atomically;
 use super::playback::Playback;
+use super::sculpt::{is_sculpt, load_sculpt};
+use crate::field::Field;
 use crate::mesh::export::{write_mesh, ExportFormat};
 use crate::mesh::{mesh_all, weld, WeldedMesh};
 use crate::scene::Scene;
@@ -23,19 +25,30 @@ pub struct ExportSummary {
     pub bytes: u64,
 }
 
-/// The surface of `scene`'s clay at the end of its timeline (after its last key and capture),
-/// welded into one indexed mesh; chunks in key order, so the same scene gives the same file.
-pub fn final_mesh(scene: &Scene) -> WeldedMesh {
+/// `scene`'s clay at the end of its timeline (after its last key and capture).
+pub fn final_field(scene: &Scene) -> Field {
     let mut playback = Playback::new(scene);
     let end = scene.captures.iter().map(|c| c.time_s).fold(scene.timeline.duration_s(), f32::max);
     playback.advance_to(end, |_| {});
-    let mut diff = mesh_all(playback.field());
+    playback.into_field()
+}
+
+/// The surface of `field`, welded into one indexed mesh; chunks in key order, so the same
+/// clay gives the same file.
+pub fn welded_surface(field: &Field) -> WeldedMesh {
+    let mut diff = mesh_all(field);
     diff.upserted.sort_unstable_by_key(|(k, _)| k.to_array());
     weld(diff.upserted.iter().map(|(_, m)| m))
 }
 
-/// Exports the scene file `input` as `format` to `out` (refusing to replace a file unless
-/// `overwrite`), with a progress bar when `progress`.
+/// The surface of `scene`'s clay at the end of its timeline.
+pub fn final_mesh(scene: &Scene) -> WeldedMesh {
+    welded_surface(&final_field(scene))
+}
+
+/// Exports `input` as `format` to `out` (refusing to replace a file unless `overwrite`), with
+/// a progress bar when `progress`. `input` is a scene file (its clay at the end of its
+/// timeline) or a saved sculpt (`.argile`).
 pub fn export(
     input: &Path,
     format: ExportFormat,
@@ -46,8 +59,11 @@ pub fn export(
     if !overwrite && out.exists() {
         bail!("{} already exists; pass --force to replace it", out.display());
     }
-    let scene = Scene::load(input)?;
-    let mesh = final_mesh(&scene);
+    let mesh = if is_sculpt(input) {
+        welded_surface(&load_sculpt(input)?.field)
+    } else {
+        final_mesh(&Scene::load(input)?)
+    };
     if mesh.indices.is_empty() {
         bail!(
             "{}: the clay has no surface at the end of the timeline; there is nothing to export",

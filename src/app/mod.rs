@@ -9,13 +9,15 @@ mod export;
 mod files;
 mod frame;
 mod playback;
+mod sculpt;
 
 pub use capture::{render_scene, renderer_for, save_png_atomically, RenderOptions, WrittenCapture};
 pub use environment::{load_environment, EnvironmentError};
-pub use export::{export, final_mesh, ExportSummary};
+pub use export::{export, final_field, final_mesh, welded_surface, ExportSummary};
 pub use files::write_atomically;
 pub use frame::{build_frame, world_lights};
 pub use playback::Playback;
+pub use sculpt::{is_sculpt, load_sculpt, save_scene_sculpt, SavedSculpt, SCULPT_EXTENSION};
 
 use crate::field::HistoryConfig;
 

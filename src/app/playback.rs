@@ -47,6 +47,11 @@ impl<'s> Playback<'s> {
         &self.field
     }
 
+    /// The clay, ending the playback.
+    pub fn into_field(self) -> Field {
+        self.field
+    }
+
     /// The clay, mutably (to drain its dirty set).
     pub fn field_mut(&mut self) -> &mut Field {
         &mut self.field

@@ -176,6 +176,21 @@ impl Field {
         self.bricks.get(&key)
     }
 
+    /// Puts `brick` at `key`, replacing what was there (an all-empty brick removes it), and
+    /// marks what it changes dirty. For loading stored sculpts; not journaled.
+    pub fn insert_brick(&mut self, key: BrickKey, brick: Brick) {
+        let range = density_range(&brick);
+        if range.1 == 0.0 {
+            self.bricks.remove(&key);
+            self.ranges.remove(&key);
+        } else {
+            self.bricks.insert(key, brick);
+            self.ranges.insert(key, range);
+        }
+        let base = key * BRICK_SIZE;
+        self.mark_dirty(base, base + IVec3::splat(BRICK_SIZE - 1));
+    }
+
     /// The lowest and highest density of a stored brick (`None`: no brick, all samples 0).
     pub fn density_range(&self, key: BrickKey) -> Option<(f32, f32)> {
         self.ranges.get(&key).copied()

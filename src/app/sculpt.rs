@@ -1,0 +1,54 @@
+//! Saving a scene's sculpt in the native format and loading sculpts (see [`crate::io`]).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+
+use super::export::final_field;
+use super::files::write_atomically;
+use crate::io::{decode, encode, Sculpt};
+use crate::scene::Scene;
+
+/// The extension of sculpt files.
+pub const SCULPT_EXTENSION: &str = "argile";
+
+/// Whether `path` names a sculpt file (by its extension).
+pub fn is_sculpt(path: &Path) -> bool {
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case(SCULPT_EXTENSION))
+}
+
+/// What a save wrote.
+#[derive(Clone, Debug)]
+pub struct SavedSculpt {
+    /// The file.
+    pub path: PathBuf,
+    /// Bricks stored.
+    pub bricks: usize,
+    /// Bytes written.
+    pub bytes: usize,
+}
+
+/// Plays the scene file `scene_path` to the end of its timeline and saves its clay, with the
+/// scene's text, to `out` (atomically; an existing file only when `overwrite`).
+pub fn save_scene_sculpt(scene_path: &Path, out: &Path, overwrite: bool) -> Result<SavedSculpt> {
+    if !overwrite && out.exists() {
+        bail!("{} already exists; pass --force to replace it", out.display());
+    }
+    let scene = Scene::load(scene_path)?;
+    let text = std::fs::read_to_string(scene_path)
+        .with_context(|| format!("cannot read scene file {}", scene_path.display()))?;
+    let field = final_field(&scene);
+    let bytes = encode(&field, Some(&text), &mut |_| {});
+    write_atomically(out, overwrite, |w| {
+        w.write_all(&bytes).with_context(|| format!("cannot write {}", out.display()))
+    })?;
+    Ok(SavedSculpt { path: out.to_path_buf(), bricks: field.brick_count(), bytes: bytes.len() })
+}
+
+/// Loads a sculpt file, refusing damaged, truncated, future-version or hostile files with a
+/// sentence that names the file.
+pub fn load_sculpt(path: &Path) -> Result<Sculpt> {
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read sculpt file {}", path.display()))?;
+    Ok(decode(&bytes, &path.display().to_string(), &mut |_| {})?)
+}
