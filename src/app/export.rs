@@ -56,6 +56,7 @@ pub fn export(
     overwrite: bool,
     progress: bool,
 ) -> Result<ExportSummary> {
+    // Checked here too (`write_atomically` checks again) so a refused export costs no meshing.
     if !overwrite && out.exists() {
         bail!("{} already exists; pass --force to replace it", out.display());
     }

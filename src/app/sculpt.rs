@@ -32,12 +32,14 @@ pub struct SavedSculpt {
 /// Plays the scene file `scene_path` to the end of its timeline and saves its clay, with the
 /// scene's text, to `out` (atomically; an existing file only when `overwrite`).
 pub fn save_scene_sculpt(scene_path: &Path, out: &Path, overwrite: bool) -> Result<SavedSculpt> {
+    // Checked here too (`write_atomically` checks again) so a refused save costs no playback.
     if !overwrite && out.exists() {
         bail!("{} already exists; pass --force to replace it", out.display());
     }
-    let scene = Scene::load(scene_path)?;
+    // Read once: the same text is parsed and stored.
     let text = std::fs::read_to_string(scene_path)
         .with_context(|| format!("cannot read scene file {}", scene_path.display()))?;
+    let scene = Scene::parse(&text, &scene_path.display().to_string(), scene_path.parent())?;
     let field = final_field(&scene);
     let bytes = encode(&field, Some(&text), &mut |_| {});
     write_atomically(out, overwrite, |w| {
