@@ -13,8 +13,8 @@ use clap::{Parser, Subcommand};
 
 /// Argile: sculpt virtual clay in stereo and VR.
 ///
-/// With no command, starts the station on the default scene. Until the desktop window exists,
-/// the station renders the default scene headless and says where the stereo pair is.
+/// With no command, starts the station on the default scene: in a window when there is a
+/// display, else headless (it renders the default scene and says where the stereo pair is).
 #[derive(Parser)]
 #[command(version, about, long_about)]
 struct Cli {
@@ -24,6 +24,34 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Opens the station window on a scene (the default scene when none is named) and sculpts
+    /// at the display's rate; without a display, says so and renders the scene headless.
+    Run {
+        /// The scene file (TOML, see scenes/README.md).
+        scene: Option<PathBuf>,
+        /// Close after this many frames, with a fixed 1/60 s time step (scripted runs, tests).
+        #[arg(long)]
+        frames: Option<u64>,
+        /// With --frames: write what the window shows in the last frame to this PNG.
+        #[arg(long, requires = "frames")]
+        screenshot: Option<PathBuf>,
+        /// Input events to play at given frames (TOML, see `argile::app::InputScript`).
+        #[arg(long)]
+        input_script: Option<PathBuf>,
+        /// Key bindings read over the shipped ones (see calibration/keys.toml).
+        #[arg(long)]
+        keys: Option<PathBuf>,
+        /// Where the save key (and closing with unsaved strokes) writes the sculpt
+        /// (default: SCENE-NAME.argile in the current folder).
+        #[arg(long)]
+        save_to: Option<PathBuf>,
+        /// Window size, WIDTHxHEIGHT, instead of the scene's output size.
+        #[arg(long, value_parser = parse_size)]
+        size: Option<(u32, u32)>,
+        /// Turn the Vulkan validation layer on (fails on any validation message).
+        #[arg(long)]
+        validation: bool,
+    },
     /// Plays a scene's timeline offscreen and writes every capture as NAME-left.png and
     /// NAME-right.png.
     Render {
@@ -109,7 +137,21 @@ fn main() -> ExitCode {
         .init();
     let cli = Cli::parse();
     let result = match cli.command {
-        None => station(),
+        None => station(None, app::StationOptions::default()),
+        Some(Command::Run { scene, frames, screenshot, input_script, keys, save_to, size, validation }) => {
+            station(
+                scene,
+                app::StationOptions {
+                    frames,
+                    screenshot,
+                    script: input_script,
+                    keys,
+                    save_to,
+                    window_px: size,
+                    validation,
+                },
+            )
+        }
         Some(Command::Render { scene, out, preview, size, validation }) => {
             render(&scene, out, preview, size, validation)
         }
@@ -146,23 +188,36 @@ fn print_written(written: &[app::WrittenCapture]) {
     }
 }
 
-fn station() -> Result<()> {
-    let has_display = std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some();
-    if has_display {
-        println!("The interactive desktop window is not part of this version; rendering the default scene headless.");
-    } else {
-        println!("No display found: rendering the default scene headless.");
-    }
-    let scene = Scene::default_scene();
-    let options = RenderOptions {
-        out_dir: PathBuf::from("argile-out"),
-        preview: Some(Preview::Anaglyph),
-        progress: true,
-        validation: false,
-        size_px: None,
+fn station(scene_path: Option<PathBuf>, options: app::StationOptions) -> Result<()> {
+    let scene = match &scene_path {
+        Some(p) => Scene::load(p)?,
+        None => Scene::default_scene(),
     };
-    let written = app::render_scene(&scene, &options)?;
-    print_written(&written);
+    let name = scene_path
+        .as_deref()
+        .and_then(|p| p.file_stem())
+        .map_or("default".to_owned(), |s| s.to_string_lossy().into_owned());
+    if let Some(reason) = app::no_display_reason() {
+        println!("No window can open here ({reason}): rendering the {name} scene headless.");
+        let options = RenderOptions {
+            out_dir: PathBuf::from("argile-out"),
+            preview: Some(Preview::Anaglyph),
+            progress: true,
+            validation: options.validation,
+            size_px: None,
+        };
+        let written = app::render_scene(&scene, &options)?;
+        print_written(&written);
+        return Ok(());
+    }
+    let report = app::run_station(&scene, &name, &options)?;
+    println!("station closed after {} frames", report.frames);
+    if let Some(p) = &report.screenshot {
+        println!("wrote {}", p.display());
+    }
+    if let Some(p) = &report.saved {
+        println!("saved the sculpt to {}", p.display());
+    }
     Ok(())
 }
 

@@ -10,6 +10,7 @@ mod files;
 mod frame;
 mod playback;
 mod sculpt;
+mod station;
 
 pub use capture::{render_scene, renderer_for, save_png_atomically, RenderOptions, WrittenCapture};
 pub use environment::{load_environment, EnvironmentError};
@@ -18,6 +19,10 @@ pub use files::write_atomically;
 pub use frame::{build_frame, world_lights};
 pub use playback::Playback;
 pub use sculpt::{is_sculpt, load_sculpt, save_scene_sculpt, SavedSculpt, SCULPT_EXTENSION};
+pub use station::{
+    no_display_reason, run_station, InputScript, ScriptEvent, Station, StationOptions, StationReport,
+    SCRIPTED_STEP_S,
+};
 
 use crate::field::HistoryConfig;
 

@@ -284,6 +284,11 @@ impl MouseNavigator {
         }
     }
 
+    /// Where the pointer was last seen, pixels (the viewport's centre before any).
+    pub fn last_position(&self) -> Vec2 {
+        self.last.unwrap_or(self.viewport_px * 0.5)
+    }
+
     fn scale_distance(&mut self, factor: f32) {
         // A huge wheel turn underflows the factor to 0 or overflows it to infinity: both
         // clamp to the range, as the user meant.

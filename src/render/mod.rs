@@ -27,12 +27,14 @@ mod gpu;
 mod renderer;
 mod shapes;
 mod target;
+mod window;
 
 pub use frame::*;
 pub use gpu::{choose_device, DeviceInfo, DeviceKind, ValidationLog, DEVICE_VARIABLE};
 pub use renderer::{
     probe_devices, DeviceProbe, Renderer, RendererDesc, StereoImage, ViewPasses, VIEW_PASSES_VARIABLE,
 };
+pub use window::{Presented, WindowHandles};
 
 use ash::vk;
 

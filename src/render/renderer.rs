@@ -8,6 +8,7 @@
 use std::sync::Arc;
 
 use ash::vk;
+use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 
 use super::chunks::{ArenaStorage, ChunkArena};
 use super::environment::{build_radiance_cube, irradiance_sh9, reflection_lod, CubeMap};
@@ -16,9 +17,11 @@ use super::gpu::device::Device;
 use super::gpu::image::{transition, Image, ImageDesc, Sampler};
 use super::gpu::instance::Instance;
 use super::gpu::pipeline::{DescriptorPool, Layout, Pipeline, PipelineDesc, PUSH_CONSTANT_BYTES};
+use super::gpu::swapchain::{color_range, surface_extensions, Surface, SwapchainDesc};
 use super::shapes::{full_screen_quad, icosphere, unit_box};
 use super::target::{StereoTarget, ViewPass};
 pub use super::target::{ViewPasses, VIEW_PASSES_VARIABLE};
+use super::window::{to_rgba, Presented, WindowHandles, WindowOutput};
 use super::{Environment, Frame, Light, RenderError, ValidationLog, MAX_LIGHTS};
 use crate::math::Vec3;
 use crate::mesh::{MeshDiff, Vertex};
@@ -182,6 +185,8 @@ struct Pipelines {
 /// Field order is drop order (after `Drop::drop` waits for the device): pipelines and the
 /// descriptor pool, the target, buffers, the environment, layouts, and the device last.
 pub struct Renderer {
+    /// The window frames are presented in, if any.
+    window: Option<WindowOutput>,
     /// One set of pipelines per view pass of the target.
     pipelines: Vec<Pipelines>,
     descriptors: DescriptorPool,
@@ -197,6 +202,8 @@ pub struct Renderer {
     layout: Layout,
     cube_size: u32,
     sh: [Vec3; 9],
+    /// Where screenshots of the window are read back (made on first use).
+    screenshot: Option<Buffer>,
     command_buffer: vk::CommandBuffer,
     fence: vk::Fence,
     drawn: bool,
@@ -221,8 +228,54 @@ impl Renderer {
         environment: &Environment,
         environment_intensity: f32,
     ) -> Result<Self, RenderError> {
-        let instance = Arc::new(Instance::new(desc.validation)?);
-        let device = Device::new(instance)?;
+        Self::build(desc, environment, environment_intensity, None)
+    }
+
+    /// As [`Renderer::new`], for a window of `window_size` pixels that [`Renderer::present`]
+    /// shows frames in; `desc` sizes each eye. The renderer keeps `window` alive while it
+    /// needs it.
+    pub fn for_window(
+        desc: &RendererDesc,
+        environment: &Environment,
+        environment_intensity: f32,
+        window: Arc<dyn WindowHandles>,
+        window_size: (u32, u32),
+    ) -> Result<Self, RenderError> {
+        Self::build(desc, environment, environment_intensity, Some((window, window_size)))
+    }
+
+    fn build(
+        desc: &RendererDesc,
+        environment: &Environment,
+        environment_intensity: f32,
+        window: Option<(Arc<dyn WindowHandles>, (u32, u32))>,
+    ) -> Result<Self, RenderError> {
+        let display = match &window {
+            Some((w, _)) => Some(
+                w.display_handle()
+                    .map_err(|e| RenderError::Unsupported(format!("the window has no display handle ({e})")))?
+                    .as_raw(),
+            ),
+            None => None,
+        };
+        let extensions = match display {
+            Some(display) => surface_extensions(display)?,
+            None => Vec::new(),
+        };
+        let instance = Arc::new(Instance::new(desc.validation, &extensions)?);
+        let surface = match (&window, display) {
+            (Some((w, _)), Some(display)) => {
+                let handle = w
+                    .window_handle()
+                    .map_err(|e| RenderError::Unsupported(format!("the window has no window handle ({e})")))?
+                    .as_raw();
+                // SAFETY: the handles come from a live window that the renderer keeps alive
+                // (in `WindowOutput`) for longer than the surface.
+                Some(Arc::new(unsafe { Surface::new(&instance, display, handle)? }))
+            }
+            _ => None,
+        };
+        let device = Device::new(instance, surface.as_deref())?;
         let view_passes = match desc.view_passes {
             Some(v) => v,
             None => {
@@ -282,64 +335,25 @@ impl Renderer {
             device: device.clone(),
         };
 
-        // The background is drawn after the opaque geometry, at depth 1 with the depth test on,
-        // so only pixels nothing else covers are shaded.
-        let base = PipelineDesc {
-            name: "background",
-            vertex: spirv!("background.vert"),
-            fragment: spirv!("background.frag"),
-            attributes: 1,
-            cull: vk::CullModeFlags::NONE,
-            depth_test: true,
-            depth_write: false,
-            blend: false,
-        };
-        let pipelines_for = |pass: &ViewPass| -> Result<Pipelines, RenderError> {
-            let make = |desc: PipelineDesc| {
-                Pipeline::new(&device, &desc, &layout, pass.render_pass, target.extent, target.samples)
-            };
-            Ok(Pipelines {
-                background: make(base)?,
-                stage: make(PipelineDesc {
-                    name: "stage",
-                    vertex: spirv!("stage.vert"),
-                    fragment: spirv!("stage.frag"),
-                    attributes: 2,
-                    cull: vk::CullModeFlags::FRONT,
-                    depth_test: true,
-                    depth_write: true,
-                    ..base
-                })?,
-                clay: make(PipelineDesc {
-                    name: "clay",
-                    vertex: spirv!("clay.vert"),
-                    fragment: spirv!("clay.frag"),
-                    attributes: 3,
-                    cull: vk::CullModeFlags::BACK,
-                    depth_test: true,
-                    depth_write: true,
-                    ..base
-                })?,
-                glyph: make(PipelineDesc {
-                    name: "tool glyph",
-                    vertex: spirv!("glyph.vert"),
-                    fragment: spirv!("glyph.frag"),
-                    attributes: 2,
-                    cull: vk::CullModeFlags::BACK,
-                    depth_test: true,
-                    depth_write: false,
-                    blend: true,
-                })?,
-            })
-        };
-        let pipelines = target.passes.iter().map(pipelines_for).collect::<Result<Vec<_>, _>>()?;
+        let pipelines = make_pipelines(&device, &layout, &target)?;
 
         let command_buffer = device.command_buffer()?;
         // SAFETY: a valid create info on a live device; destroyed in Drop.
         let fence = unsafe { device.raw.create_fence(&vk::FenceCreateInfo::default(), None) }
             .map_err(RenderError::vk("vkCreateFence"))?;
 
+        let window = match (window, surface) {
+            (Some((window, (width, height))), Some(surface)) => Some(WindowOutput::new(
+                &device,
+                surface,
+                window,
+                SwapchainDesc { width, height, layers: 1, vsync: true },
+            )?),
+            _ => None,
+        };
+
         Ok(Self {
+            window,
             pipelines,
             descriptors,
             target,
@@ -353,6 +367,7 @@ impl Renderer {
             layout,
             cube_size,
             sh,
+            screenshot: None,
             command_buffer,
             fence,
             drawn: false,
@@ -440,28 +455,233 @@ impl Renderer {
     /// Draws one stereo frame (both eyes in one multiview pass) and waits for it to finish.
     pub fn draw(&mut self, frame: &Frame) -> Result<(), RenderError> {
         self.write_uniforms(frame);
+        self.submit(|cb| self.record_stereo(cb, frame), None, None)?;
+        self.finish()?;
+        self.drawn = true;
+        Ok(())
+    }
+
+    /// Records the stereo view passes of `frame` (the uniforms already written).
+    fn record_stereo(&self, cb: vk::CommandBuffer, frame: &Frame) {
+        for (pass, pipelines) in self.target.passes.iter().zip(&self.pipelines) {
+            self.target.begin(cb, pass, frame.background.extend(1.0).to_array());
+            self.record_pass(cb, pipelines, frame);
+            // SAFETY: `cb` is inside the render pass begun above.
+            unsafe { self.device.raw.cmd_end_render_pass(cb) };
+        }
+    }
+
+    /// Records the frame's command buffer with `record` and submits it, waiting on `wait`
+    /// (at the colour-output and transfer stages) and signalling `signal`. [`Self::finish`]
+    /// waits for it.
+    fn submit(
+        &self,
+        record: impl FnOnce(vk::CommandBuffer),
+        wait: Option<vk::Semaphore>,
+        signal: Option<vk::Semaphore>,
+    ) -> Result<(), RenderError> {
         let d = &self.device.raw;
         let cb = self.command_buffer;
         let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-        // SAFETY: the previous submission of `cb` finished (waited on below), so it can be
-        // re-recorded; every handle recorded is owned by `self` and outlives the submission.
+        // SAFETY: the previous submission of `cb` finished (`finish` waited for it), so it can
+        // be re-recorded; every handle recorded is owned by `self` and outlives the submission.
         unsafe {
             d.begin_command_buffer(cb, &begin).map_err(RenderError::vk("vkBeginCommandBuffer"))?;
-            for (pass, pipelines) in self.target.passes.iter().zip(&self.pipelines) {
-                self.target.begin(cb, pass, frame.background.extend(1.0).to_array());
-                self.record_pass(cb, pipelines, frame);
-                d.cmd_end_render_pass(cb);
-            }
+            record(cb);
             d.end_command_buffer(cb).map_err(RenderError::vk("vkEndCommandBuffer"))?;
             let cbs = [cb];
-            let submit = [vk::SubmitInfo::default().command_buffers(&cbs)];
-            d.queue_submit(self.device.queue, &submit, self.fence)
-                .map_err(RenderError::vk("vkQueueSubmit"))?;
-            d.wait_for_fences(&[self.fence], true, u64::MAX).map_err(RenderError::vk("vkWaitForFences"))?;
-            d.reset_fences(&[self.fence]).map_err(RenderError::vk("vkResetFences"))?;
+            let waits: Vec<vk::Semaphore> = wait.into_iter().collect();
+            let stages = [vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT | vk::PipelineStageFlags::TRANSFER];
+            let signals: Vec<vk::Semaphore> = signal.into_iter().collect();
+            let submit = [vk::SubmitInfo::default()
+                .command_buffers(&cbs)
+                .wait_semaphores(&waits)
+                .wait_dst_stage_mask(&stages[..waits.len()])
+                .signal_semaphores(&signals)];
+            d.queue_submit(self.device.queue, &submit, self.fence).map_err(RenderError::vk("vkQueueSubmit"))
         }
+    }
+
+    /// Waits for the submitted frame to finish.
+    fn finish(&self) -> Result<(), RenderError> {
+        let d = &self.device.raw;
+        // SAFETY: the fence belongs to this device and was passed to the last submission.
+        unsafe {
+            d.wait_for_fences(&[self.fence], true, u64::MAX).map_err(RenderError::vk("vkWaitForFences"))?;
+            d.reset_fences(&[self.fence]).map_err(RenderError::vk("vkResetFences"))
+        }
+    }
+
+    /// Tells the renderer the window now has `width` × `height` pixels; the swapchain is remade
+    /// before the next frame.
+    pub fn resize_window(&mut self, width: u32, height: u32) {
+        if let Some(w) = &mut self.window {
+            if (w.desc.width, w.desc.height) != (width, height) {
+                w.desc.width = width;
+                w.desc.height = height;
+                w.stale = true;
+            }
+        }
+    }
+
+    /// The most image layers the window's surface offers (quad-buffer stereo needs 2); `None`
+    /// without a window.
+    pub fn window_max_layers(&self) -> Result<Option<u32>, RenderError> {
+        self.window.as_ref().map(WindowOutput::max_layers).transpose()
+    }
+
+    /// Draws `frame` and shows it in the window; with `screenshot`, also reads back what was
+    /// shown. Waits for the frame to finish (one frame in flight).
+    pub fn present(&mut self, frame: &Frame, screenshot: bool) -> Result<Presented, RenderError> {
+        let Some(window) = self.window.as_mut() else {
+            return Err(RenderError::Unsupported("this renderer draws offscreen; it has no window".into()));
+        };
+        window.refresh()?;
+        let Some(swapchain) = window.swapchain.as_ref() else {
+            return Ok(Presented::Skipped);
+        };
+        let Some((index, suboptimal)) = swapchain.acquire(window.acquired)? else {
+            window.stale = true;
+            return Ok(Presented::Skipped);
+        };
+        let (image, extent, format, layers) =
+            (swapchain.images[index as usize], swapchain.extent, swapchain.format, swapchain.layers);
+        let rendered = swapchain.rendered[index as usize];
+        let acquired = window.acquired;
+        let screenshot = screenshot && swapchain.readable;
+        let shot_bytes = u64::from(extent.width) * u64::from(extent.height) * 4 * u64::from(layers);
+        if screenshot && self.screenshot.as_ref().is_none_or(|b| b.size < shot_bytes) {
+            self.screenshot = Some(Buffer::new(
+                &self.device,
+                shot_bytes,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryUse::Readback,
+            )?);
+        }
+        self.write_uniforms(frame);
+        let shot_buffer = self.screenshot.as_ref().filter(|_| screenshot).map(|b| b.raw);
+        self.submit(
+            |cb| {
+                self.record_stereo(cb, frame);
+                self.record_to_window(cb, image, extent, layers);
+                if let Some(buffer) = shot_buffer {
+                    transition(
+                        &self.device.raw,
+                        cb,
+                        image,
+                        color_range(layers),
+                        (
+                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                            vk::PipelineStageFlags::TRANSFER,
+                            vk::AccessFlags::TRANSFER_WRITE,
+                        ),
+                        (
+                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                            vk::PipelineStageFlags::TRANSFER,
+                            vk::AccessFlags::TRANSFER_READ,
+                        ),
+                    );
+                    copy_to_host(&self.device.raw, cb, image, extent, layers, buffer);
+                    transition(
+                        &self.device.raw,
+                        cb,
+                        image,
+                        color_range(layers),
+                        (
+                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                            vk::PipelineStageFlags::TRANSFER,
+                            vk::AccessFlags::TRANSFER_READ,
+                        ),
+                        (
+                            vk::ImageLayout::PRESENT_SRC_KHR,
+                            vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                            vk::AccessFlags::empty(),
+                        ),
+                    );
+                } else {
+                    transition(
+                        &self.device.raw,
+                        cb,
+                        image,
+                        color_range(layers),
+                        (
+                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                            vk::PipelineStageFlags::TRANSFER,
+                            vk::AccessFlags::TRANSFER_WRITE,
+                        ),
+                        (
+                            vk::ImageLayout::PRESENT_SRC_KHR,
+                            vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                            vk::AccessFlags::empty(),
+                        ),
+                    );
+                }
+            },
+            Some(acquired),
+            Some(rendered),
+        )?;
+        let window = self.window.as_mut().expect("checked above");
+        let fits = window.swapchain.as_ref().expect("checked above").present(index)?;
+        self.finish()?;
         self.drawn = true;
-        Ok(())
+        if !fits || suboptimal {
+            self.window.as_mut().expect("checked above").stale = true;
+        }
+        let shot = match (&self.screenshot, shot_buffer) {
+            (Some(_), Some(_)) => {
+                let buffer = self.screenshot.as_mut().expect("matched above");
+                let bytes = buffer.read()[..(shot_bytes / u64::from(layers)) as usize].to_vec();
+                Some(to_rgba(format, extent.width, extent.height, bytes))
+            }
+            _ => None,
+        };
+        Ok(Presented::Shown(shot))
+    }
+
+    /// Records the composition of the eyes into swapchain image `image` (layers: 2 for
+    /// quad-buffer stereo), leaving it in `TRANSFER_DST_OPTIMAL`.
+    fn record_to_window(&self, cb: vk::CommandBuffer, image: vk::Image, extent: vk::Extent2D, layers: u32) {
+        let d = &self.device.raw;
+        transition(
+            d,
+            cb,
+            image,
+            color_range(layers),
+            (vk::ImageLayout::UNDEFINED, vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::empty()),
+            (
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_WRITE,
+            ),
+        );
+        let src = self.target.extent;
+        let layers_of = |count| {
+            vk::ImageSubresourceLayers::default()
+                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                .mip_level(0)
+                .base_array_layer(0)
+                .layer_count(count)
+        };
+        let corner =
+            |w: u32, h: u32| [vk::Offset3D::default(), vk::Offset3D { x: w as i32, y: h as i32, z: 1 }];
+        let blit = vk::ImageBlit::default()
+            .src_subresource(layers_of(layers))
+            .src_offsets(corner(src.width, src.height))
+            .dst_subresource(layers_of(layers))
+            .dst_offsets(corner(extent.width, extent.height));
+        // SAFETY: the render pass left the target's output in TRANSFER_SRC_OPTIMAL, the
+        // swapchain image was moved to TRANSFER_DST_OPTIMAL above; both have `layers` layers.
+        unsafe {
+            d.cmd_blit_image(
+                cb,
+                self.target.output.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[blit],
+                vk::Filter::LINEAR,
+            )
+        };
     }
 
     /// Records one view pass's draws: stage, clay, background (where nothing else is), then
@@ -541,45 +761,8 @@ impl Renderer {
         let image = self.target.output.raw;
         let buffer = self.readback.raw;
         let d = &self.device.raw;
-        self.device.submit_and_wait(|cb| {
-            let region = vk::BufferImageCopy::default()
-                .image_subresource(
-                    vk::ImageSubresourceLayers::default()
-                        .aspect_mask(vk::ImageAspectFlags::COLOR)
-                        .mip_level(0)
-                        .base_array_layer(0)
-                        .layer_count(2),
-                )
-                .image_extent(vk::Extent3D { width: extent.width, height: extent.height, depth: 1 });
-            let to_host = vk::BufferMemoryBarrier::default()
-                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-                .dst_access_mask(vk::AccessFlags::HOST_READ)
-                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .buffer(buffer)
-                .offset(0)
-                .size(vk::WHOLE_SIZE);
-            // SAFETY: the render pass left the output in TRANSFER_SRC_OPTIMAL; the buffer
-            // holds both layers.
-            unsafe {
-                d.cmd_copy_image_to_buffer(
-                    cb,
-                    image,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    buffer,
-                    &[region],
-                );
-                d.cmd_pipeline_barrier(
-                    cb,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::PipelineStageFlags::HOST,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[to_host],
-                    &[],
-                );
-            }
-        })?;
+        // The render pass left the output in TRANSFER_SRC_OPTIMAL.
+        self.device.submit_and_wait(|cb| copy_to_host(d, cb, image, extent, 2, buffer))?;
         let layer = (extent.width * extent.height * 4) as usize;
         let bytes = self.readback.read();
         let eye = |i: usize| {
@@ -603,6 +786,107 @@ impl Drop for Renderer {
             self.device.raw.destroy_fence(self.fence, None);
         }
     }
+}
+
+/// Records a copy of every layer of `image` (in `TRANSFER_SRC_OPTIMAL`) into `buffer`, visible
+/// to the host once the submission finishes.
+fn copy_to_host(
+    d: &ash::Device,
+    cb: vk::CommandBuffer,
+    image: vk::Image,
+    extent: vk::Extent2D,
+    layers: u32,
+    buffer: vk::Buffer,
+) {
+    let region = vk::BufferImageCopy::default()
+        .image_subresource(
+            vk::ImageSubresourceLayers::default()
+                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                .mip_level(0)
+                .base_array_layer(0)
+                .layer_count(layers),
+        )
+        .image_extent(vk::Extent3D { width: extent.width, height: extent.height, depth: 1 });
+    let to_host = vk::BufferMemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(vk::AccessFlags::HOST_READ)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .buffer(buffer)
+        .offset(0)
+        .size(vk::WHOLE_SIZE);
+    // SAFETY: the image is in TRANSFER_SRC_OPTIMAL and the buffer holds every layer.
+    unsafe {
+        d.cmd_copy_image_to_buffer(cb, image, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buffer, &[region]);
+        d.cmd_pipeline_barrier(
+            cb,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::HOST,
+            vk::DependencyFlags::empty(),
+            &[],
+            &[to_host],
+            &[],
+        );
+    }
+}
+
+/// The pipelines of each view pass of `target`.
+fn make_pipelines(
+    device: &Arc<Device>,
+    layout: &Layout,
+    target: &StereoTarget,
+) -> Result<Vec<Pipelines>, RenderError> {
+    // The background is drawn after the opaque geometry, at depth 1 with the depth test on,
+    // so only pixels nothing else covers are shaded.
+    let base = PipelineDesc {
+        name: "background",
+        vertex: spirv!("background.vert"),
+        fragment: spirv!("background.frag"),
+        attributes: 1,
+        cull: vk::CullModeFlags::NONE,
+        depth_test: true,
+        depth_write: false,
+        blend: false,
+    };
+    let pipelines_for = |pass: &ViewPass| -> Result<Pipelines, RenderError> {
+        let make = |desc: PipelineDesc| {
+            Pipeline::new(device, &desc, layout, pass.render_pass, target.extent, target.samples)
+        };
+        Ok(Pipelines {
+            background: make(base)?,
+            stage: make(PipelineDesc {
+                name: "stage",
+                vertex: spirv!("stage.vert"),
+                fragment: spirv!("stage.frag"),
+                attributes: 2,
+                cull: vk::CullModeFlags::FRONT,
+                depth_test: true,
+                depth_write: true,
+                ..base
+            })?,
+            clay: make(PipelineDesc {
+                name: "clay",
+                vertex: spirv!("clay.vert"),
+                fragment: spirv!("clay.frag"),
+                attributes: 3,
+                cull: vk::CullModeFlags::BACK,
+                depth_test: true,
+                depth_write: true,
+                ..base
+            })?,
+            glyph: make(PipelineDesc {
+                name: "tool glyph",
+                vertex: spirv!("glyph.vert"),
+                fragment: spirv!("glyph.frag"),
+                attributes: 2,
+                cull: vk::CullModeFlags::BACK,
+                depth_test: true,
+                depth_write: false,
+                blend: true,
+            })?,
+        })
+    };
+    target.passes.iter().map(pipelines_for).collect()
 }
 
 /// Uploads a cube map (all faces and levels) as a sampled RGBA16F cube image.
@@ -736,7 +1020,7 @@ impl std::fmt::Display for DeviceProbe {
 /// Lists the Vulkan devices and says which one a renderer would use (honouring
 /// `ARGILE_DEVICE`), without creating a device.
 pub fn probe_devices() -> Result<DeviceProbe, RenderError> {
-    let instance = Instance::new(false)?;
+    let instance = Instance::new(false, &[])?;
     let devices: Vec<super::DeviceInfo> =
         super::gpu::device::enumerate(&instance.raw)?.into_iter().map(|(_, info)| info).collect();
     let wanted = std::env::var(super::DEVICE_VARIABLE).ok();
@@ -752,9 +1036,10 @@ mod tests {
     /// reported. Needs Vulkan and the validation layer; fails without them.
     #[test]
     fn validation_errors_reach_the_log() {
-        let instance = Arc::new(Instance::new(true).expect("a Vulkan instance with the validation layer"));
+        let instance =
+            Arc::new(Instance::new(true, &[]).expect("a Vulkan instance with the validation layer"));
         let log = instance.validation_log();
-        let device = Device::new(instance).expect("a Vulkan device");
+        let device = Device::new(instance, None).expect("a Vulkan device");
         let info = vk::BufferCreateInfo::default().size(0).usage(vk::BufferUsageFlags::VERTEX_BUFFER);
         // SAFETY: deliberately invalid (size 0) to provoke the layer; the buffer, if the driver
         // made one, is destroyed at once and never used.

@@ -6,6 +6,7 @@ use ash::vk;
 
 use super::super::RenderError;
 use super::instance::{version_string, Instance};
+use super::swapchain::Surface;
 
 /// The environment variable that overrides the device choice: an index or part of a name.
 pub const DEVICE_VARIABLE: &str = "ARGILE_DEVICE";
@@ -215,8 +216,9 @@ impl std::fmt::Debug for Device {
 }
 
 impl Device {
-    /// Picks a device (see [`choose_device`]) and creates it with multiview enabled.
-    pub(crate) fn new(instance: Arc<Instance>) -> Result<Arc<Self>, RenderError> {
+    /// Picks a device (see [`choose_device`]) and creates it with multiview enabled; with a
+    /// `surface`, its graphics queue must present to it and the swapchain extension is on.
+    pub(crate) fn new(instance: Arc<Instance>, surface: Option<&Surface>) -> Result<Arc<Self>, RenderError> {
         let devices = enumerate(&instance.raw)?;
         let infos: Vec<DeviceInfo> = devices.iter().map(|(_, i)| i.clone()).collect();
         let wanted = std::env::var(DEVICE_VARIABLE).ok();
@@ -232,9 +234,22 @@ impl Device {
         let priorities = [1.0f32];
         let queue_info =
             [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
+        let mut extensions = Vec::new();
+        if let Some(surface) = surface {
+            if !surface.supports(physical, family) {
+                return Err(RenderError::Unsupported(format!(
+                    "{} cannot present to this window (its graphics queue has no presentation \
+                     support); pick another device with {DEVICE_VARIABLE} or run headless",
+                    info.name
+                )));
+            }
+            extensions.push(ash::khr::swapchain::NAME.as_ptr());
+        }
         let mut multiview = vk::PhysicalDeviceMultiviewFeatures::default().multiview(true);
-        let create =
-            vk::DeviceCreateInfo::default().queue_create_infos(&queue_info).push_next(&mut multiview);
+        let create = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_info)
+            .enabled_extension_names(&extensions)
+            .push_next(&mut multiview);
         // SAFETY: `physical` belongs to `instance`; `create` and what it points to outlive the call.
         let raw = unsafe { instance.raw.create_device(physical, &create, None) }
             .map_err(RenderError::vk("vkCreateDevice"))?;

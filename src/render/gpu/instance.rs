@@ -35,7 +35,7 @@ pub(crate) struct Instance {
     /// The callback's user data points into this; dropped after the messenger.
     messages: ValidationLog,
     /// The loader; must outlive `raw`.
-    _entry: ash::Entry,
+    pub(crate) entry: ash::Entry,
 }
 
 impl std::fmt::Debug for Instance {
@@ -54,7 +54,11 @@ pub(crate) fn load_entry() -> Result<ash::Entry, RenderError> {
 impl Instance {
     /// Creates a Vulkan 1.1 instance; with `validation`, enables the Khronos validation layer
     /// and records its warnings and errors (read them with [`Instance::take_messages`]).
-    pub(crate) fn new(validation: bool) -> Result<Self, RenderError> {
+    /// `window_extensions` are the surface extensions a window needs (none offscreen).
+    pub(crate) fn new(
+        validation: bool,
+        window_extensions: &[*const std::ffi::c_char],
+    ) -> Result<Self, RenderError> {
         let entry = load_entry()?;
         // SAFETY: a plain query on a loaded entry.
         let version = unsafe { entry.try_enumerate_instance_version() }
@@ -67,7 +71,7 @@ impl Instance {
             )));
         }
         let mut layers = Vec::new();
-        let mut extensions = Vec::new();
+        let mut extensions = window_extensions.to_vec();
         if validation {
             // SAFETY: a plain query on a loaded entry.
             let available = unsafe { entry.enumerate_instance_layer_properties() }
@@ -128,7 +132,7 @@ impl Instance {
         } else {
             None
         };
-        Ok(Self { debug, raw, messages, _entry: entry })
+        Ok(Self { debug, raw, messages, entry })
     }
 
     /// Whether the validation layer is on.

@@ -7,6 +7,7 @@ pub(crate) mod device;
 pub(crate) mod image;
 pub(crate) mod instance;
 pub(crate) mod pipeline;
+pub(crate) mod swapchain;
 
 pub use device::{choose_device, DeviceInfo, DeviceKind, DEVICE_VARIABLE};
 pub use instance::ValidationLog;

@@ -1,0 +1,838 @@
+//! The interactive station: a window where the scene plays and the user sculpts, at the
+//! display's rate.
+//!
+//! Each frame runs the stages in the order of the data flow: input (window events or a
+//! scripted input file) → tools (the scene's scripted hands and the desk tool) → field →
+//! incremental mesh of the dirty bricks → stereo render → present. Key bindings come from
+//! `calibration/keys.toml` (see [`crate::config`]); the mouse turns the scene with a virtual
+//! trackball or places the desk tool on a plane through it ([`MouseNavigator`]).
+//!
+//! With `frames` set, the station plays that many frames with a fixed time step of 1/60 s
+//! (so a scripted run gives the same pictures on every machine), optionally writes a
+//! screenshot of the last frame, and closes.
+
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use serde::Deserialize;
+use toml::Spanned;
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+use super::environment::load_environment;
+use super::frame::build_frame;
+use super::playback::Playback;
+use crate::config::{Chord, KeyBindings, Modifiers, StationAction};
+use crate::input::mouse::{MouseButton, MouseEvent, MouseMode, MouseNavigator, MouseSettings};
+use crate::math::{Mat4, Pose, Quat, Vec2, Vec3, Vec4};
+use crate::mesh::remesh_dirty;
+use crate::render::{Light, Presented, Renderer, RendererDesc, ToolGlyph, ValidationLog};
+use crate::scene::{line_column, FileError, Scene};
+use crate::tool::{Action, Stroke, Tool, ToolShape};
+
+/// The time step of a scripted run, seconds.
+pub const SCRIPTED_STEP_S: f32 = 1.0 / 60.0;
+/// How fast held pointer keys move the desk tool, metres per second.
+const POINTER_SPEED_M_PER_S: f32 = 0.1;
+/// How much one press of bigger/smaller scales the desk tool.
+const SIZE_STEP: f32 = 1.25;
+/// How much one press moves the convergence plane or changes the interaxial distance.
+const STEREO_STEP: f32 = 1.1;
+
+/// How the station runs.
+#[derive(Clone, Debug, Default)]
+pub struct StationOptions {
+    /// Close after this many frames, stepping time by [`SCRIPTED_STEP_S`] per frame.
+    pub frames: Option<u64>,
+    /// Write what the window shows in the last frame to this PNG.
+    pub screenshot: Option<PathBuf>,
+    /// Scripted input events (see [`InputScript`]).
+    pub script: Option<PathBuf>,
+    /// Key bindings read over the shipped ones.
+    pub keys: Option<PathBuf>,
+    /// Where `save` writes the sculpt.
+    pub save_to: Option<PathBuf>,
+    /// Window size in pixels (the scene's output size when absent).
+    pub window_px: Option<(u32, u32)>,
+    /// Run with the Vulkan validation layer; any message it reports fails the run.
+    pub validation: bool,
+}
+
+/// How a station run ended.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct StationReport {
+    /// Frames shown.
+    pub frames: u64,
+    /// Where the screenshot went, if one was asked for.
+    pub screenshot: Option<PathBuf>,
+    /// Where the sculpt was saved, if it was.
+    pub saved: Option<PathBuf>,
+}
+
+/// Why no window can be opened here (no display server named in the environment), or `None`
+/// when one may be.
+pub fn no_display_reason() -> Option<String> {
+    let named = |v: &str| std::env::var_os(v).is_some_and(|s| !s.is_empty());
+    if named("DISPLAY") || named("WAYLAND_DISPLAY") {
+        None
+    } else {
+        Some("no display (neither DISPLAY nor WAYLAND_DISPLAY is set)".into())
+    }
+}
+
+/// One scripted input event.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ScriptEvent {
+    /// A chord pressed and released.
+    Press(Chord),
+    /// A key pressed and held (until a `Release`).
+    Hold(KeyCode),
+    /// A held key released.
+    Release(KeyCode),
+    /// A mouse drag with `button` from one pixel to another, in `steps` moves.
+    Drag {
+        /// The button held.
+        button: MouseButton,
+        /// Where the drag starts, window pixels.
+        from_px: Vec2,
+        /// Where it ends.
+        to_px: Vec2,
+        /// Mouse moves between them.
+        steps: u32,
+    },
+    /// Wheel steps (positive: away from the user).
+    Wheel(f32),
+}
+
+/// Input events at given frames, from a TOML file:
+///
+/// ```toml
+/// [[event]]
+/// frame = 3
+/// press = "Ctrl+KeyZ"          # or hold = "Space", release = "Space", wheel = 2.0,
+///                              # or drag = { button = "left", from_px = [10, 10], to_px = [60, 10] }
+/// ```
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct InputScript {
+    /// `(frame, event)` in frame order (stable for events of the same frame).
+    pub events: Vec<(u64, ScriptEvent)>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScriptFile {
+    #[serde(default)]
+    event: Vec<Spanned<EventSpec>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EventSpec {
+    frame: u64,
+    press: Option<String>,
+    hold: Option<String>,
+    release: Option<String>,
+    wheel: Option<f32>,
+    drag: Option<DragSpec>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DragSpec {
+    button: String,
+    from_px: [f32; 2],
+    to_px: [f32; 2],
+    #[serde(default = "default_drag_steps")]
+    steps: u32,
+}
+
+fn default_drag_steps() -> u32 {
+    8
+}
+
+impl InputScript {
+    /// Parses a script; errors name `name`, the line and the column.
+    pub fn parse(text: &str, name: &str) -> Result<Self, FileError> {
+        let at = |span: std::ops::Range<usize>, message: String| {
+            let (line, column) = line_column(text, span.start);
+            FileError::Invalid { path: name.to_owned(), line, column, message }
+        };
+        let file: ScriptFile =
+            toml::from_str(text).map_err(|e| at(e.span().unwrap_or(0..0), e.message().to_owned()))?;
+        let mut events = Vec::new();
+        for spanned in &file.event {
+            let e = spanned.get_ref();
+            let span = spanned.span();
+            let key = |name: &str| Chord::parse(name).map_err(|m| at(span.clone(), m));
+            let mut parsed = Vec::new();
+            if let Some(k) = &e.press {
+                parsed.push(ScriptEvent::Press(key(k)?));
+            }
+            if let Some(k) = &e.hold {
+                parsed.push(ScriptEvent::Hold(key(k)?.key));
+            }
+            if let Some(k) = &e.release {
+                parsed.push(ScriptEvent::Release(key(k)?.key));
+            }
+            if let Some(w) = e.wheel {
+                if !w.is_finite() {
+                    return Err(at(span, "`wheel` must be a finite number of steps".into()));
+                }
+                parsed.push(ScriptEvent::Wheel(w));
+            }
+            if let Some(d) = &e.drag {
+                let button = match d.button.as_str() {
+                    "left" => MouseButton::Left,
+                    "right" => MouseButton::Right,
+                    "middle" => MouseButton::Middle,
+                    other => {
+                        return Err(at(span, format!("drag button `{other}` is not left, right or middle")))
+                    }
+                };
+                if !(1..=1000).contains(&d.steps) {
+                    return Err(at(span, format!("drag steps must be 1 to 1000, not {}", d.steps)));
+                }
+                parsed.push(ScriptEvent::Drag {
+                    button,
+                    from_px: Vec2::from(d.from_px),
+                    to_px: Vec2::from(d.to_px),
+                    steps: d.steps,
+                });
+            }
+            if parsed.len() != 1 {
+                return Err(at(
+                    span,
+                    "an event gives exactly one of press, hold, release, wheel or drag".into(),
+                ));
+            }
+            events.push((e.frame, parsed.remove(0)));
+        }
+        events.sort_by_key(|(frame, _)| *frame);
+        Ok(Self { events })
+    }
+
+    /// Reads and parses a script file.
+    pub fn load(path: &Path) -> Result<Self, FileError> {
+        let text = std::fs::read_to_string(path).map_err(|source| FileError::Read {
+            kind: "input script",
+            path: path.to_owned(),
+            source,
+        })?;
+        Self::parse(&text, &path.display().to_string())
+    }
+}
+
+/// The actions the desk tool cycles through with `next-action`.
+fn action_cycle() -> [Action; 6] {
+    [
+        Action::Add,
+        Action::Remove,
+        Action::Build { rate_per_s: 2.0 },
+        Action::SoftRemove { rate_per_s: 2.0 },
+        Action::Paint,
+        Action::Smooth { centre_weight: 6.0, rate_per_s: 20.0 },
+    ]
+}
+
+/// The station's state between frames, without the window and renderer.
+#[derive(Debug)]
+pub struct Station<'s> {
+    scene: &'s Scene,
+    /// The scene as drawn: its rig follows the mouse and the stereo keys.
+    view: Scene,
+    playback: Playback<'s>,
+    bindings: KeyBindings,
+    mouse: MouseNavigator,
+    modifiers: Modifiers,
+    held: HashSet<KeyCode>,
+    desk_tool: Tool,
+    /// Index of the scene tool the desk tool started from (`next-tool`).
+    tool_index: usize,
+    action_index: usize,
+    stroke: Option<Stroke>,
+    convergence_factor: f32,
+    lights_follow_viewer: bool,
+    save_to: PathBuf,
+    saved: Option<PathBuf>,
+    quit: bool,
+    /// Messages for the user (saved, undo had nothing, ...).
+    pub messages: Vec<String>,
+}
+
+impl<'s> Station<'s> {
+    /// The station on `scene` at time 0, for a window of `window_px`.
+    pub fn new(scene: &'s Scene, bindings: KeyBindings, window_px: (u32, u32), save_to: PathBuf) -> Self {
+        let playback = Playback::new(scene);
+        let rig = scene.rig;
+        let distance = (rig.eye_m - rig.target_m).length();
+        let mut mouse = MouseNavigator::new(
+            MouseSettings::default(),
+            Vec2::new(window_px.0 as f32, window_px.1 as f32),
+            distance,
+        );
+        mouse.tool_position_m = rig.target_m;
+        let desk_tool = playback
+            .tools()
+            .first()
+            .cloned()
+            .unwrap_or_else(|| Tool::new(ToolShape::sphere(0.02), Action::Add, [0.8, 0.5, 0.35, 1.0]));
+        let action_index = action_cycle().iter().position(|a| *a == desk_tool.action).unwrap_or(0);
+        Self {
+            scene,
+            view: scene.clone(),
+            playback,
+            bindings,
+            mouse,
+            modifiers: Modifiers::default(),
+            held: HashSet::new(),
+            desk_tool,
+            tool_index: 0,
+            action_index,
+            stroke: None,
+            convergence_factor: scene.rig.convergence_m / distance.max(1e-6),
+            lights_follow_viewer: false,
+            save_to,
+            saved: None,
+            quit: false,
+            messages: Vec::new(),
+        }
+    }
+
+    /// Whether the user asked to close.
+    pub fn wants_quit(&self) -> bool {
+        self.quit
+    }
+
+    /// The window changed size.
+    pub fn resize(&mut self, window_px: (u32, u32)) {
+        self.mouse.resize(Vec2::new(window_px.0 as f32, window_px.1 as f32));
+    }
+
+    /// The modifiers held now.
+    pub fn set_modifiers(&mut self, modifiers: Modifiers) {
+        self.modifiers = modifiers;
+    }
+
+    /// A key went down or up.
+    pub fn key(&mut self, key: KeyCode, pressed: bool) {
+        if !pressed {
+            self.held.remove(&key);
+            return;
+        }
+        if !self.held.insert(key) {
+            return; // auto-repeat
+        }
+        if let Some(action) = self.bindings.action(key, self.modifiers) {
+            self.act(action);
+        }
+    }
+
+    /// A mouse event, in window pixels.
+    pub fn mouse(&mut self, event: MouseEvent) {
+        let views = self.view.rig.views(1.0);
+        let eye = &views.eyes[0];
+        let inverse = (eye.projection * eye.view).inverse();
+        self.mouse.handle(event, &inverse, self.view.rig.forward());
+    }
+
+    /// A scripted event.
+    pub fn script(&mut self, event: &ScriptEvent) {
+        match *event {
+            ScriptEvent::Press(chord) => {
+                let saved = self.modifiers;
+                self.modifiers = chord.modifiers;
+                self.key(chord.key, true);
+                self.key(chord.key, false);
+                self.modifiers = saved;
+            }
+            ScriptEvent::Hold(key) => self.key(key, true),
+            ScriptEvent::Release(key) => self.key(key, false),
+            ScriptEvent::Wheel(steps) => self.mouse(MouseEvent::Wheel(steps)),
+            ScriptEvent::Drag { button, from_px, to_px, steps } => {
+                self.mouse(MouseEvent::Press(button, from_px));
+                for i in 1..=steps {
+                    self.mouse(MouseEvent::Move(from_px.lerp(to_px, i as f32 / steps as f32)));
+                }
+                self.mouse(MouseEvent::Release(button));
+            }
+        }
+    }
+
+    fn act(&mut self, action: StationAction) {
+        let field = self.playback.field_mut();
+        match action {
+            StationAction::Quit => self.quit = true,
+            StationAction::Undo => {
+                self.stroke = None;
+                match field.undo() {
+                    Ok(true) => {}
+                    Ok(false) => self.messages.push("nothing to undo".into()),
+                    Err(e) => self.messages.push(format!("undo failed: {e}")),
+                }
+            }
+            StationAction::Redo => {
+                if !field.redo() {
+                    self.messages.push("nothing to redo".into());
+                }
+            }
+            StationAction::Save => match self.save() {
+                Ok(path) => self.messages.push(format!("saved the sculpt to {}", path.display())),
+                Err(e) => self.messages.push(format!("{e:#}")),
+            },
+            StationAction::NextTool => {
+                let tools = self.playback.tools();
+                if !tools.is_empty() {
+                    self.tool_index = (self.tool_index + 1) % tools.len();
+                    let scale = self.desk_tool.scale;
+                    self.desk_tool = Tool { scale, ..tools[self.tool_index].clone() };
+                }
+            }
+            StationAction::NextAction => {
+                let cycle = action_cycle();
+                self.action_index = (self.action_index + 1) % cycle.len();
+                self.desk_tool.action = cycle[self.action_index];
+            }
+            StationAction::Bigger => self.desk_tool.scale *= SIZE_STEP,
+            StationAction::Smaller => self.desk_tool.scale /= SIZE_STEP,
+            StationAction::ConvergenceFarther => self.convergence_factor *= STEREO_STEP,
+            StationAction::ConvergenceNearer => self.convergence_factor /= STEREO_STEP,
+            StationAction::InteraxialWider => self.view.rig.interaxial_m *= STEREO_STEP,
+            StationAction::InteraxialNarrower => self.view.rig.interaxial_m /= STEREO_STEP,
+            StationAction::ToggleMouseMode => {
+                self.mouse.mode = match self.mouse.mode {
+                    MouseMode::Scene => MouseMode::Cursor,
+                    MouseMode::Cursor => MouseMode::Scene,
+                }
+            }
+            StationAction::ToggleLights => self.lights_follow_viewer = !self.lights_follow_viewer,
+            StationAction::ResetView => {
+                let distance = (self.scene.rig.eye_m - self.scene.rig.target_m).length();
+                self.mouse.scene_rotation = Quat::IDENTITY;
+                self.mouse.distance_m = distance;
+                self.mouse.tool_position_m = self.scene.rig.target_m;
+                self.view.rig = self.scene.rig;
+                self.convergence_factor = self.scene.rig.convergence_m / distance.max(1e-6);
+            }
+            StationAction::NextDisplayMode => self.messages.push("this window shows one display mode".into()),
+            StationAction::Apply
+            | StationAction::PointerLeft
+            | StationAction::PointerRight
+            | StationAction::PointerUp
+            | StationAction::PointerDown
+            | StationAction::PointerAway
+            | StationAction::PointerToward => {}
+        }
+    }
+
+    /// Writes the sculpt to the save path, atomically.
+    pub fn save(&mut self) -> Result<PathBuf> {
+        let bytes = crate::io::encode(self.playback.field(), None, &mut |_| {});
+        let path = self.save_to.clone();
+        super::files::write_atomically(&path, true, |w| {
+            std::io::Write::write_all(w, &bytes).with_context(|| format!("cannot write {}", path.display()))
+        })?;
+        self.saved = Some(path.clone());
+        Ok(path)
+    }
+
+    fn holding(&self, action: StationAction) -> bool {
+        self.held.iter().any(|&k| self.bindings.held_action(k) == Some(action))
+    }
+
+    /// Runs the tools and the field for `dt_s` seconds and returns the frame to draw; mesh
+    /// changes go to `apply`.
+    pub fn step(&mut self, dt_s: f32, mut apply: impl FnMut(&crate::mesh::MeshDiff)) -> crate::render::Frame {
+        // The view first: the pointer moves in it.
+        let rig = &mut self.view.rig;
+        let base = self.scene.rig;
+        let rotation = self.mouse.scene_rotation.inverse();
+        let offset = (base.eye_m - base.target_m).normalize_or(Vec3::Z) * self.mouse.distance_m;
+        rig.eye_m = base.target_m + rotation * offset;
+        rig.up = rotation * base.up;
+        rig.convergence_m = self.mouse.distance_m * self.convergence_factor;
+
+        let step = POINTER_SPEED_M_PER_S * dt_s;
+        let (right, up, forward) = (rig.right(), rig.right().cross(rig.forward()), rig.forward());
+        for (action, direction) in [
+            (StationAction::PointerLeft, -right),
+            (StationAction::PointerRight, right),
+            (StationAction::PointerUp, up),
+            (StationAction::PointerDown, -up),
+            (StationAction::PointerAway, forward),
+            (StationAction::PointerToward, -forward),
+        ] {
+            if self.holding(action) {
+                self.mouse.tool_position_m += direction * step;
+            }
+        }
+
+        // Tools: the scene's scripted hands, then the desk tool.
+        let t = self.playback.time_s() + dt_s;
+        self.playback.advance_to(t, |_| {});
+        let pose = Pose { position_m: self.mouse.tool_position_m, ..Default::default() };
+        let applying = self.holding(StationAction::Apply);
+        let field = self.playback.field_mut();
+        if applying {
+            if self.stroke.is_none() {
+                field.begin_stroke();
+                let mut s = Stroke::new(self.desk_tool.clone());
+                s.advance(field, pose, 0.0);
+                self.stroke = Some(s);
+            }
+            if let Some(s) = &mut self.stroke {
+                s.advance(field, pose, dt_s);
+            }
+        } else if self.stroke.take().is_some() {
+            field.end_stroke();
+        }
+
+        // Field → mesh → renderer.
+        let diff = remesh_dirty(field);
+        if !diff.is_empty() {
+            apply(&diff);
+        }
+
+        let mut frame = build_frame(&self.view, &self.playback.hands(), true);
+        if self.lights_follow_viewer {
+            // The scene's lights, carried along with the viewer's turn about the target.
+            let pivot = self.scene.rig.target_m;
+            for light in &mut frame.lights {
+                match light {
+                    Light::Directional { direction, .. } => *direction = rotation * *direction,
+                    Light::Point { position_m, .. } => *position_m = pivot + rotation * (*position_m - pivot),
+                }
+            }
+        }
+        frame.tools.push(ToolGlyph {
+            model: Mat4::from_translation(pose.position_m)
+                * Mat4::from_scale(self.desk_tool.half_extents_m()),
+            colour: Vec4::from(self.desk_tool.colour).truncate().extend(0.35),
+        });
+        frame
+    }
+}
+
+/// Runs the station in a window on `scene` until the user closes it (or the frame count of
+/// `options` is reached). `scene_name` names the window and the default save file.
+pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) -> Result<StationReport> {
+    if let Some(reason) = no_display_reason() {
+        bail!("cannot open the station window: {reason}");
+    }
+    let (bindings, _) = KeyBindings::load(options.keys.as_deref())?;
+    let script = options.script.as_deref().map(InputScript::load).transpose()?;
+    let event_loop = EventLoop::new().context("cannot connect to the display server")?;
+    event_loop.set_control_flow(ControlFlow::Poll);
+    let window_px = options.window_px.unwrap_or((scene.output.width_px, scene.output.height_px));
+    let save_to = options.save_to.clone().unwrap_or_else(|| PathBuf::from(format!("{scene_name}.argile")));
+    let mut app = WindowApp {
+        station: Station::new(scene, bindings, window_px, save_to),
+        options,
+        script: script.unwrap_or_default(),
+        scene_name,
+        window_px,
+        window: None,
+        renderer: None,
+        validation: None,
+        frames: 0,
+        last: None,
+        screenshot: None,
+        error: None,
+    };
+    event_loop.run_app(&mut app).context("the window's event loop failed")?;
+    // Drop the renderer before its window, then read what the validation layer said of the
+    // teardown too.
+    drop(app.renderer.take());
+    drop(app.window.take());
+    if let Some(e) = app.error.take() {
+        return Err(e);
+    }
+    if let Some(log) = &app.validation {
+        let messages = log.take();
+        if !messages.is_empty() {
+            bail!(
+                "the Vulkan validation layer reported {} problem(s):\n{}",
+                messages.len(),
+                messages.join("\n")
+            );
+        }
+    }
+    let mut saved = app.station.saved.clone();
+    if options.frames.is_none()
+        && app.station.playback.field().history_stats().undo_in_memory
+            + app.station.playback.field().history_stats().undo_on_disk
+            > 0
+        && saved.is_none()
+    {
+        saved = Some(app.station.save()?);
+    }
+    Ok(StationReport { frames: app.frames, screenshot: app.screenshot, saved })
+}
+
+struct WindowApp<'s, 'o> {
+    station: Station<'s>,
+    options: &'o StationOptions,
+    script: InputScript,
+    scene_name: &'o str,
+    window_px: (u32, u32),
+    /// Dropped after the renderer (see `run_station`).
+    window: Option<Arc<Window>>,
+    renderer: Option<Renderer>,
+    validation: Option<ValidationLog>,
+    frames: u64,
+    last: Option<Instant>,
+    screenshot: Option<PathBuf>,
+    error: Option<anyhow::Error>,
+}
+
+impl WindowApp<'_, '_> {
+    fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
+        let attributes = Window::default_attributes()
+            .with_title(format!("Argile — {}", self.scene_name))
+            .with_inner_size(PhysicalSize::new(self.window_px.0, self.window_px.1));
+        let window =
+            Arc::new(event_loop.create_window(attributes).context("cannot open the station window")?);
+        let size = window.inner_size();
+        self.window_px = (size.width, size.height);
+        self.station.resize(self.window_px);
+        let scene = self.station.scene;
+        let environment = load_environment(&scene.environment.choice)?;
+        let desc = RendererDesc {
+            width: size.width.max(1),
+            height: size.height.max(1),
+            samples: scene.output.samples,
+            validation: self.options.validation,
+            view_passes: None,
+        };
+        let renderer = Renderer::for_window(
+            &desc,
+            &environment,
+            scene.environment.intensity,
+            window.clone(),
+            self.window_px,
+        )?;
+        tracing::info!("station window on {}", renderer.device_name());
+        self.validation = Some(renderer.validation_log());
+        self.renderer = Some(renderer);
+        self.window = Some(window);
+        Ok(())
+    }
+
+    fn frame(&mut self) -> Result<bool> {
+        let dt = match self.options.frames {
+            Some(_) => SCRIPTED_STEP_S,
+            None => {
+                let now = Instant::now();
+                let dt = self.last.map_or(SCRIPTED_STEP_S, |l| (now - l).as_secs_f32().min(0.1));
+                self.last = Some(now);
+                dt
+            }
+        };
+        let index = self.frames;
+        let due: Vec<ScriptEvent> =
+            self.script.events.iter().filter(|(f, _)| *f == index).map(|(_, e)| e.clone()).collect();
+        for event in &due {
+            self.station.script(event);
+        }
+        let renderer = self.renderer.as_mut().expect("the window is open");
+        let mut failed = None;
+        let frame = self.station.step(dt, |diff| {
+            if let Err(e) = renderer.apply(diff) {
+                failed = Some(e);
+            }
+        });
+        if let Some(e) = failed {
+            return Err(e.into());
+        }
+        for m in self.station.messages.drain(..) {
+            println!("{m}");
+        }
+        let last = self.options.frames.is_some_and(|n| index + 1 >= n);
+        let want_shot = last && self.options.screenshot.is_some();
+        match renderer.present(&frame, want_shot)? {
+            Presented::Shown(shot) => {
+                self.frames += 1;
+                if let (Some(image), Some(path)) = (shot, &self.options.screenshot) {
+                    super::capture::save_png_atomically(&image, path)?;
+                    self.screenshot = Some(path.clone());
+                }
+            }
+            Presented::Skipped => {}
+        }
+        if want_shot && self.screenshot.is_none() && self.frames > index {
+            bail!("the window's swapchain cannot be read back, so no screenshot was taken");
+        }
+        Ok(self.station.wants_quit() || self.options.frames.is_some_and(|n| self.frames >= n))
+    }
+
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
+        self.error = Some(e);
+        event_loop.exit();
+    }
+}
+
+fn modifiers_of(state: winit::keyboard::ModifiersState) -> Modifiers {
+    Modifiers {
+        ctrl: state.control_key(),
+        shift: state.shift_key(),
+        alt: state.alt_key(),
+        logo: state.super_key(),
+    }
+}
+
+impl ApplicationHandler for WindowApp<'_, '_> {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.window.is_none() {
+            if let Err(e) = self.open(event_loop) {
+                self.fail(event_loop, e);
+            }
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(size) => {
+                self.window_px = (size.width, size.height);
+                self.station.resize(self.window_px);
+                if let Some(r) = &mut self.renderer {
+                    r.resize_window(size.width, size.height);
+                }
+            }
+            WindowEvent::ModifiersChanged(m) => self.station.set_modifiers(modifiers_of(m.state())),
+            WindowEvent::KeyboardInput { event, .. } => {
+                if let PhysicalKey::Code(code) = event.physical_key {
+                    self.station.key(code, event.state == ElementState::Pressed);
+                }
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                self.station.mouse(MouseEvent::Move(Vec2::new(position.x as f32, position.y as f32)));
+            }
+            WindowEvent::MouseInput { state, button, .. } => {
+                let button = match button {
+                    winit::event::MouseButton::Left => MouseButton::Left,
+                    winit::event::MouseButton::Right => MouseButton::Right,
+                    winit::event::MouseButton::Middle => MouseButton::Middle,
+                    _ => return,
+                };
+                let event = match state {
+                    ElementState::Pressed => MouseEvent::Press(button, self.station.mouse.last_position()),
+                    ElementState::Released => MouseEvent::Release(button),
+                };
+                self.station.mouse(event);
+            }
+            WindowEvent::MouseWheel { delta, .. } => {
+                let steps = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                };
+                self.station.mouse(MouseEvent::Wheel(steps));
+            }
+            WindowEvent::RedrawRequested => match self.frame() {
+                Ok(true) => event_loop.exit(),
+                Ok(false) => {}
+                Err(e) => self.fail(event_loop, e),
+            },
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {
+        if let Some(w) = &self.window {
+            w.request_redraw();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scripts_parse_every_event_and_name_the_line_of_a_mistake() {
+        let s = InputScript::parse(
+            "[[event]]\nframe = 4\npress = \"Ctrl+KeyZ\"\n\
+             [[event]]\nframe = 1\nhold = \"Space\"\n\
+             [[event]]\nframe = 2\ndrag = { button = \"left\", from_px = [0, 0], to_px = [10, 0], steps = 2 }\n\
+             [[event]]\nframe = 3\nwheel = -1.5\n",
+            "s.toml",
+        )
+        .unwrap();
+        let frames: Vec<u64> = s.events.iter().map(|(f, _)| *f).collect();
+        assert_eq!(frames, [1, 2, 3, 4], "sorted by frame");
+        assert_eq!(s.events[0].1, ScriptEvent::Hold(KeyCode::Space));
+        assert_eq!(s.events[2].1, ScriptEvent::Wheel(-1.5));
+        let e = InputScript::parse("[[event]]\nframe = 1\npress = \"KeyA\"\nwheel = 1.0\n", "s.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("s.toml:1:1:") && e.contains("exactly one"), "{e}");
+        let e = InputScript::parse("[[event]]\nframe = 1\npress = \"Banana\"\n", "s.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("not a key name"), "{e}");
+    }
+
+    #[test]
+    fn keys_sculpt_undo_and_redo_through_the_bindings() {
+        let scene = Scene::parse(
+            "[[tool]]\nname = \"ball\"\nshape = \"sphere\"\nradius_m = 0.03\naction = \"add\"\n",
+            "t",
+            None,
+        )
+        .unwrap();
+        let mut station =
+            Station::new(&scene, KeyBindings::shipped(), (64, 64), PathBuf::from("unused.argile"));
+        let mut applied = 0;
+        station.step(SCRIPTED_STEP_S, |_| applied += 1);
+        assert_eq!(station.playback.field().mass(), 0.0, "nothing sculpted yet");
+        station.key(KeyCode::Space, true);
+        for _ in 0..3 {
+            station.step(SCRIPTED_STEP_S, |_| applied += 1);
+        }
+        station.key(KeyCode::Space, false);
+        station.step(SCRIPTED_STEP_S, |_| applied += 1);
+        let sculpted = station.playback.field().mass();
+        assert!(sculpted > 0.0 && applied > 0, "holding apply adds clay and remeshes");
+
+        station.set_modifiers(Modifiers { ctrl: true, ..Default::default() });
+        station.key(KeyCode::KeyZ, true);
+        station.key(KeyCode::KeyZ, false);
+        assert_eq!(station.playback.field().mass(), 0.0, "ctrl+z undoes the stroke");
+        station.key(KeyCode::KeyY, true);
+        station.key(KeyCode::KeyY, false);
+        assert_eq!(station.playback.field().mass(), sculpted, "ctrl+y redoes it");
+        station.set_modifiers(Modifiers::default());
+        station.key(KeyCode::KeyZ, true);
+        assert_eq!(station.playback.field().mass(), sculpted, "z alone is not undo");
+    }
+
+    #[test]
+    fn arrow_keys_move_the_tool_in_the_view_and_the_wheel_zooms() {
+        let scene = Scene::default_scene();
+        let mut station =
+            Station::new(&scene, KeyBindings::shipped(), (64, 64), PathBuf::from("unused.argile"));
+        let start = station.mouse.tool_position_m;
+        station.key(KeyCode::ArrowRight, true);
+        for _ in 0..60 {
+            station.step(SCRIPTED_STEP_S, |_| {});
+        }
+        let moved = station.mouse.tool_position_m - start;
+        let right = station.view.rig.right();
+        assert!((moved - right * POINTER_SPEED_M_PER_S).length() < 1e-4, "a second of ArrowRight: {moved}");
+        let before = station.view.rig.eye_m.distance(station.view.rig.target_m);
+        station.script(&ScriptEvent::Wheel(2.0));
+        station.step(SCRIPTED_STEP_S, |_| {});
+        let after = station.view.rig.eye_m.distance(station.view.rig.target_m);
+        assert!(after < before, "wheel away zooms in: {before} → {after}");
+        assert!(
+            (station.view.rig.convergence_m / after - station.convergence_factor).abs() < 1e-5,
+            "the zero-parallax plane follows the zoom"
+        );
+    }
+}
