@@ -7,24 +7,13 @@
 //!
 //! These tests need a Vulkan device and fail (never skip) without one.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use argile::app::{render_scene, RenderOptions};
 use argile::scene::Scene;
 
-/// Per-pixel error is the largest absolute channel difference (0..=255).
-/// Thresholds set on llvmpipe (Mesa 22.3.6, LLVM 15), which renders bit-identically across
-/// runs: a change that moves any edge by a pixel fails, a blessed image passes exactly.
-const MAX_MEAN_ERROR: f64 = 0.1; // llvmpipe, Mesa 22.3.6
-const MAX_P99_ERROR: u8 = 4; // llvmpipe, Mesa 22.3.6
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn out_dir(case: &str) -> PathBuf {
-    root().join("target").join("stereo-tests").join(case)
-}
+mod common;
+use common::{check_against_golden, out_dir, root};
 
 fn render(
     case: &str,
@@ -48,58 +37,6 @@ fn render(
     assert_eq!(written.len(), 1, "{case} has one capture");
     let load = |p: &Path| image::open(p).expect("rendered image reads back").to_rgba8();
     (load(&written[0].left), load(&written[0].right), scene)
-}
-
-struct Comparison {
-    mean: f64,
-    p99: u8,
-    diff: image::RgbaImage,
-}
-
-fn compare(actual: &image::RgbaImage, golden: &image::RgbaImage) -> Comparison {
-    assert_eq!(actual.dimensions(), golden.dimensions(), "image size changed");
-    let mut errors: Vec<u8> = Vec::with_capacity((actual.width() * actual.height()) as usize);
-    let diff = image::RgbaImage::from_fn(actual.width(), actual.height(), |x, y| {
-        let (a, g) = (actual.get_pixel(x, y), golden.get_pixel(x, y));
-        let e = (0..4).map(|i| a[i].abs_diff(g[i])).max().unwrap_or(0);
-        errors.push(e);
-        // Errors in red on a dimmed copy of the golden, so where they are is visible.
-        let base = g[1] / 4;
-        image::Rgba([base.saturating_add(e.saturating_mul(8)), base, base, 255])
-    });
-    let mean = errors.iter().map(|&e| f64::from(e)).sum::<f64>() / errors.len() as f64;
-    errors.sort_unstable();
-    let p99 = errors[(errors.len() * 99 / 100).min(errors.len() - 1)];
-    Comparison { mean, p99, diff }
-}
-
-fn check_against_golden(case: &str, eye: &str, actual: &image::RgbaImage) {
-    let golden_path = root().join("tests/golden").join(format!("{case}-{eye}.png"));
-    if std::env::var_os("BLESS").is_some() {
-        actual.save(&golden_path).expect("golden written");
-        eprintln!("blessed {}", golden_path.display());
-        return;
-    }
-    let golden = match image::open(&golden_path) {
-        Ok(g) => g.to_rgba8(),
-        Err(e) => panic!(
-            "no golden {} ({e}); render it with BLESS=1 and look at it before committing",
-            golden_path.display()
-        ),
-    };
-    let c = compare(actual, &golden);
-    let dir = out_dir(case);
-    let driver = "lavapipe";
-    actual.save(dir.join(format!("{case}-{eye}-{driver}-actual.png"))).expect("actual written");
-    c.diff.save(dir.join(format!("{case}-{eye}-{driver}-diff.png"))).expect("diff written");
-    assert!(
-        c.mean <= MAX_MEAN_ERROR && c.p99 <= MAX_P99_ERROR,
-        "{case} {eye} eye differs from its golden: mean error {:.3} (max {MAX_MEAN_ERROR}), 99th percentile {} \
-         (max {MAX_P99_ERROR}); see {}",
-        c.mean,
-        c.p99,
-        dir.display()
-    );
 }
 
 fn golden_case(case: &str, scene: &str, size: Option<(u32, u32)>) {

@@ -115,12 +115,14 @@ fn wheel_and_right_drag_set_the_distance() {
 fn cursor_mode_carries_the_tool_under_the_pointer() {
     let eye = Vec3::new(0.0, 0.0, 1.0);
     let view = Mat4::look_at_rh(eye, Vec3::ZERO, Vec3::Y);
-    let proj = Mat4::perspective_rh(PI / 2.0, VIEWPORT.x / VIEWPORT.y, 0.1, 10.0);
+    // Vulkan's clip space, as the renderer's projections: y points down the image.
+    let proj = Mat4::from_scale(Vec3::new(1.0, -1.0, 1.0))
+        * Mat4::perspective_rh(PI / 2.0, VIEWPORT.x / VIEWPORT.y, 0.1, 10.0);
     let inv = (proj * view).inverse();
     let dir = Vec3::NEG_Z;
     let mut nav = navigator(TrackballKind::Shoemake);
     nav.mode = MouseMode::Cursor;
-    // The pointer at the top-right quarter: ndc (0.5, 0.5).
+    // The pointer at the top-right quarter: ndc (0.5, −0.5), half a metre right and up.
     nav.handle(MouseEvent::Press(MouseButton::Left, Vec2::new(300.0, 50.0)), &inv, dir);
     let p = nav.tool_position_m;
     assert!((p - Vec3::new(0.5 * VIEWPORT.x / VIEWPORT.y, 0.5, 0.0)).length() < 1e-4, "{p:?}");

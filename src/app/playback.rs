@@ -17,6 +17,8 @@ pub struct Playback<'s> {
     tools: Vec<Tool>,
     /// The stroke each hand is drawing (left, right), with its tool index.
     strokes: [Option<(usize, Stroke)>; 2],
+    /// Whether the field's open stroke is the hands' (opened here).
+    owns_stroke: bool,
     time_s: f32,
 }
 
@@ -36,7 +38,8 @@ impl<'s> Playback<'s> {
             rasterize_solid(&mut field, &primitive.solid, primitive.op, primitive.colour);
         }
         let tools = scene.tools.iter().map(|t| build_tool(t, &field)).collect();
-        let mut playback = Self { scene, field, tools, strokes: [None, None], time_s: 0.0 };
+        let mut playback =
+            Self { scene, field, tools, strokes: [None, None], owns_stroke: false, time_s: 0.0 };
         // Keys at time 0 with their action on stamp at once.
         playback.step_to(0.0);
         playback
@@ -98,6 +101,7 @@ impl<'s> Playback<'s> {
             if stroke.as_ref().is_none_or(|(tool, _)| *tool != during.tool) {
                 if !self.field.in_stroke() {
                     self.field.begin_stroke();
+                    self.owns_stroke = true;
                 }
                 let mut s = Stroke::new(self.tools[during.tool].clone());
                 s.advance(&mut self.field, at_start.pose, 0.0);
@@ -108,11 +112,14 @@ impl<'s> Playback<'s> {
             }
         }
         // The hands' strokes form one undo step while any of them draws.
+        // A stroke someone else opened on the field (the station's desk tool) is theirs to close.
         let drawing = self.strokes.iter().any(Option::is_some);
         if drawing && !self.field.in_stroke() {
             self.field.begin_stroke();
-        } else if !drawing && self.field.in_stroke() {
+            self.owns_stroke = true;
+        } else if !drawing && self.owns_stroke {
             self.field.end_stroke();
+            self.owns_stroke = false;
         }
         self.time_s = t;
     }

@@ -284,7 +284,7 @@ impl<'s> Station<'s> {
             .cloned()
             .unwrap_or_else(|| Tool::new(ToolShape::sphere(0.02), Action::Add, [0.8, 0.5, 0.35, 1.0]));
         let action_index = action_cycle().iter().position(|a| *a == desk_tool.action).unwrap_or(0);
-        Self {
+        let mut station = Self {
             scene,
             view: scene.clone(),
             playback,
@@ -302,7 +302,9 @@ impl<'s> Station<'s> {
             saved: None,
             quit: false,
             messages: Vec::new(),
-        }
+        };
+        station.resize(window_px);
+        station
     }
 
     /// Whether the user asked to close.
@@ -313,6 +315,9 @@ impl<'s> Station<'s> {
     /// The window changed size.
     pub fn resize(&mut self, window_px: (u32, u32)) {
         self.mouse.resize(Vec2::new(window_px.0 as f32, window_px.1 as f32));
+        // The frame's views take their aspect from the output size.
+        self.view.output.width_px = window_px.0.max(1);
+        self.view.output.height_px = window_px.1.max(1);
     }
 
     /// The modifiers held now.
@@ -336,7 +341,8 @@ impl<'s> Station<'s> {
 
     /// A mouse event, in window pixels.
     pub fn mouse(&mut self, event: MouseEvent) {
-        let views = self.view.rig.views(1.0);
+        let aspect = self.view.output.width_px as f32 / self.view.output.height_px as f32;
+        let views = self.view.rig.views(aspect);
         let eye = &views.eyes[0];
         let inverse = (eye.projection * eye.view).inverse();
         self.mouse.handle(event, &inverse, self.view.rig.forward());
@@ -791,11 +797,14 @@ mod tests {
         let mut applied = 0;
         station.step(SCRIPTED_STEP_S, |_| applied += 1);
         assert_eq!(station.playback.field().mass(), 0.0, "nothing sculpted yet");
+        // Sculpt while moving, over many frames: still one stroke, one undo step.
         station.key(KeyCode::Space, true);
-        for _ in 0..3 {
+        station.key(KeyCode::ArrowRight, true);
+        for _ in 0..20 {
             station.step(SCRIPTED_STEP_S, |_| applied += 1);
         }
         station.key(KeyCode::Space, false);
+        station.key(KeyCode::ArrowRight, false);
         station.step(SCRIPTED_STEP_S, |_| applied += 1);
         let sculpted = station.playback.field().mass();
         assert!(sculpted > 0.0 && applied > 0, "holding apply adds clay and remeshes");

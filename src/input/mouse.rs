@@ -82,10 +82,11 @@ pub fn pixel_to_ball(pixel: Vec2, size_px: Vec2) -> Vec2 {
     Vec2::new(pixel.x - half.x, half.y - pixel.y) / radius
 }
 
-/// Converts a pixel position to normalised device coordinates (x right, y up, −1 to 1).
+/// Converts a pixel position to Vulkan's normalised device coordinates (x right, y down, −1 to
+/// 1), which the renderer's projections ([`crate::stereo::vulkan_frustum`]) map to.
 pub fn pixel_to_ndc(pixel: Vec2, size_px: Vec2) -> Vec2 {
     let size = size_px.max(Vec2::ONE);
-    Vec2::new(2.0 * pixel.x / size.x - 1.0, 1.0 - 2.0 * pixel.y / size.y)
+    Vec2::new(2.0 * pixel.x / size.x - 1.0, 2.0 * pixel.y / size.y - 1.0)
 }
 
 /// The world-space ray under a point in normalised device coordinates, given the inverse of
