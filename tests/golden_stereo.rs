@@ -178,3 +178,32 @@ fn near_objects_have_crossed_and_far_objects_uncrossed_parallax() {
         }
     }
 }
+
+#[test]
+fn the_heads_up_display_has_zero_parallax() {
+    let mut scene = Scene::load(&root().join("scenes/tests/carved-sphere.toml")).expect("test scene loads");
+    scene.output.width_px = 256;
+    scene.output.height_px = 128;
+    let mut renderer =
+        argile::app::renderer_for(&scene, None, true, None).unwrap_or_else(|e| panic!("no renderer: {e:#}"));
+    let mut frame = argile::app::build_frame(&scene, &[], false);
+    frame.hud = vec!["tool 1: 44 mm, remove".into(), "convergence 0.47 m".into()];
+    renderer.draw(&frame).expect("drawn");
+    let pair = renderer.read_back().expect("read back");
+    let log = renderer.validation_log();
+    drop(renderer);
+    assert!(log.take().is_empty(), "the validation layer is silent");
+    // The text is opaque: its pixels are the same in both eyes, at the same places.
+    let text = |img: &image::RgbaImage| -> Vec<(u32, u32)> {
+        img.enumerate_pixels()
+            .filter(|(_, _, p)| p[0] > 240 && p[1] > 240 && p[2] > 225)
+            .map(|(x, y, _)| (x, y))
+            .collect()
+    };
+    let (left, right) = (text(&pair.left), text(&pair.right));
+    assert!(left.len() > 200, "the HUD is drawn: {} text pixels", left.len());
+    assert_eq!(left, right, "each letter lands on the same pixels in both eyes");
+    assert!(left.iter().all(|&(x, y)| x < 200 && y < 40), "in the top-left corner");
+    // And the clay behind it still differs between the eyes (the scene has parallax).
+    assert_ne!(pair.left, pair.right);
+}

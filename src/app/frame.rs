@@ -62,6 +62,7 @@ pub fn build_frame(scene: &Scene, hands: &[(usize, crate::math::Pose)], show_too
         stage: scene.stage.map(|s| Stage { min_m: s.min_m, max_m: s.max_m, colour: s.colour }),
         show_environment: scene.environment.show,
         background: scene.environment.background,
+        hud: Vec::new(),
     }
 }
 

@@ -262,6 +262,7 @@ pub struct Station<'s> {
     save_to: PathBuf,
     saved: Option<PathBuf>,
     quit: bool,
+    frame_ms: f32,
     /// Messages for the user (saved, undo had nothing, ...).
     pub messages: Vec<String>,
 }
@@ -301,6 +302,7 @@ impl<'s> Station<'s> {
             save_to,
             saved: None,
             quit: false,
+            frame_ms: 0.0,
             messages: Vec::new(),
         };
         station.resize(window_px);
@@ -437,6 +439,30 @@ impl<'s> Station<'s> {
         }
     }
 
+    /// What the heads-up display shows: the desk tool, the stereo settings, the frame time.
+    pub fn hud_lines(&self) -> Vec<String> {
+        let rig = &self.view.rig;
+        let mouse = match self.mouse.mode {
+            MouseMode::Scene => "turns",
+            MouseMode::Cursor => "places tool",
+        };
+        vec![
+            format!(
+                "tool {}: {} mm, {}",
+                self.tool_index + 1,
+                (self.desk_tool.size_m() * 1000.0).round(),
+                self.desk_tool.action.name()
+            ),
+            format!("convergence {:.2} m, eyes {:.0} mm", rig.convergence_m, rig.interaxial_m * 1000.0),
+            format!("{:.1} ms/frame, mouse {mouse}", self.frame_ms),
+        ]
+    }
+
+    /// The last frame's duration, milliseconds (shown in the HUD).
+    pub fn set_frame_time(&mut self, ms: f32) {
+        self.frame_ms = ms;
+    }
+
     /// Writes the sculpt to the save path, atomically.
     pub fn save(&mut self) -> Result<PathBuf> {
         let bytes = crate::io::encode(self.playback.field(), None, &mut |_| {});
@@ -516,6 +542,7 @@ impl<'s> Station<'s> {
                 }
             }
         }
+        frame.hud = self.hud_lines();
         frame.tools.push(ToolGlyph {
             model: Mat4::from_translation(pose.position_m)
                 * Mat4::from_scale(self.desk_tool.half_extents_m()),
@@ -640,6 +667,7 @@ impl WindowApp<'_, '_> {
                 dt
             }
         };
+        let started = Instant::now();
         let index = self.frames;
         let due: Vec<ScriptEvent> =
             self.script.events.iter().filter(|(f, _)| *f == index).map(|(_, e)| e.clone()).collect();
@@ -661,7 +689,13 @@ impl WindowApp<'_, '_> {
         }
         let last = self.options.frames.is_some_and(|n| index + 1 >= n);
         let want_shot = last && self.options.screenshot.is_some();
-        match renderer.present(&frame, want_shot)? {
+        let presented = renderer.present(&frame, want_shot)?;
+        // A scripted run shows its fixed step, so its pictures do not depend on the machine.
+        self.station.set_frame_time(match self.options.frames {
+            Some(_) => SCRIPTED_STEP_S * 1e3,
+            None => started.elapsed().as_secs_f32() * 1e3,
+        });
+        match presented {
             Presented::Shown(shot) => {
                 self.frames += 1;
                 if let (Some(image), Some(path)) = (shot, &self.options.screenshot) {

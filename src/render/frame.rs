@@ -101,6 +101,9 @@ pub struct Frame {
     pub show_environment: bool,
     /// Linear RGB background when the environment is not drawn.
     pub background: Vec3,
+    /// Heads-up display lines (ASCII), drawn at zero parallax in the top-left corner; none
+    /// draws nothing.
+    pub hud: Vec<String>,
 }
 
 /// The number of lights the clay shader evaluates.

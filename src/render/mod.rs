@@ -24,6 +24,7 @@ mod chunks;
 mod environment;
 mod frame;
 mod gpu;
+mod hud;
 mod renderer;
 mod shapes;
 mod target;

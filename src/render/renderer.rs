@@ -178,6 +178,17 @@ struct Pipelines {
     stage: Pipeline,
     clay: Pipeline,
     glyph: Pipeline,
+    hud: Pipeline,
+}
+
+/// The heads-up display's quads (host-visible, rewritten when the text or the size changes).
+struct HudMesh {
+    vertices: Buffer,
+    indices: Buffer,
+    index_count: u32,
+    /// What the buffers hold: the lines for an image of this size.
+    text: Vec<String>,
+    extent: (u32, u32),
 }
 
 /// The offscreen stereo renderer.
@@ -204,6 +215,7 @@ pub struct Renderer {
     sh: [Vec3; 9],
     /// Where screenshots of the window are read back (made on first use).
     screenshot: Option<Buffer>,
+    hud: HudMesh,
     command_buffer: vk::CommandBuffer,
     fence: vk::Fence,
     drawn: bool,
@@ -368,6 +380,13 @@ impl Renderer {
             cube_size,
             sh,
             screenshot: None,
+            hud: HudMesh {
+                vertices: Buffer::new(&device, 4096, vk::BufferUsageFlags::VERTEX_BUFFER, MemoryUse::Upload)?,
+                indices: Buffer::new(&device, 1024, vk::BufferUsageFlags::INDEX_BUFFER, MemoryUse::Upload)?,
+                index_count: 0,
+                text: Vec::new(),
+                extent: (0, 0),
+            },
             command_buffer,
             fence,
             drawn: false,
@@ -415,6 +434,25 @@ impl Renderer {
         self.device.instance.validation()
     }
 
+    /// Lays out the HUD text again when it or the image size changed.
+    fn write_hud(&mut self, lines: &[String]) -> Result<(), RenderError> {
+        let extent = (self.target.extent.width, self.target.extent.height);
+        let hud = &mut self.hud;
+        if hud.text == lines && hud.extent == extent {
+            return Ok(());
+        }
+        let (vertices, indices) = super::hud::layout(lines, extent.0, extent.1);
+        let vertex_bytes = std::mem::size_of_val(vertices.as_slice()) as u64;
+        grow(&self.device, &mut hud.vertices, vertex_bytes, vk::BufferUsageFlags::VERTEX_BUFFER)?;
+        grow(&self.device, &mut hud.indices, indices.len() as u64 * 4, vk::BufferUsageFlags::INDEX_BUFFER)?;
+        hud.vertices.write(0, &vertices);
+        hud.indices.write(0, &indices);
+        hud.index_count = indices.len() as u32;
+        hud.text = lines.to_vec();
+        hud.extent = extent;
+        Ok(())
+    }
+
     fn write_uniforms(&mut self, frame: &Frame) {
         let mut u = FrameUniforms::default();
         for (eye, view) in u.eyes.iter_mut().zip(&frame.views.eyes) {
@@ -455,6 +493,7 @@ impl Renderer {
     /// Draws one stereo frame (both eyes in one multiview pass) and waits for it to finish.
     pub fn draw(&mut self, frame: &Frame) -> Result<(), RenderError> {
         self.write_uniforms(frame);
+        self.write_hud(&frame.hud)?;
         self.submit(|cb| self.record_stereo(cb, frame), None, None)?;
         self.finish()?;
         self.drawn = true;
@@ -559,6 +598,7 @@ impl Renderer {
             )?);
         }
         self.write_uniforms(frame);
+        self.write_hud(&frame.hud)?;
         let shot_buffer = self.screenshot.as_ref().filter(|_| screenshot).map(|b| b.raw);
         self.submit(
             |cb| {
@@ -726,6 +766,12 @@ impl Renderer {
                     self.draw_shape(cb, &self.shapes.sphere);
                 }
             }
+            if self.hud.index_count > 0 {
+                d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, pipelines.hud.raw);
+                d.cmd_bind_vertex_buffers(cb, 0, &[self.hud.vertices.raw], &[0]);
+                d.cmd_bind_index_buffer(cb, self.hud.indices.raw, 0, vk::IndexType::UINT32);
+                d.cmd_draw_indexed(cb, self.hud.index_count, 1, 0, 0, 0);
+            }
         }
     }
 
@@ -881,6 +927,16 @@ fn make_pipelines(
                 attributes: 2,
                 cull: vk::CullModeFlags::BACK,
                 depth_test: true,
+                depth_write: false,
+                blend: true,
+            })?,
+            hud: make(PipelineDesc {
+                name: "heads-up display",
+                vertex: spirv!("hud.vert"),
+                fragment: spirv!("hud.frag"),
+                attributes: 2,
+                cull: vk::CullModeFlags::NONE,
+                depth_test: false,
                 depth_write: false,
                 blend: true,
             })?,

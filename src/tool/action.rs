@@ -80,6 +80,22 @@ pub enum Action {
 }
 
 impl Action {
+    /// A short name for displays ("add", "soft remove", ...).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Action::Add => "add",
+            Action::Remove => "remove",
+            Action::SoftRemove { .. } => "soft remove",
+            Action::Build { .. } => "build",
+            Action::Paint => "paint",
+            Action::SoftPaint { .. } => "soft paint",
+            Action::Smooth { .. } => "smooth",
+            Action::Stamp { .. } => "stamp",
+            Action::Inflate { .. } => "inflate",
+            Action::Deflate { .. } => "deflate",
+        }
+    }
+
     /// Whether the action works in proportion to time held (rather than once per stamp).
     pub fn is_rate_based(&self) -> bool {
         matches!(

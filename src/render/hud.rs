@@ -1,0 +1,118 @@
+//! The heads-up display: lines of text drawn at zero parallax over both eyes.
+//!
+//! Text is laid out on the CPU with the 8×8 public-domain bitmap font of the `font8x8` crate:
+//! each horizontal run of lit font pixels becomes one quad, on a translucent dark panel, in
+//! Vulkan's normalised device coordinates (x right, y down). The HUD vertex shader passes those
+//! coordinates through unchanged for both views, so each letter lands on the same pixel in the
+//! left and the right eye: zero disparity, the text sits on the screen plane whatever the
+//! convergence. Only ASCII is drawn; other characters show as `?`.
+//!
+//! The quads use the mesh [`Vertex`] layout, read as two attributes: `position` holds the
+//! NDC x and y and, in z, the opacity; `normal` holds the linear RGB colour.
+
+use crate::mesh::Vertex;
+
+/// Screen pixels per font pixel for an image `width` pixels wide: 1 below 1280 pixels, then
+/// one more per 640 pixels (at most 4), so the text keeps about the same share of the width.
+pub(crate) fn scale_for(width: u32) -> u32 {
+    (width / 640).clamp(1, 4)
+}
+/// Margin around the text and from the window's corner, screen pixels.
+const MARGIN_PX: u32 = 6;
+/// Text colour (linear RGBA) and the panel's.
+const TEXT: [f32; 4] = [0.95, 0.95, 0.85, 1.0];
+const PANEL: [f32; 4] = [0.0, 0.0, 0.0, 0.55];
+
+/// The quads of `lines` in the top-left corner of a `width` × `height` image: vertices and
+/// indices, empty when there is no text.
+pub(crate) fn layout(lines: &[String], width: u32, height: u32) -> (Vec<Vertex>, Vec<u32>) {
+    let mut vertices = Vec::new();
+    let mut indices = Vec::new();
+    let columns = lines.iter().map(|l| l.chars().count()).max().unwrap_or(0) as u32;
+    if columns == 0 || width == 0 || height == 0 {
+        return (vertices, indices);
+    }
+    let scale = scale_for(width);
+    let glyph = 8 * scale;
+    let (w, h) = (width as f32, height as f32);
+    let mut quad = |x0: u32, y0: u32, x1: u32, y1: u32, colour: [f32; 4]| {
+        let ndc = |x: u32, y: u32| [2.0 * x as f32 / w - 1.0, 2.0 * y as f32 / h - 1.0, colour[3]];
+        let base = vertices.len() as u32;
+        let rgb = [colour[0], colour[1], colour[2]];
+        for (x, y) in [(x0, y0), (x1, y0), (x1, y1), (x0, y1)] {
+            vertices.push(Vertex { position: ndc(x, y), normal: rgb, colour });
+        }
+        indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+    };
+    let right = MARGIN_PX * 2 + columns * glyph;
+    let bottom = MARGIN_PX * 2 + lines.len() as u32 * (glyph + scale);
+    quad(MARGIN_PX / 2, MARGIN_PX / 2, right, bottom, PANEL);
+    for (row, line) in lines.iter().enumerate() {
+        let top = MARGIN_PX + row as u32 * (glyph + scale);
+        for (column, c) in line.chars().enumerate() {
+            let code = if c.is_ascii() { c as usize } else { '?' as usize };
+            let bitmap = font8x8::legacy::BASIC_LEGACY[code];
+            let left = MARGIN_PX + column as u32 * glyph;
+            for (y, bits) in bitmap.iter().enumerate() {
+                // Bit 0 is the leftmost pixel; one quad per run of lit pixels.
+                let mut x = 0;
+                while x < 8 {
+                    if bits & (1 << x) == 0 {
+                        x += 1;
+                        continue;
+                    }
+                    let start = x;
+                    while x < 8 && bits & (1 << x) != 0 {
+                        x += 1;
+                    }
+                    let (y0, y1) = (top + y as u32 * scale, top + (y as u32 + 1) * scale);
+                    quad(left + start * scale, y0, left + x * scale, y1, TEXT);
+                }
+            }
+        }
+    }
+    (vertices, indices)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn no_text_draws_nothing() {
+        assert!(layout(&[], 100, 100).0.is_empty());
+        assert!(layout(&[String::new()], 100, 100).0.is_empty());
+    }
+
+    #[test]
+    fn letters_are_runs_of_font_pixels_inside_a_panel_in_the_top_left_corner() {
+        let (v, i) = layout(&["I".to_owned()], 200, 100);
+        assert_eq!(i.len() % 6, 0);
+        assert_eq!(v.len() / 4 * 6, i.len());
+        // The panel, then the letter's runs: font8x8's `I` has 7 lit rows.
+        let runs = v.len() / 4 - 1;
+        assert_eq!(runs, 7, "one run per lit row of I");
+        for p in &v {
+            assert!(
+                p.position[0] >= -1.0
+                    && p.position[0] <= 1.0
+                    && p.position[1] >= -1.0
+                    && p.position[1] <= 1.0
+            );
+            assert!(p.position[0] < 0.0 && p.position[1] < 0.0, "top-left (y down): {:?}", p.position);
+        }
+        // Text pixels are `scale` screen pixels apart on the grid.
+        let (v2, _) = layout(&["I".to_owned()], 1400, 100);
+        let px = |x: f32| ((x + 1.0) * 700.0).round() as u32;
+        for quad in v2[4..].chunks(4) {
+            assert_eq!((px(quad[1].position[0]) - px(quad[0].position[0])) % scale_for(1400), 0);
+        }
+        assert_eq!(scale_for(1400), 2);
+        assert_eq!(scale_for(200), 1);
+    }
+
+    #[test]
+    fn non_ascii_shows_as_a_question_mark() {
+        assert_eq!(layout(&["é".to_owned()], 64, 64), layout(&["?".to_owned()], 64, 64));
+    }
+}
