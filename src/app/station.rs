@@ -30,8 +30,13 @@ use super::environment::load_environment;
 use super::frame::build_frame;
 use super::playback::Playback;
 use crate::config::{Chord, KeyBindings, Modifiers, StationAction};
+use crate::input::calibration::SpaceMouseCalibration;
+use crate::input::desk::{DeskInput, FrameInput};
+use crate::input::gamepad::{GamepadCalibration, GamepadMotion, Gamepads};
+use crate::input::motion::{ActionEvent, InputAction, MappingTable, Rates, Target};
 use crate::input::mouse::{MouseButton, MouseEvent, MouseMode, MouseNavigator, MouseSettings};
-use crate::math::{Mat4, Pose, Quat, Vec2, Vec3, Vec4};
+use crate::input::reader::{HidSource, Mailbox, ReaderConfig, ReaderHandle};
+use crate::math::{Mat4, Quat, Vec2, Vec3, Vec4};
 use crate::mesh::remesh_dirty;
 use crate::render::{Light, Presented, Renderer, RendererDesc, ToolGlyph, ValidationLog};
 use crate::scene::{line_column, FileError, Scene};
@@ -250,6 +255,14 @@ pub struct Station<'s> {
     playback: Playback<'s>,
     bindings: KeyBindings,
     mouse: MouseNavigator,
+    /// The 6-DoF devices' state (SpaceMice through `mailbox`, gamepads): the desk tool's pose
+    /// is its `Target::Tool` pose.
+    desk: DeskInput,
+    mailbox: Option<Arc<Mailbox>>,
+    /// A device's stroke button is down.
+    device_apply: bool,
+    /// Seconds since the station started (the devices' filters run on it).
+    clock_s: f64,
     modifiers: Modifiers,
     held: HashSet<KeyCode>,
     desk_tool: Tool,
@@ -279,6 +292,9 @@ impl<'s> Station<'s> {
             distance,
         );
         mouse.tool_position_m = rig.target_m;
+        let mut desk =
+            DeskInput::new(SpaceMouseCalibration::shipped(), MappingTable::default(), Rates::default());
+        desk.poses.get_mut(Target::Tool).position_m = rig.target_m;
         let desk_tool = playback
             .tools()
             .first()
@@ -291,6 +307,10 @@ impl<'s> Station<'s> {
             playback,
             bindings,
             mouse,
+            desk,
+            mailbox: None,
+            device_apply: false,
+            clock_s: 0.0,
             modifiers: Modifiers::default(),
             held: HashSet::new(),
             desk_tool,
@@ -348,6 +368,46 @@ impl<'s> Station<'s> {
         let eye = &views.eyes[0];
         let inverse = (eye.projection * eye.view).inverse();
         self.mouse.handle(event, &inverse, self.view.rig.forward());
+        self.desk.poses.get_mut(Target::Tool).position_m = self.mouse.tool_position_m;
+    }
+
+    /// Reads SpaceMouse events and states from `mailbox` (filled by a reader thread).
+    pub fn attach_spacemice(&mut self, mailbox: Arc<Mailbox>) {
+        self.mailbox = Some(mailbox);
+    }
+
+    /// One frame of the 6-DoF devices: drains the SpaceMice, integrates their motion and the
+    /// gamepads' into the targets they drive, and acts on their buttons (`actions` holds what
+    /// the gamepads' buttons did this frame).
+    pub fn devices(&mut self, dt_s: f32, gamepads: &[GamepadMotion], mut actions: Vec<ActionEvent>) {
+        self.clock_s += f64::from(dt_s);
+        let view_rotation = Quat::from_mat4(&self.view.rig.centre_view().inverse());
+        let input =
+            FrameInput { t_s: self.clock_s, dt_s, view_rotation, gamepads, mouse_turn: Quat::IDENTITY };
+        let first_new = actions.len();
+        self.desk.update(self.mailbox.as_deref(), &input, &mut actions);
+        for (i, a) in actions.iter().enumerate() {
+            // The desk already applied its own devices' actions to itself; the gamepads' go
+            // through it here (a gamepad's CycleTarget switches the gamepad's target).
+            if i < first_new {
+                self.desk.apply_action(*a);
+            }
+            let station_action = match a.action {
+                InputAction::Stroke => {
+                    self.device_apply = a.pressed;
+                    None
+                }
+                InputAction::Undo => Some(StationAction::Undo),
+                InputAction::Redo => Some(StationAction::Redo),
+                InputAction::ResetView => Some(StationAction::ResetView),
+                InputAction::NextTool => Some(StationAction::NextTool),
+                InputAction::Clutch | InputAction::CycleTarget | InputAction::None => None,
+            };
+            if let (Some(action), true) = (station_action, a.pressed) {
+                self.act(action);
+            }
+        }
+        self.mouse.tool_position_m = self.desk.poses.get(Target::Tool).position_m;
     }
 
     /// A scripted event.
@@ -425,6 +485,8 @@ impl<'s> Station<'s> {
                 self.mouse.scene_rotation = Quat::IDENTITY;
                 self.mouse.distance_m = distance;
                 self.mouse.tool_position_m = self.scene.rig.target_m;
+                self.desk.poses = Default::default();
+                self.desk.poses.get_mut(Target::Tool).position_m = self.scene.rig.target_m;
                 self.view.rig = self.scene.rig;
                 self.convergence_factor = self.scene.rig.convergence_m / distance.max(1e-6);
             }
@@ -484,7 +546,8 @@ impl<'s> Station<'s> {
         // The view first: the pointer moves in it.
         let rig = &mut self.view.rig;
         let base = self.scene.rig;
-        let rotation = self.mouse.scene_rotation.inverse();
+        let scene_pose = self.desk.poses.get(Target::Scene);
+        let rotation = (self.mouse.scene_rotation * scene_pose.rotation).inverse();
         let offset = (base.eye_m - base.target_m).normalize_or(Vec3::Z) * self.mouse.distance_m;
         rig.eye_m = base.target_m + rotation * offset;
         rig.up = rotation * base.up;
@@ -504,12 +567,14 @@ impl<'s> Station<'s> {
                 self.mouse.tool_position_m += direction * step;
             }
         }
+        let tool = self.desk.poses.get_mut(Target::Tool);
+        tool.position_m = self.mouse.tool_position_m;
+        let pose = *tool;
 
         // Tools: the scene's scripted hands, then the desk tool.
         let t = self.playback.time_s() + dt_s;
         self.playback.advance_to(t, |_| {});
-        let pose = Pose { position_m: self.mouse.tool_position_m, ..Default::default() };
-        let applying = self.holding(StationAction::Apply);
+        let applying = self.holding(StationAction::Apply) || self.device_apply;
         let field = self.playback.field_mut();
         if applying {
             if self.stroke.is_none() {
@@ -572,6 +637,8 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
         window_px,
         window: None,
         renderer: None,
+        spacemice: None,
+        gamepads: None,
         validation: None,
         frames: 0,
         last: None,
@@ -617,6 +684,9 @@ struct WindowApp<'s, 'o> {
     /// Dropped after the renderer (see `run_station`).
     window: Option<Arc<Window>>,
     renderer: Option<Renderer>,
+    /// The SpaceMouse reader thread (stopped on drop) and the gamepads, when available.
+    spacemice: Option<ReaderHandle>,
+    gamepads: Option<Gamepads>,
     validation: Option<ValidationLog>,
     frames: u64,
     last: Option<Instant>,
@@ -652,6 +722,20 @@ impl WindowApp<'_, '_> {
         )?;
         tracing::info!("station window on {}", renderer.device_name());
         self.validation = Some(renderer.validation_log());
+        // The 6-DoF devices, unless the run is scripted (its input is the script alone).
+        if self.options.frames.is_none() {
+            match ReaderHandle::spawn(HidSource::new, ReaderConfig::default()) {
+                Ok(reader) => {
+                    self.station.attach_spacemice(reader.mailbox().clone());
+                    self.spacemice = Some(reader);
+                }
+                Err(e) => tracing::warn!("no SpaceMouse reader: {e}"),
+            }
+            match Gamepads::new(GamepadCalibration::shipped()) {
+                Ok(g) => self.gamepads = Some(g),
+                Err(e) => tracing::warn!("no gamepads: {e}"),
+            }
+        }
         self.renderer = Some(renderer);
         self.window = Some(window);
         Ok(())
@@ -674,6 +758,13 @@ impl WindowApp<'_, '_> {
         for event in &due {
             self.station.script(event);
         }
+        let mut device_actions = Vec::new();
+        let mut motions = Vec::new();
+        if let Some(g) = &mut self.gamepads {
+            g.poll(&mut device_actions);
+            motions.extend(g.motions().map(|(_, m)| m));
+        }
+        self.station.devices(dt, &motions, device_actions);
         let renderer = self.renderer.as_mut().expect("the window is open");
         let mut failed = None;
         let frame = self.station.step(dt, |diff| {
@@ -877,5 +968,51 @@ mod tests {
             (station.view.rig.convergence_m / after - station.convergence_factor).abs() < 1e-5,
             "the zero-parallax plane follows the zoom"
         );
+    }
+
+    #[test]
+    fn a_spacemouse_moves_the_desk_tool_and_its_button_sculpts() {
+        use crate::input::reader::{DeviceId, DeviceInfo, ReaderEvent};
+        use crate::input::spacemouse::{ButtonChange, RawAxes, SpaceMouseState};
+        let scene = Scene::parse(
+            "[[tool]]\nname = \"ball\"\nshape = \"sphere\"\nradius_m = 0.03\naction = \"add\"\n",
+            "t",
+            None,
+        )
+        .unwrap();
+        let mut station =
+            Station::new(&scene, KeyBindings::shipped(), (64, 64), PathBuf::from("unused.argile"));
+        let mailbox = Arc::new(Mailbox::new(16));
+        station.attach_spacemice(mailbox.clone());
+        let id = DeviceId(1);
+        mailbox.push_event(ReaderEvent::Connected {
+            id,
+            info: DeviceInfo { path: "test".into(), name: "SpaceMouse".into() },
+        });
+        let start = station.desk.poses.get(Target::Tool).position_m;
+        // Half deflection to the right, button 1 (stroke) held.
+        let state = SpaceMouseState { axes: RawAxes([175, 0, 0, 0, 0, 0]), buttons: 1, ..Default::default() };
+        mailbox.push_event(ReaderEvent::Buttons {
+            id,
+            change: ButtonChange { pressed: 1, released: 0 },
+            buttons: 1,
+        });
+        for _ in 0..30 {
+            mailbox.publish_state(id, state);
+            station.devices(SCRIPTED_STEP_S, &[], Vec::new());
+            station.step(SCRIPTED_STEP_S, |_| {});
+        }
+        let moved = station.desk.poses.get(Target::Tool).position_m - start;
+        assert!(moved.dot(station.view.rig.right()) > 0.01, "the tool went right: {moved}");
+        assert_eq!(station.mouse.tool_position_m, station.desk.poses.get(Target::Tool).position_m);
+        assert!(station.playback.field().mass() > 0.0, "the stroke button sculpts");
+        mailbox.push_event(ReaderEvent::Buttons {
+            id,
+            change: ButtonChange { pressed: 0, released: 1 },
+            buttons: 0,
+        });
+        station.devices(SCRIPTED_STEP_S, &[], Vec::new());
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert!(station.stroke.is_none() && !station.playback.field().in_stroke(), "release ends the stroke");
     }
 }
