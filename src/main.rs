@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use argile::app::{self, bench, RenderOptions};
 use argile::mesh::export::ExportFormat;
 use argile::scene::Scene;
-use argile::stereo::Preview;
+use argile::stereo::display::DisplayMode;
 use clap::{Parser, Subcommand};
 
 /// Argile: sculpt virtual clay in stereo and VR.
@@ -32,9 +32,11 @@ enum Command {
         /// Folder for the images (created if missing).
         #[arg(long, short)]
         out: PathBuf,
-        /// Also write a combined preview image per capture.
+        /// Also write each capture as this display mode shows it, as NAME-MODE.png (repeat for
+        /// several; replaces the scene's `[display] mode`). Quad-buffer writes its two layers
+        /// as NAME-quad-buffer-left.png and -right.png.
         #[arg(long, value_enum)]
-        preview: Option<Preview>,
+        display_mode: Vec<DisplayMode>,
         /// Per-eye image size, WIDTHxHEIGHT, instead of the scene's.
         #[arg(long, value_parser = parse_size)]
         size: Option<(u32, u32)>,
@@ -110,8 +112,8 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         None => station(),
-        Some(Command::Render { scene, out, preview, size, validation }) => {
-            render(&scene, out, preview, size, validation)
+        Some(Command::Render { scene, out, display_mode, size, validation }) => {
+            render(&scene, out, display_mode, size, validation)
         }
         Some(Command::Export { input, format, out, force }) => app::export(&input, format, &out, force, true)
             .map(|s| {
@@ -140,7 +142,7 @@ fn main() -> ExitCode {
 fn print_written(written: &[app::WrittenCapture]) {
     for w in written {
         println!("wrote {} and {}", w.left.display(), w.right.display());
-        if let Some(p) = &w.preview {
+        for p in &w.composed {
             println!("wrote {}", p.display());
         }
     }
@@ -156,7 +158,7 @@ fn station() -> Result<()> {
     let scene = Scene::default_scene();
     let options = RenderOptions {
         out_dir: PathBuf::from("argile-out"),
-        preview: Some(Preview::Anaglyph),
+        display_modes: vec![DisplayMode::Anaglyph],
         progress: true,
         validation: false,
         size_px: None,
@@ -169,12 +171,12 @@ fn station() -> Result<()> {
 fn render(
     scene: &std::path::Path,
     out: PathBuf,
-    preview: Option<Preview>,
+    display_modes: Vec<DisplayMode>,
     size: Option<(u32, u32)>,
     validation: bool,
 ) -> Result<()> {
     let scene = Scene::load(scene)?;
-    let options = RenderOptions { out_dir: out, preview, progress: true, validation, size_px: size };
+    let options = RenderOptions { out_dir: out, display_modes, progress: true, validation, size_px: size };
     let written = app::render_scene(&scene, &options)?;
     print_written(&written);
     Ok(())

@@ -54,23 +54,33 @@ fn bench_render_stereo_runs_on_the_vulkan_device() {
 }
 
 #[test]
-fn render_writes_the_pair_and_preview_and_says_where() {
+fn render_writes_the_pair_and_the_composed_images_and_says_where() {
     let dir = temp_dir("render");
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/tests/parallax.toml");
     let out = argile()
         .args(["render", scene, "--out"])
         .arg(&dir)
-        .args(["--preview", "sbs", "--size", "64x48"])
+        .args(["--display-mode", "side-by-side", "--display-mode", "quad-buffer", "--size", "64x48"])
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
-    for name in ["parallax-left.png", "parallax-right.png", "parallax-sbs.png"] {
+    let names = [
+        "parallax-left.png",
+        "parallax-right.png",
+        "parallax-side-by-side.png",
+        "parallax-quad-buffer-left.png",
+        "parallax-quad-buffer-right.png",
+    ];
+    for name in names {
         assert!(text.contains(name), "says where {name} is: {text}");
         let img = image::open(dir.join(name)).unwrap();
         assert_eq!(img.height(), 48);
     }
-    assert_eq!(image::open(dir.join("parallax-sbs.png")).unwrap().width(), 128);
+    assert_eq!(image::open(dir.join("parallax-side-by-side.png")).unwrap().width(), 128);
+    let read = |name: &str| image::open(dir.join(name)).unwrap().to_rgba8();
+    assert_eq!(read("parallax-quad-buffer-left.png"), read("parallax-left.png"));
+    assert_eq!(read("parallax-quad-buffer-right.png"), read("parallax-right.png"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

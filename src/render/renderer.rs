@@ -10,10 +10,11 @@ use std::sync::Arc;
 use ash::vk;
 
 use super::chunks::{ArenaStorage, ChunkArena};
+use super::compose::{ComposedOutput, Composer, COMPOSED_FORMAT};
 use super::environment::{build_radiance_cube, irradiance_sh9, reflection_lod, CubeMap};
 use super::gpu::buffer::{Buffer, MemoryUse};
 use super::gpu::device::Device;
-use super::gpu::image::{transition, Image, ImageDesc, Sampler};
+use super::gpu::image::{read_layers, transition, Image, ImageDesc, Sampler};
 use super::gpu::instance::Instance;
 use super::gpu::pipeline::{DescriptorPool, Layout, Pipeline, PipelineDesc, PUSH_CONSTANT_BYTES};
 use super::shapes::{full_screen_quad, icosphere, unit_box};
@@ -22,6 +23,7 @@ pub use super::target::{ViewPasses, VIEW_PASSES_VARIABLE};
 use super::{Environment, Frame, Light, RenderError, ValidationLog, MAX_LIGHTS};
 use crate::math::Vec3;
 use crate::mesh::{MeshDiff, Vertex};
+use crate::stereo::display::{DisplayMode, Parity};
 
 macro_rules! spirv {
     ($name:literal) => {
@@ -179,9 +181,13 @@ struct Pipelines {
 
 /// The offscreen stereo renderer.
 ///
-/// Field order is drop order (after `Drop::drop` waits for the device): pipelines and the
-/// descriptor pool, the target, buffers, the environment, layouts, and the device last.
+/// Field order is drop order (after `Drop::drop` waits for the device): the composition's
+/// destination and pass, pipelines and the descriptor pool, the target, buffers, the environment, layouts, and the device last.
 pub struct Renderer {
+    /// The offscreen destination of the last composition, made for its mode and size.
+    composed: Option<ComposedOutput>,
+    /// The display-mode composition pass, reading the target's output.
+    composer: Composer,
     /// One set of pipelines per view pass of the target.
     pipelines: Vec<Pipelines>,
     descriptors: DescriptorPool,
@@ -296,7 +302,14 @@ impl Renderer {
         };
         let pipelines_for = |pass: &ViewPass| -> Result<Pipelines, RenderError> {
             let make = |desc: PipelineDesc| {
-                Pipeline::new(&device, &desc, &layout, pass.render_pass, target.extent, target.samples)
+                Pipeline::new(
+                    &device,
+                    &desc,
+                    layout.pipeline,
+                    pass.render_pass,
+                    Some(target.extent),
+                    target.samples,
+                )
             };
             Ok(Pipelines {
                 background: make(base)?,
@@ -334,12 +347,21 @@ impl Renderer {
         };
         let pipelines = target.passes.iter().map(pipelines_for).collect::<Result<Vec<_>, _>>()?;
 
+        let composer = Composer::new(
+            &device,
+            target.output.view,
+            COMPOSED_FORMAT,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        )?;
+
         let command_buffer = device.command_buffer()?;
         // SAFETY: a valid create info on a live device; destroyed in Drop.
         let fence = unsafe { device.raw.create_fence(&vk::FenceCreateInfo::default(), None) }
             .map_err(RenderError::vk("vkCreateFence"))?;
 
         Ok(Self {
+            composed: None,
+            composer,
             pipelines,
             descriptors,
             target,
@@ -537,60 +559,78 @@ impl Renderer {
         if !self.drawn {
             return Err(RenderError::NothingDrawn);
         }
+        let mut layers = read_layers(&self.device, &self.target.output, &mut self.readback)?.into_iter();
+        match (layers.next(), layers.next()) {
+            (Some(left), Some(right)) => Ok(StereoImage { left, right }),
+            _ => unreachable!("the stereo target has two layers"),
+        }
+    }
+}
+
+impl Renderer {
+    /// Composes the last frame's stereo pair as `mode` shows it (interlaced modes with
+    /// `parity`) into an offscreen image, with the same pass a window uses, and waits for it.
+    /// Read it with [`read_back_composed`](Self::read_back_composed).
+    pub fn compose(&mut self, mode: DisplayMode, parity: Parity) -> Result<(), RenderError> {
+        if !self.drawn {
+            return Err(RenderError::NothingDrawn);
+        }
         let extent = self.target.extent;
-        let image = self.target.output.raw;
-        let buffer = self.readback.raw;
+        let eye = (extent.width, extent.height);
+        if self.composed.as_ref().map(|c| c.key) != Some((mode, eye)) {
+            self.composed = None;
+            self.composed = Some(ComposedOutput::new(&self.device, &self.composer, mode, eye)?);
+        }
+        let Some(output) = &self.composed else { unreachable!("made just above") };
         let d = &self.device.raw;
+        let source = self.target.output.raw;
+        let range = self.target.output.desc.whole();
         self.device.submit_and_wait(|cb| {
-            let region = vk::BufferImageCopy::default()
-                .image_subresource(
-                    vk::ImageSubresourceLayers::default()
-                        .aspect_mask(vk::ImageAspectFlags::COLOR)
-                        .mip_level(0)
-                        .base_array_layer(0)
-                        .layer_count(2),
-                )
-                .image_extent(vk::Extent3D { width: extent.width, height: extent.height, depth: 1 });
-            let to_host = vk::BufferMemoryBarrier::default()
-                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-                .dst_access_mask(vk::AccessFlags::HOST_READ)
-                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .buffer(buffer)
-                .offset(0)
-                .size(vk::WHOLE_SIZE);
-            // SAFETY: the render pass left the output in TRANSFER_SRC_OPTIMAL; the buffer
-            // holds both layers.
-            unsafe {
-                d.cmd_copy_image_to_buffer(
-                    cb,
-                    image,
+            // The stereo passes leave the image ready for readback; the composition samples it,
+            // then hands it back in that layout (which the next frame's passes expect).
+            transition(
+                d,
+                cb,
+                source,
+                range,
+                (
                     vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    buffer,
-                    &[region],
-                );
-                d.cmd_pipeline_barrier(
-                    cb,
+                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                    vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+                ),
+                (
+                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    vk::PipelineStageFlags::FRAGMENT_SHADER,
+                    vk::AccessFlags::SHADER_READ,
+                ),
+            );
+            self.composer.record(cb, output.framebuffers(), (mode, parity), eye);
+            transition(
+                d,
+                cb,
+                source,
+                range,
+                (
+                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    vk::PipelineStageFlags::FRAGMENT_SHADER,
+                    vk::AccessFlags::empty(),
+                ),
+                (
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                     vk::PipelineStageFlags::TRANSFER,
-                    vk::PipelineStageFlags::HOST,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[to_host],
-                    &[],
-                );
-            }
-        })?;
-        let layer = (extent.width * extent.height * 4) as usize;
-        let bytes = self.readback.read();
-        let eye = |i: usize| {
-            image::RgbaImage::from_raw(
-                extent.width,
-                extent.height,
-                bytes[i * layer..(i + 1) * layer].to_vec(),
-            )
-            .expect("the readback buffer holds two whole layers")
-        };
-        Ok(StereoImage { left: eye(0), right: eye(1) })
+                    vk::AccessFlags::TRANSFER_READ,
+                ),
+            );
+        })
+    }
+
+    /// Copies the last composition to the host: one image of the mode's output size, or two
+    /// (left, right) for quad-buffer.
+    pub fn read_back_composed(&mut self) -> Result<Vec<image::RgbaImage>, RenderError> {
+        match &mut self.composed {
+            Some(output) => output.read_back(&self.device),
+            None => Err(RenderError::NothingDrawn),
+        }
     }
 }
 
