@@ -54,6 +54,20 @@ fn bench_render_stereo_runs_on_the_vulkan_device() {
 }
 
 #[test]
+fn bench_compose_times_every_display_mode() {
+    let out = argile().args(["bench", "--json", "--quick", "compose"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<serde_json::Value> = text.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let modes: Vec<&str> = lines.iter().map(|l| l["mode"].as_str().unwrap()).collect();
+    assert_eq!(modes.len(), 9, "one line per display mode: {modes:?}");
+    assert!(modes.contains(&"anaglyph") && modes.contains(&"quad-buffer"));
+    let side_by_side = lines.iter().find(|l| l["mode"] == "side-by-side").unwrap();
+    assert_eq!(side_by_side["output_width_px"], 2 * side_by_side["eye_width_px"].as_u64().unwrap());
+    assert!(lines.iter().all(|l| l["median_compose_ms"].as_f64().unwrap() > 0.0));
+}
+
+#[test]
 fn render_writes_the_pair_and_the_composed_images_and_says_where() {
     let dir = temp_dir("render");
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/tests/parallax.toml");

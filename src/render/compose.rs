@@ -381,13 +381,15 @@ pub(crate) struct ComposedOutput {
 pub(crate) const COMPOSED_FORMAT: vk::Format = super::target::COLOUR_FORMAT;
 
 impl ComposedOutput {
-    /// The destination for `mode` with eyes of `eye` pixels, for `composer` (made for
-    /// [`COMPOSED_FORMAT`] and `TRANSFER_SRC_OPTIMAL`).
+    /// The destination for `mode` with eyes of `eye` pixels, of 8-bit RGBA `format`
+    /// ([`COMPOSED_FORMAT`] or its UNORM twin), for `composer` (made for `format` and
+    /// `TRANSFER_SRC_OPTIMAL`).
     pub(crate) fn new(
         device: &Arc<Device>,
         composer: &Composer,
         mode: DisplayMode,
         eye: (u32, u32),
+        format: vk::Format,
     ) -> Result<Self, RenderError> {
         let (width, height) = mode.output_size(eye);
         let layers = mode.layers();
@@ -398,7 +400,7 @@ impl ComposedOutput {
                 height,
                 layers,
                 mip_levels: 1,
-                format: COMPOSED_FORMAT,
+                format,
                 samples: vk::SampleCountFlags::TYPE_1,
                 usage: vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
                 cube: false,
@@ -421,7 +423,7 @@ impl ComposedOutput {
             let info = vk::ImageViewCreateInfo::default()
                 .image(image.raw)
                 .view_type(vk::ImageViewType::TYPE_2D)
-                .format(COMPOSED_FORMAT)
+                .format(format)
                 .subresource_range(
                     vk::ImageSubresourceRange::default()
                         .aspect_mask(vk::ImageAspectFlags::COLOR)

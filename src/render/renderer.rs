@@ -579,9 +579,21 @@ impl Renderer {
         let eye = (extent.width, extent.height);
         if self.composed.as_ref().map(|c| c.key) != Some((mode, eye)) {
             self.composed = None;
-            self.composed = Some(ComposedOutput::new(&self.device, &self.composer, mode, eye)?);
+            let output = ComposedOutput::new(&self.device, &self.composer, mode, eye, COMPOSED_FORMAT)?;
+            self.composed = Some(output);
         }
         let Some(output) = &self.composed else { unreachable!("made just above") };
+        self.compose_into(&self.composer, output, (mode, parity))
+    }
+
+    /// Records and runs `composer` from the stereo image into `output`, and waits for it.
+    fn compose_into(
+        &self,
+        composer: &Composer,
+        output: &ComposedOutput,
+        (mode, parity): (DisplayMode, Parity),
+    ) -> Result<(), RenderError> {
+        let extent = self.target.extent;
         let d = &self.device.raw;
         let source = self.target.output.raw;
         let range = self.target.output.desc.whole();
@@ -604,7 +616,7 @@ impl Renderer {
                     vk::AccessFlags::SHADER_READ,
                 ),
             );
-            self.composer.record(cb, output.framebuffers(), (mode, parity), eye);
+            composer.record(cb, output.framebuffers(), (mode, parity), (extent.width, extent.height));
             transition(
                 d,
                 cb,
@@ -787,6 +799,7 @@ pub fn probe_devices() -> Result<DeviceProbe, RenderError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::Environment;
 
     /// The log really receives what the layer says: an invalid call (a buffer of size 0) is
     /// reported. Needs Vulkan and the validation layer; fails without them.
@@ -807,6 +820,62 @@ mod tests {
         assert!(messages.iter().any(|m| m.contains("size")), "the layer reported {messages:?}");
         drop(device);
         assert!(log.take().is_empty(), "a clean teardown reports nothing");
+    }
+
+    /// A window's swapchain may be UNORM: the composition then encodes sRGB in the shader, and
+    /// must give what an sRGB destination stores (within the rounding of the two encoders).
+    #[test]
+    fn a_unorm_destination_gets_the_same_srgb_values_as_an_srgb_one() {
+        let desc = RendererDesc { width: 40, height: 24, samples: 1, validation: true, view_passes: None };
+        let mut renderer = Renderer::new(&desc, &Environment::Studio, 1.0).expect("a Vulkan device");
+        let log = renderer.validation_log();
+        let rig = crate::stereo::StereoRig {
+            eye_m: Vec3::new(0.0, 0.2, 0.6),
+            target_m: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y_deg: 60.0,
+            interaxial_m: 0.063,
+            convergence_m: 0.6,
+            near_m: 0.05,
+            far_m: 10.0,
+        };
+        let frame = Frame {
+            views: rig.views(40.0 / 24.0),
+            lights: Vec::new(),
+            material: Default::default(),
+            tools: Vec::new(),
+            stage: None,
+            show_environment: true,
+            background: Vec3::ZERO,
+        };
+        renderer.draw(&frame).unwrap();
+        let format = vk::Format::R8G8B8A8_UNORM;
+        let unorm = Composer::new(
+            &renderer.device,
+            renderer.target.output.view,
+            format,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        )
+        .unwrap();
+        for mode in [DisplayMode::Anaglyph, DisplayMode::SideBySideHalf, DisplayMode::Mono] {
+            renderer.compose(mode, Parity::LeftEven).unwrap();
+            let srgb = renderer.read_back_composed().unwrap().remove(0);
+            let mut output = ComposedOutput::new(&renderer.device, &unorm, mode, (40, 24), format).unwrap();
+            renderer.compose_into(&unorm, &output, (mode, Parity::LeftEven)).unwrap();
+            let encoded = output.read_back(&renderer.device).unwrap().remove(0);
+            let distinct: std::collections::HashSet<_> = srgb.pixels().collect();
+            assert!(distinct.len() > 20, "{mode}: the studio gives many colours ({})", distinct.len());
+            for (a, b) in srgb.pixels().zip(encoded.pixels()) {
+                assert!(
+                    (0..4).all(|c| a[c].abs_diff(b[c]) <= 2),
+                    "{mode}: {a:?} (sRGB) against {b:?} (UNORM)"
+                );
+            }
+        }
+        drop(unorm);
+        drop(renderer);
+        let messages = log.take();
+        assert!(messages.is_empty(), "the validation layer reported {messages:#?}");
     }
 
     #[test]
