@@ -99,6 +99,35 @@ fn render_writes_the_pair_and_the_composed_images_and_says_where() {
 }
 
 #[test]
+fn the_scene_display_mode_writes_the_composed_image_unless_the_command_line_names_others() {
+    let dir = temp_dir("display");
+    let scene = dir.join("display.toml");
+    std::fs::write(
+        &scene,
+        "[output]\nwidth_px = 32\nheight_px = 24\nsamples = 1\n[display]\nmode = \"top-bottom\"\n",
+    )
+    .unwrap();
+    let out = argile().arg("render").arg(&scene).arg("--out").arg(dir.join("a")).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(image::open(dir.join("a/final-top-bottom.png")).unwrap().height(), 48);
+    let out = argile()
+        .arg("render")
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.join("b"))
+        .args(["--display-mode", "mono"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(dir.join("b/final-mono.png").exists() && !dir.join("b/final-top-bottom.png").exists());
+    let out =
+        argile().arg("render").arg(&scene).args(["--out", "o", "--display-mode", "3d"]).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("side-by-side-half"), "the modes are listed");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn scene_errors_name_the_file_line_and_column() {
     let dir = temp_dir("bad-scene");
     let scene = dir.join("bad.toml");
