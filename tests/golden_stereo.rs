@@ -1,5 +1,6 @@
 //! Stereo image regression tests: scenes rendered offscreen (multiview, 4x MSAA) on the pinned
-//! Vulkan device with the validation layer on, each eye compared with `tests/golden/`.
+//! Vulkan device with the validation layer on, each eye compared with `tests/golden/`; and one
+//! stereo pair composed in every display mode by the composition pass (`display-MODE.png`).
 //!
 //! Regenerate the goldens after a deliberate change: `BLESS=1 scripts/test` (or
 //! `BLESS=1 cargo test --test golden_stereo`). Actual and diff images of every run are written
