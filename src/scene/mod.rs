@@ -3,7 +3,8 @@
 //! `scenes/README.md`.
 //!
 //! Every error names the file, and the line and column where the problem is. Knows nothing of
-//! Vulkan; depends on `math`, `tool` (solids and tools) and `stereo` (the camera rig).
+//! Vulkan; depends on `math`, `tool` (solids and tools) and `stereo` (the camera rig and the
+//! display modes).
 
 mod colour;
 mod file;
