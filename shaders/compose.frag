@@ -1,8 +1,11 @@
 #version 450
 // The display-mode composition: one output pixel from the 2-layer stereo image (layer 0 the
-// left eye, layer 1 the right). The source is read with texelFetch through an sRGB view, so the
+// left eye, layer 1 the right). The mode is a specialization constant: each mode's pipeline
+// keeps only its own branch (on lavapipe a mode chosen at run time cost about 3 times more). The source is read with texelFetch through an sRGB view, so the
 // values are linear and exact (no filtering); averages and the anaglyph matrices work on linear
 // values. Modes and their layouts: src/stereo/display.rs. Mode numbers: src/render/compose.rs.
+
+layout(constant_id = 0) const uint MODE = 8u;
 
 layout(set = 0, binding = 0) uniform sampler2DArray stereo;
 
@@ -10,8 +13,8 @@ layout(push_constant) uniform Compose {
     // Anaglyph matrices, one column per vec4 (w unused): output = left * l + right * r.
     vec4 left[3];
     vec4 right[3];
-    // x: mode, y: interlace parity offset (0 or 1), z: encode sRGB in the shader (a UNORM
-    // destination), w: the destination layer (quad-buffer).
+    // x: interlace parity offset (0 or 1), y: encode sRGB in the shader (a UNORM destination),
+    // z: the destination layer (quad-buffer), w: unused.
     uvec4 params;
 } pc;
 
@@ -39,11 +42,11 @@ vec3 linear_to_srgb(vec3 c) {
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     ivec2 size = textureSize(stereo, 0).xy;
-    uint mode = pc.params.x;
-    uint parity = pc.params.y;
+    const uint mode = MODE;
+    uint parity = pc.params.x;
     vec4 c;
     if (mode == QUAD_BUFFER) {
-        c = eye(pc.params.w, p);
+        c = eye(pc.params.z, p);
     } else if (mode == SIDE_BY_SIDE) {
         uint layer = p.x < size.x ? 0u : 1u;
         c = eye(layer, ivec2(p.x - int(layer) * size.x, p.y));
@@ -73,5 +76,5 @@ void main() {
     } else {
         c = eye(0u, p);
     }
-    colour = pc.params.z != 0u ? vec4(linear_to_srgb(c.rgb), c.a) : c;
+    colour = pc.params.y != 0u ? vec4(linear_to_srgb(c.rgb), c.a) : c;
 }

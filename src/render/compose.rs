@@ -1,9 +1,10 @@
 //! The composition pass: the last pass of a frame, turning the 2-layer stereo image into what
 //! a display mode shows (see [`crate::stereo::display`] for the modes and their layouts).
 //!
-//! One full-screen triangle, one fragment shader (`shaders/compose.frag`) with the mode, the
-//! interlace parity and the anaglyph matrices in push constants, so switching modes costs
-//! nothing but a different output size. The destination is any colour image view with its
+//! One full-screen triangle, one fragment shader (`shaders/compose.frag`) with the mode as a
+//! specialization constant (a pipeline per mode, made when the mode is first used: on lavapipe
+//! a mode chosen at run time made the pass about three times slower) and the interlace parity
+//! and the anaglyph matrices in push constants. The destination is any colour image view with its
 //! format and final layout given by the caller: the offscreen [`ComposedOutput`] here, and a
 //! window's swapchain images (final layout `PRESENT_SRC_KHR`) alike. Colour arithmetic is done
 //! on linear values: the stereo image is read through its sRGB view, and the shader encodes
@@ -34,13 +35,13 @@ struct ComposePush {
     left: [[f32; 4]; 3],
     /// The right eye's.
     right: [[f32; 4]; 3],
-    /// Mode, parity offset, encode sRGB, destination layer.
+    /// Parity offset, encode sRGB, destination layer, unused.
     params: [u32; 4],
 }
 
 const _: () = assert!(std::mem::size_of::<ComposePush>() == 112);
 
-/// The mode numbers of `shaders/compose.frag`.
+/// The mode numbers of `shaders/compose.frag` (its specialization constant `MODE`).
 fn shader_mode(mode: DisplayMode) -> u32 {
     match mode {
         DisplayMode::QuadBuffer => 0,
@@ -72,8 +73,8 @@ fn is_srgb(format: vk::Format) -> bool {
     )
 }
 
-/// The handles a [`Composer`] owns besides its pipeline; `Drop` destroys them (after the
-/// pipeline, which is declared before this in the composer).
+/// The handles a [`Composer`] owns besides its pipelines; `Drop` destroys them (after the
+/// pipelines, which are declared before this in the composer).
 struct ComposerHandles {
     render_pass: vk::RenderPass,
     pipeline_layout: vk::PipelineLayout,
@@ -97,9 +98,10 @@ impl Drop for ComposerHandles {
 }
 
 /// The composition pass for destinations of one format and final layout, reading one stereo
-/// image. Field order is drop order: the pipeline before the layouts and render pass.
+/// image. Field order is drop order: the pipelines before the layouts and render pass.
 pub(crate) struct Composer {
-    pipeline: Pipeline,
+    /// One pipeline per display mode (indexed by [`shader_mode`]), made when first needed.
+    pipelines: [Option<Pipeline>; 9],
     handles: ComposerHandles,
     set: vk::DescriptorSet,
     _sampler: Sampler,
@@ -189,25 +191,41 @@ impl Composer {
         // SAFETY: the set is not in use; the view and sampler outlive the composer (the view
         // is the caller's contract, the sampler is a field).
         unsafe { d.update_descriptor_sets(&[write], &[]) };
-        let desc = PipelineDesc {
-            name: "compose",
-            vertex: include_bytes!(concat!(env!("OUT_DIR"), "/compose.vert.spv")),
-            fragment: include_bytes!(concat!(env!("OUT_DIR"), "/compose.frag.spv")),
-            attributes: 0,
-            cull: vk::CullModeFlags::NONE,
-            depth_test: false,
-            depth_write: false,
-            blend: false,
-        };
-        let pipeline = Pipeline::new(
-            device,
-            &desc,
-            handles.pipeline_layout,
-            handles.render_pass,
-            None,
-            vk::SampleCountFlags::TYPE_1,
-        )?;
-        Ok(Self { pipeline, handles, set, _sampler: sampler, encode_srgb: !is_srgb(format) })
+        Ok(Self {
+            pipelines: Default::default(),
+            handles,
+            set,
+            _sampler: sampler,
+            encode_srgb: !is_srgb(format),
+        })
+    }
+
+    /// Makes `mode`'s pipeline, if it is not made yet (each mode is a specialization of the
+    /// one shader); [`record`](Self::record) needs it.
+    pub(crate) fn prepare(&mut self, mode: DisplayMode) -> Result<(), RenderError> {
+        let slot = &mut self.pipelines[shader_mode(mode) as usize];
+        if slot.is_none() {
+            let desc = PipelineDesc {
+                name: "compose",
+                vertex: include_bytes!(concat!(env!("OUT_DIR"), "/compose.vert.spv")),
+                fragment: include_bytes!(concat!(env!("OUT_DIR"), "/compose.frag.spv")),
+                attributes: 0,
+                cull: vk::CullModeFlags::NONE,
+                depth_test: false,
+                depth_write: false,
+                blend: false,
+                fragment_constant: Some(shader_mode(mode)),
+            };
+            *slot = Some(Pipeline::new(
+                &self.handles.device,
+                &desc,
+                self.handles.pipeline_layout,
+                self.handles.render_pass,
+                None,
+                vk::SampleCountFlags::TYPE_1,
+            )?);
+        }
+        Ok(())
     }
 
     /// Framebuffers over a destination: one view per layer (two for quad-buffer output, one
@@ -239,7 +257,7 @@ impl Composer {
     /// Records the composition of `mode` (interlaced modes with `parity`) into `target`: the
     /// output covers the top-left `mode.output_size(eye)` pixels of each of the mode's layers,
     /// the rest is cleared to black. The source must be in `SHADER_READ_ONLY_OPTIMAL` with its
-    /// writes visible to fragment shaders.
+    /// writes visible to fragment shaders, and `mode` [prepared](Self::prepare).
     pub(crate) fn record(
         &self,
         cb: vk::CommandBuffer,
@@ -248,6 +266,9 @@ impl Composer {
         eye: (u32, u32),
     ) {
         debug_assert!(target.raw.len() >= mode.layers() as usize, "{mode} needs {} layers", mode.layers());
+        let pipeline = self.pipelines[shader_mode(mode) as usize]
+            .as_ref()
+            .unwrap_or_else(|| panic!("the composer was not prepared for {mode}"));
         let (w, h) = mode.output_size(eye);
         let (w, h) = (w.min(target.extent.width), h.min(target.extent.height));
         let d = &self.handles.device.raw;
@@ -261,7 +282,7 @@ impl Composer {
             let push = ComposePush {
                 left: columns(&DUBOIS_RED_CYAN_LEFT),
                 right: columns(&DUBOIS_RED_CYAN_RIGHT),
-                params: [shader_mode(mode), parity.offset(), u32::from(self.encode_srgb), layer as u32],
+                params: [parity.offset(), u32::from(self.encode_srgb), layer as u32, 0],
             };
             let viewport = vk::Viewport {
                 x: 0.0,
@@ -277,7 +298,7 @@ impl Composer {
             // composer or the target and outlives the submission (the caller's contract).
             unsafe {
                 d.cmd_begin_render_pass(cb, &begin, vk::SubpassContents::INLINE);
-                d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, self.pipeline.raw);
+                d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
                 d.cmd_bind_descriptor_sets(
                     cb,
                     vk::PipelineBindPoint::GRAPHICS,

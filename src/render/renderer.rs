@@ -299,6 +299,7 @@ impl Renderer {
             depth_test: true,
             depth_write: false,
             blend: false,
+            fragment_constant: None,
         };
         let pipelines_for = |pass: &ViewPass| -> Result<Pipelines, RenderError> {
             let make = |desc: PipelineDesc| {
@@ -342,6 +343,7 @@ impl Renderer {
                     depth_test: true,
                     depth_write: false,
                     blend: true,
+                    ..base
                 })?,
             })
         };
@@ -582,11 +584,13 @@ impl Renderer {
             let output = ComposedOutput::new(&self.device, &self.composer, mode, eye, COMPOSED_FORMAT)?;
             self.composed = Some(output);
         }
+        self.composer.prepare(mode)?;
         let Some(output) = &self.composed else { unreachable!("made just above") };
         self.compose_into(&self.composer, output, (mode, parity))
     }
 
-    /// Records and runs `composer` from the stereo image into `output`, and waits for it.
+    /// Records and runs `composer` (prepared for the mode) from the stereo image into
+    /// `output`, and waits for it.
     fn compose_into(
         &self,
         composer: &Composer,
@@ -850,7 +854,7 @@ mod tests {
         };
         renderer.draw(&frame).unwrap();
         let format = vk::Format::R8G8B8A8_UNORM;
-        let unorm = Composer::new(
+        let mut unorm = Composer::new(
             &renderer.device,
             renderer.target.output.view,
             format,
@@ -861,6 +865,7 @@ mod tests {
             renderer.compose(mode, Parity::LeftEven).unwrap();
             let srgb = renderer.read_back_composed().unwrap().remove(0);
             let mut output = ComposedOutput::new(&renderer.device, &unorm, mode, (40, 24), format).unwrap();
+            unorm.prepare(mode).unwrap();
             renderer.compose_into(&unorm, &output, (mode, Parity::LeftEven)).unwrap();
             let encoded = output.read_back(&renderer.device).unwrap().remove(0);
             let distinct: std::collections::HashSet<_> = srgb.pixels().collect();

@@ -28,6 +28,9 @@ pub(crate) struct PipelineDesc {
     pub(crate) depth_write: bool,
     /// Premultiplied-free alpha blending (`src·a + dst·(1−a)`).
     pub(crate) blend: bool,
+    /// The value of the fragment shader's specialization constant 0 (`constant_id = 0`), for
+    /// shaders that have one.
+    pub(crate) fragment_constant: Option<u32>,
 }
 
 /// The descriptor set layout and pipeline layout shared by every pipeline: binding 0 the frame
@@ -113,18 +116,6 @@ impl<'d> ShaderModule<'d> {
     }
 }
 
-/// The vertex and fragment stages of a pipeline, both entered at `main`.
-fn shader_stages<'a>(
-    vertex: &ShaderModule<'_>,
-    fragment: &ShaderModule<'_>,
-) -> [vk::PipelineShaderStageCreateInfo<'a>; 2] {
-    [(vk::ShaderStageFlags::VERTEX, vertex.raw), (vk::ShaderStageFlags::FRAGMENT, fragment.raw)].map(
-        |(stage, module)| {
-            vk::PipelineShaderStageCreateInfo::default().stage(stage).module(module).name(c"main")
-        },
-    )
-}
-
 impl Drop for ShaderModule<'_> {
     fn drop(&mut self) {
         // SAFETY: modules are only needed while their pipeline is created.
@@ -147,7 +138,23 @@ impl Pipeline {
         let d = &device.raw;
         let (vs, fs) =
             (ShaderModule::new(d, desc.vertex, desc.name)?, ShaderModule::new(d, desc.fragment, desc.name)?);
-        let stages = shader_stages(&vs, &fs);
+        let constant = desc.fragment_constant.unwrap_or(0).to_ne_bytes();
+        let entries = [vk::SpecializationMapEntry::default().constant_id(0).offset(0).size(constant.len())];
+        let specialization = vk::SpecializationInfo::default().map_entries(&entries).data(&constant);
+        let mut fragment_stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::FRAGMENT)
+            .module(fs.raw)
+            .name(c"main");
+        if desc.fragment_constant.is_some() {
+            fragment_stage = fragment_stage.specialization_info(&specialization);
+        }
+        let stages = [
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::VERTEX)
+                .module(vs.raw)
+                .name(c"main"),
+            fragment_stage,
+        ];
         let bindings = [vk::VertexInputBindingDescription::default()
             .binding(0)
             .stride(std::mem::size_of::<Vertex>() as u32)
