@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use argile::app::{self, bench, RenderOptions};
 use argile::mesh::export::ExportFormat;
 use argile::scene::Scene;
-use argile::stereo::Preview;
+use argile::stereo::display::DisplayMode;
 use clap::{Parser, Subcommand};
 
 /// Argile: sculpt virtual clay in stereo and VR.
@@ -60,9 +60,11 @@ enum Command {
         /// Folder for the images (created if missing).
         #[arg(long, short)]
         out: PathBuf,
-        /// Also write a combined preview image per capture.
+        /// Also write each capture as this display mode shows it, as NAME-MODE.png (repeat for
+        /// several; replaces the scene's `[display] mode`). Quad-buffer writes its two layers
+        /// as NAME-quad-buffer-left.png and -right.png.
         #[arg(long, value_enum)]
-        preview: Option<Preview>,
+        display_mode: Vec<DisplayMode>,
         /// Per-eye image size, WIDTHxHEIGHT, instead of the scene's.
         #[arg(long, value_parser = parse_size)]
         size: Option<(u32, u32)>,
@@ -152,8 +154,8 @@ fn main() -> ExitCode {
                 },
             )
         }
-        Some(Command::Render { scene, out, preview, size, validation }) => {
-            render(&scene, out, preview, size, validation)
+        Some(Command::Render { scene, out, display_mode, size, validation }) => {
+            render(&scene, out, display_mode, size, validation)
         }
         Some(Command::Export { input, format, out, force }) => app::export(&input, format, &out, force, true)
             .map(|s| {
@@ -182,7 +184,7 @@ fn main() -> ExitCode {
 fn print_written(written: &[app::WrittenCapture]) {
     for w in written {
         println!("wrote {} and {}", w.left.display(), w.right.display());
-        if let Some(p) = &w.preview {
+        for p in &w.composed {
             println!("wrote {}", p.display());
         }
     }
@@ -201,7 +203,7 @@ fn station(scene_path: Option<PathBuf>, options: app::StationOptions) -> Result<
         println!("No window can open here ({reason}): rendering the {name} scene headless.");
         let options = RenderOptions {
             out_dir: PathBuf::from("argile-out"),
-            preview: Some(Preview::Anaglyph),
+            display_modes: vec![DisplayMode::Anaglyph],
             progress: true,
             validation: options.validation,
             size_px: None,
@@ -224,12 +226,12 @@ fn station(scene_path: Option<PathBuf>, options: app::StationOptions) -> Result<
 fn render(
     scene: &std::path::Path,
     out: PathBuf,
-    preview: Option<Preview>,
+    display_modes: Vec<DisplayMode>,
     size: Option<(u32, u32)>,
     validation: bool,
 ) -> Result<()> {
     let scene = Scene::load(scene)?;
-    let options = RenderOptions { out_dir: out, preview, progress: true, validation, size_px: size };
+    let options = RenderOptions { out_dir: out, display_modes, progress: true, validation, size_px: size };
     let written = app::render_scene(&scene, &options)?;
     print_written(&written);
     Ok(())

@@ -54,23 +54,76 @@ fn bench_render_stereo_runs_on_the_vulkan_device() {
 }
 
 #[test]
-fn render_writes_the_pair_and_preview_and_says_where() {
+fn bench_compose_times_every_display_mode() {
+    let out = argile().args(["bench", "--json", "--quick", "compose"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<serde_json::Value> = text.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let modes: Vec<&str> = lines.iter().map(|l| l["mode"].as_str().unwrap()).collect();
+    assert_eq!(modes.len(), 9, "one line per display mode: {modes:?}");
+    assert!(modes.contains(&"anaglyph") && modes.contains(&"quad-buffer"));
+    let side_by_side = lines.iter().find(|l| l["mode"] == "side-by-side").unwrap();
+    assert_eq!(side_by_side["output_width_px"], 2 * side_by_side["eye_width_px"].as_u64().unwrap());
+    assert!(lines.iter().all(|l| l["median_compose_ms"].as_f64().unwrap() > 0.0));
+}
+
+#[test]
+fn render_writes_the_pair_and_the_composed_images_and_says_where() {
     let dir = temp_dir("render");
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/tests/parallax.toml");
     let out = argile()
         .args(["render", scene, "--out"])
         .arg(&dir)
-        .args(["--preview", "sbs", "--size", "64x48"])
+        .args(["--display-mode", "side-by-side", "--display-mode", "quad-buffer", "--size", "64x48"])
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
-    for name in ["parallax-left.png", "parallax-right.png", "parallax-sbs.png"] {
+    let names = [
+        "parallax-left.png",
+        "parallax-right.png",
+        "parallax-side-by-side.png",
+        "parallax-quad-buffer-left.png",
+        "parallax-quad-buffer-right.png",
+    ];
+    for name in names {
         assert!(text.contains(name), "says where {name} is: {text}");
         let img = image::open(dir.join(name)).unwrap();
         assert_eq!(img.height(), 48);
     }
-    assert_eq!(image::open(dir.join("parallax-sbs.png")).unwrap().width(), 128);
+    assert_eq!(image::open(dir.join("parallax-side-by-side.png")).unwrap().width(), 128);
+    let read = |name: &str| image::open(dir.join(name)).unwrap().to_rgba8();
+    assert_eq!(read("parallax-quad-buffer-left.png"), read("parallax-left.png"));
+    assert_eq!(read("parallax-quad-buffer-right.png"), read("parallax-right.png"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn the_scene_display_mode_writes_the_composed_image_unless_the_command_line_names_others() {
+    let dir = temp_dir("display");
+    let scene = dir.join("display.toml");
+    std::fs::write(
+        &scene,
+        "[output]\nwidth_px = 32\nheight_px = 24\nsamples = 1\n[display]\nmode = \"top-bottom\"\n",
+    )
+    .unwrap();
+    let out = argile().arg("render").arg(&scene).arg("--out").arg(dir.join("a")).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(image::open(dir.join("a/final-top-bottom.png")).unwrap().height(), 48);
+    let out = argile()
+        .arg("render")
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.join("b"))
+        .args(["--display-mode", "mono"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(dir.join("b/final-mono.png").exists() && !dir.join("b/final-top-bottom.png").exists());
+    let out =
+        argile().arg("render").arg(&scene).args(["--out", "o", "--display-mode", "3d"]).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("side-by-side-half"), "the modes are listed");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -1,5 +1,6 @@
 //! Stereo image regression tests: scenes rendered offscreen (multiview, 4x MSAA) on the pinned
-//! Vulkan device with the validation layer on, each eye compared with `tests/golden/`.
+//! Vulkan device with the validation layer on, each eye compared with `tests/golden/`; and one
+//! stereo pair composed in every display mode by the composition pass (`display-MODE.png`).
 //!
 //! Regenerate the goldens after a deliberate change: `BLESS=1 scripts/test` (or
 //! `BLESS=1 cargo test --test golden_stereo`). Actual and diff images of every run are written
@@ -11,6 +12,7 @@ use std::path::Path;
 
 use argile::app::{render_scene, RenderOptions};
 use argile::scene::Scene;
+use argile::stereo::display::DisplayMode;
 
 mod common;
 use common::{check_against_golden, out_dir, root};
@@ -20,6 +22,18 @@ fn render(
     scene_path: &str,
     size: Option<(u32, u32)>,
 ) -> (image::RgbaImage, image::RgbaImage, Scene) {
+    let (left, right, scene, _) = render_composed(case, scene_path, size, &[]);
+    (left, right, scene)
+}
+
+/// Renders like [`render`] and also composes the capture in each of `modes` (through the
+/// composition pass); returns the composed images too, in order (two for quad-buffer).
+fn render_composed(
+    case: &str,
+    scene_path: &str,
+    size: Option<(u32, u32)>,
+    modes: &[DisplayMode],
+) -> (image::RgbaImage, image::RgbaImage, Scene, Vec<image::RgbaImage>) {
     let scene = if scene_path == "default" {
         Scene::default_scene()
     } else {
@@ -27,7 +41,7 @@ fn render(
     };
     let options = RenderOptions {
         out_dir: out_dir(case),
-        preview: None,
+        display_modes: modes.to_vec(),
         progress: false,
         validation: true,
         size_px: size,
@@ -36,7 +50,8 @@ fn render(
     let written = render_scene(&scene, &options).unwrap_or_else(|e| panic!("rendering {case} failed: {e:#}"));
     assert_eq!(written.len(), 1, "{case} has one capture");
     let load = |p: &Path| image::open(p).expect("rendered image reads back").to_rgba8();
-    (load(&written[0].left), load(&written[0].right), scene)
+    let composed = written[0].composed.iter().map(|p| load(p)).collect();
+    (load(&written[0].left), load(&written[0].right), scene, composed)
 }
 
 fn golden_case(case: &str, scene: &str, size: Option<(u32, u32)>) {
@@ -206,4 +221,79 @@ fn the_heads_up_display_has_zero_parallax() {
     assert!(left.iter().all(|&(x, y)| x < 200 && y < 40), "in the top-left corner");
     // And the clay behind it still differs between the eyes (the scene has parallax).
     assert_ne!(pair.left, pair.right);
+}
+
+/// Every display mode, composed by the composition pass from one stereo pair of the default
+/// scene (128² per eye), against its golden `display-MODE.png` (quad-buffer: its two layers).
+#[test]
+fn every_display_mode_matches_its_golden() {
+    let (left, right, _, composed) =
+        render_composed("display", "default", Some((128, 128)), &DisplayMode::ALL);
+    let mut images = composed.iter();
+    for mode in DisplayMode::ALL {
+        let (w, h) = mode.output_size((128, 128));
+        for layer in 0..mode.layers() {
+            let image = images.next().expect("one image per layer of every mode");
+            assert_eq!(image.dimensions(), (w, h), "{mode}");
+            let eye = match (mode.layers(), layer) {
+                (1, _) => String::new(),
+                (_, 0) => "-left".to_owned(),
+                _ => "-right".to_owned(),
+            };
+            check_against_golden("display", &format!("{mode}{eye}"), image);
+        }
+    }
+    assert!(images.next().is_none());
+    // Quad-buffer output is the pair itself, and mono the left eye.
+    assert_eq!(composed[0], left);
+    assert_eq!(composed[1], right);
+    assert_eq!(composed.last(), Some(&left));
+}
+
+/// In the anaglyph, the near red ball and the far blue ball of the parallax scene show red
+/// fringes (the left eye's image) and cyan fringes (the right eye's) on the sides their
+/// parallax puts them: crossed parallax in front of the screen puts the left eye's image of
+/// the near ball to the right.
+#[test]
+fn anaglyph_fringes_sit_where_the_parallax_puts_them() {
+    let (left, right, scene, composed) =
+        render_composed("anaglyph-parallax", "scenes/tests/parallax.toml", None, &[DisplayMode::Anaglyph]);
+    let anaglyph = &composed[0];
+    check_against_golden("anaglyph-parallax", "anaglyph", anaglyph);
+    let width = scene.output.width_px;
+    let aspect = width as f32 / scene.output.height_px as f32;
+    // Where only one eye sees the near ball the anaglyph is that eye's colour channel alone:
+    // strongly red where only the left eye sees it, dark red with cyan elsewhere.
+    let near = |p: &image::Rgba<u8>| {
+        p[0] > 40 && u16::from(p[0]) > 2 * u16::from(p[2]) && u16::from(p[0]) > 2 * u16::from(p[1])
+    };
+    let (xl, _, _) = centroid(&left, near);
+    let (xr, _, _) = centroid(&right, near);
+    let parallax = scene.rig.parallax_px(0.3, width, aspect);
+    assert!(parallax < -2.0 && (xr - xl - parallax).abs() <= 1.0, "near ball parallax {}", xr - xl);
+    // On the row through the ball (the background is black, the other ball far below): the
+    // red fringe, where only the left eye sees the ball, lies right of the ball's centre and
+    // shows red alone; the cyan fringe, where only the right eye sees it, lies left of it and
+    // shows no red.
+    let (_, row, _) = centroid(&left, near);
+    let row = row as u32;
+    let lit = |p: &image::Rgba<u8>| p[0].max(p[1]).max(p[2]) > 30;
+    let centre = 0.5 * (xl + xr);
+    let mut red = 0;
+    let mut cyan = 0;
+    for x in 0..width {
+        let (l, r, p) =
+            (lit(left.get_pixel(x, row)), lit(right.get_pixel(x, row)), anaglyph.get_pixel(x, row));
+        if l && !r {
+            assert!((x as f32) > centre, "red fringe at column {x}, right of {centre}");
+            assert!(p[0] > 30 && p[1] < 5 && p[2] < 5, "red fringe at {x}: {p:?}");
+            red += 1;
+        }
+        if r && !l {
+            assert!((x as f32) < centre, "cyan fringe at column {x}, left of {centre}");
+            assert!(p[0] < 5 && p[1] > 30, "cyan fringe at {x}: {p:?}");
+            cyan += 1;
+        }
+    }
+    assert!(red >= 2 && cyan >= 2, "fringes {red} red and {cyan} cyan pixels wide on row {row}");
 }

@@ -13,6 +13,7 @@ use crate::math::{IVec3, Vec3};
 use crate::mesh::{mesh_all, remesh_dirty, ChunkMesh, MeshDiff};
 use crate::render::ViewPasses;
 use crate::scene::Scene;
+use crate::stereo::display::{DisplayMode, Parity};
 use crate::tool::{stamp_sphere, Action};
 
 /// A standard workload.
@@ -35,17 +36,21 @@ pub enum Workload {
     /// The per-frame cost of desk input (mailbox drain, calibration, smoothing, integration,
     /// gamepad mapping, trackball) with 1, 2 and 4 SpaceMice and as many gamepads.
     InputFrame,
+    /// The display-mode composition pass after a stereo frame of the default scene, in every
+    /// display mode: the pass alone and its read-back.
+    Compose,
 }
 
 impl Workload {
     /// Every workload, in the order `argile bench` runs them.
-    pub const ALL: [Workload; 6] = [
+    pub const ALL: [Workload; 7] = [
         Workload::Stamp,
         Workload::StampCarve,
         Workload::MeshFull,
         Workload::RemeshStamp,
         Workload::RenderStereo,
         Workload::InputFrame,
+        Workload::Compose,
     ];
 }
 
@@ -113,6 +118,7 @@ pub fn run(workloads: &[Workload], size: BenchSize, mut emit: impl FnMut(Value))
             Workload::RemeshStamp => bench_remesh_stamp(size, &mut emit),
             Workload::RenderStereo => bench_render(size, &mut emit)?,
             Workload::InputFrame => bench_input(size, &mut emit),
+            Workload::Compose => bench_compose(size, &mut emit)?,
         }
     }
     Ok(())
@@ -485,6 +491,54 @@ fn bench_render(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> {
                 "median_readback_ms": median(readback_ms),
             }));
         }
+    }
+    Ok(())
+}
+
+/// The composition pass in every display mode, after one stereo frame of the default scene at
+/// `image_px` per eye. Each timed composition is recorded, submitted and waited for on its own
+/// (as the offscreen renderer runs it), so the figure includes one submission's overhead.
+fn bench_compose(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> {
+    let mut scene = Scene::default_scene();
+    scene.output.width_px = size.image_px;
+    scene.output.height_px = size.image_px;
+    let mut playback = Playback::new(&scene);
+    let end = scene.captures.last().map_or(0.0, |c| c.time_s);
+    playback.advance_to(end, |_| {});
+    let mut renderer = renderer_for(&scene, None, false, None)?;
+    renderer.apply(&mesh_all(playback.field()))?;
+    let frame = build_frame(&scene, &playback.hands(), true);
+    renderer.draw(&frame)?;
+    let timed = |run: &mut dyn FnMut() -> Result<()>| -> Result<f64> {
+        let mut ms = Vec::with_capacity(size.frames);
+        for _ in 0..size.frames {
+            let t = Instant::now();
+            run()?;
+            ms.push(t.elapsed().as_secs_f64() * 1e3);
+        }
+        Ok(median(ms))
+    };
+    let draw_ms = timed(&mut || Ok(renderer.draw(&frame)?))?;
+    for mode in DisplayMode::ALL {
+        // The first composition makes the mode's output image.
+        renderer.compose(mode, Parity::LeftEven)?;
+        let compose_ms = timed(&mut || Ok(renderer.compose(mode, Parity::LeftEven)?))?;
+        let readback_ms = timed(&mut || Ok(renderer.read_back_composed().map(drop)?))?;
+        let (width, height) = mode.output_size((size.image_px, size.image_px));
+        emit(json!({
+            "workload": "compose",
+            "mode": mode.name(),
+            "device": renderer.device_name(),
+            "eye_width_px": size.image_px,
+            "eye_height_px": size.image_px,
+            "output_width_px": width,
+            "output_height_px": height,
+            "output_layers": mode.layers(),
+            "frames": size.frames,
+            "median_compose_ms": compose_ms,
+            "median_readback_ms": readback_ms,
+            "median_stereo_frame_ms": draw_ms,
+        }));
     }
     Ok(())
 }

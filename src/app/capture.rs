@@ -1,4 +1,5 @@
-//! Headless rendering of a scene: play its timeline and write each capture as a stereo PNG pair.
+//! Headless rendering of a scene: play its timeline and write each capture as a stereo PNG pair,
+//! and as its display mode composes it when one is set.
 
 use std::path::{Path, PathBuf};
 
@@ -11,15 +12,17 @@ use super::playback::Playback;
 use crate::mesh::{mesh_all, remesh_dirty};
 use crate::render::{Renderer, RendererDesc, StereoImage, ViewPasses};
 use crate::scene::Scene;
-use crate::stereo::{compose, Preview};
+use crate::stereo::display::DisplayMode;
 
 /// Options of a headless render.
 #[derive(Clone, Debug)]
 pub struct RenderOptions {
     /// Folder the images go to (created if missing).
     pub out_dir: PathBuf,
-    /// Also write a combined preview image per capture.
-    pub preview: Option<Preview>,
+    /// Also write each capture as these display modes compose it (`NAME-MODE.png`; the two
+    /// layers of quad-buffer as `NAME-quad-buffer-left.png` and `-right.png`); none keeps the
+    /// scene's `[display] mode`.
+    pub display_modes: Vec<DisplayMode>,
     /// Show a progress bar on the terminal.
     pub progress: bool,
     /// Turn the Vulkan validation layer on.
@@ -37,8 +40,8 @@ pub struct WrittenCapture {
     pub left: PathBuf,
     /// Right-eye image.
     pub right: PathBuf,
-    /// Preview image, when asked for.
-    pub preview: Option<PathBuf>,
+    /// The composed images, in the order of the display modes (two for quad-buffer).
+    pub composed: Vec<PathBuf>,
 }
 
 /// Writes an image as PNG atomically (see [`write_atomically`]), replacing an older one.
@@ -73,6 +76,11 @@ pub fn render_scene(scene: &Scene, options: &RenderOptions) -> Result<Vec<Writte
         scene.output.width_px = w;
         scene.output.height_px = h;
     }
+    let display_modes = if options.display_modes.is_empty() {
+        scene.display.mode.into_iter().collect()
+    } else {
+        options.display_modes.clone()
+    };
     let mut renderer = renderer_for(&scene, None, options.validation, None)?;
     tracing::info!("rendering {} on {}", scene.source, renderer.device_name());
     let mut playback = Playback::new(&scene);
@@ -94,23 +102,22 @@ pub fn render_scene(scene: &Scene, options: &RenderOptions) -> Result<Vec<Writte
         let right_path = options.out_dir.join(format!("{}-right.png", capture.name));
         save_png_atomically(&left, &left_path)?;
         save_png_atomically(&right, &right_path)?;
-        let preview = match options.preview {
-            Some(mode) => {
-                let suffix = match mode {
-                    Preview::Sbs => "sbs",
-                    Preview::Anaglyph => "anaglyph",
-                };
-                let path = options.out_dir.join(format!("{}-{suffix}.png", capture.name));
-                save_png_atomically(&compose(mode, &left, &right), &path)?;
-                Some(path)
+        let mut composed = Vec::new();
+        for &mode in &display_modes {
+            renderer.compose(mode, scene.display.parity)?;
+            let layers = renderer.read_back_composed()?;
+            let suffixes: &[&str] = if layers.len() == 2 { &["-left", "-right"] } else { &[""] };
+            for (layer, suffix) in layers.iter().zip(suffixes) {
+                let path = options.out_dir.join(format!("{}-{mode}{suffix}.png", capture.name));
+                save_png_atomically(layer, &path)?;
+                composed.push(path);
             }
-            None => None,
-        };
+        }
         written.push(WrittenCapture {
             name: capture.name.clone(),
             left: left_path,
             right: right_path,
-            preview,
+            composed,
         });
     }
     bar.finish_and_clear();

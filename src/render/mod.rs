@@ -11,16 +11,22 @@
 //!                                                                       ▼
 //!      multiview pass, view mask 0b11: background ▸ stage ▸ clay ▸ tool glyphs
 //!      into 2-layer MSAA colour + depth ──resolve──► 2-layer sRGB image ──► read back
+//!                                                          │
+//!      composition pass (display mode: side-by-side, interlaced, anaglyph, …) ◄─┘
+//!      into an offscreen image (read back) or a window's swapchain image
 //! ```
 //!
 //! - `gpu/`: the Vulkan layer (instance, device, buffers, images, pipelines), each handle
 //!   owned by one value that destroys it in `Drop`.
 //! - `target`: the stereo render target and render pass.
+//! - `compose`: the display-mode composition pass, from the stereo image to what a display
+//!   shows (offscreen, or a window's swapchain image).
 //! - `chunks`: where mesh chunks live on the GPU.
 //! - `environment`: cube map and irradiance from the scene's environment (CPU).
 //! - `renderer`: [`Renderer`], which ties them together.
 
 mod chunks;
+mod compose;
 mod environment;
 mod frame;
 mod gpu;

@@ -11,10 +11,11 @@ use ash::vk;
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 
 use super::chunks::{ArenaStorage, ChunkArena};
+use super::compose::{ComposedOutput, Composer, COMPOSED_FORMAT};
 use super::environment::{build_radiance_cube, irradiance_sh9, reflection_lod, CubeMap};
 use super::gpu::buffer::{Buffer, MemoryUse};
 use super::gpu::device::Device;
-use super::gpu::image::{transition, Image, ImageDesc, Sampler};
+use super::gpu::image::{read_layers, transition, Image, ImageDesc, Sampler};
 use super::gpu::instance::Instance;
 use super::gpu::pipeline::{DescriptorPool, Layout, Pipeline, PipelineDesc, PUSH_CONSTANT_BYTES};
 use super::gpu::swapchain::{color_range, surface_extensions, Surface, SwapchainDesc};
@@ -25,6 +26,7 @@ use super::window::{to_rgba, Presented, WindowHandles, WindowOutput};
 use super::{Environment, Frame, Light, RenderError, ValidationLog, MAX_LIGHTS};
 use crate::math::Vec3;
 use crate::mesh::{MeshDiff, Vertex};
+use crate::stereo::display::{DisplayMode, Parity};
 
 macro_rules! spirv {
     ($name:literal) => {
@@ -193,11 +195,15 @@ struct HudMesh {
 
 /// The offscreen stereo renderer.
 ///
-/// Field order is drop order (after `Drop::drop` waits for the device): pipelines and the
-/// descriptor pool, the target, buffers, the environment, layouts, and the device last.
+/// Field order is drop order (after `Drop::drop` waits for the device): the composition's
+/// destination and pass, pipelines and the descriptor pool, the target, buffers, the environment, layouts, and the device last.
 pub struct Renderer {
     /// The window frames are presented in, if any.
     window: Option<WindowOutput>,
+    /// The offscreen destination of the last composition, made for its mode and size.
+    composed: Option<ComposedOutput>,
+    /// The display-mode composition pass, reading the target's output.
+    composer: Composer,
     /// One set of pipelines per view pass of the target.
     pipelines: Vec<Pipelines>,
     descriptors: DescriptorPool,
@@ -349,6 +355,13 @@ impl Renderer {
 
         let pipelines = make_pipelines(&device, &layout, &target)?;
 
+        let composer = Composer::new(
+            &device,
+            target.output.view,
+            COMPOSED_FORMAT,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        )?;
+
         let command_buffer = device.command_buffer()?;
         // SAFETY: a valid create info on a live device; destroyed in Drop.
         let fence = unsafe { device.raw.create_fence(&vk::FenceCreateInfo::default(), None) }
@@ -366,6 +379,8 @@ impl Renderer {
 
         Ok(Self {
             window,
+            composed: None,
+            composer,
             pipelines,
             descriptors,
             target,
@@ -803,23 +818,92 @@ impl Renderer {
         if !self.drawn {
             return Err(RenderError::NothingDrawn);
         }
+        let mut layers = read_layers(&self.device, &self.target.output, &mut self.readback)?.into_iter();
+        match (layers.next(), layers.next()) {
+            (Some(left), Some(right)) => Ok(StereoImage { left, right }),
+            _ => unreachable!("the stereo target has two layers"),
+        }
+    }
+}
+
+impl Renderer {
+    /// Composes the last frame's stereo pair as `mode` shows it (interlaced modes with
+    /// `parity`) into an offscreen image, with the same pass a window uses, and waits for it.
+    /// Read it with [`read_back_composed`](Self::read_back_composed).
+    pub fn compose(&mut self, mode: DisplayMode, parity: Parity) -> Result<(), RenderError> {
+        if !self.drawn {
+            return Err(RenderError::NothingDrawn);
+        }
         let extent = self.target.extent;
-        let image = self.target.output.raw;
-        let buffer = self.readback.raw;
+        let eye = (extent.width, extent.height);
+        if self.composed.as_ref().map(|c| c.key) != Some((mode, eye)) {
+            self.composed = None;
+            let output = ComposedOutput::new(&self.device, &self.composer, mode, eye, COMPOSED_FORMAT)?;
+            self.composed = Some(output);
+        }
+        self.composer.prepare(mode)?;
+        let Some(output) = &self.composed else { unreachable!("made just above") };
+        self.compose_into(&self.composer, output, (mode, parity))
+    }
+
+    /// Records and runs `composer` (prepared for the mode) from the stereo image into
+    /// `output`, and waits for it.
+    fn compose_into(
+        &self,
+        composer: &Composer,
+        output: &ComposedOutput,
+        (mode, parity): (DisplayMode, Parity),
+    ) -> Result<(), RenderError> {
+        let extent = self.target.extent;
         let d = &self.device.raw;
-        // The render pass left the output in TRANSFER_SRC_OPTIMAL.
-        self.device.submit_and_wait(|cb| copy_to_host(d, cb, image, extent, 2, buffer))?;
-        let layer = (extent.width * extent.height * 4) as usize;
-        let bytes = self.readback.read();
-        let eye = |i: usize| {
-            image::RgbaImage::from_raw(
-                extent.width,
-                extent.height,
-                bytes[i * layer..(i + 1) * layer].to_vec(),
-            )
-            .expect("the readback buffer holds two whole layers")
-        };
-        Ok(StereoImage { left: eye(0), right: eye(1) })
+        let source = self.target.output.raw;
+        let range = self.target.output.desc.whole();
+        self.device.submit_and_wait(|cb| {
+            // The stereo passes leave the image ready for readback; the composition samples it,
+            // then hands it back in that layout (which the next frame's passes expect).
+            transition(
+                d,
+                cb,
+                source,
+                range,
+                (
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                    vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+                ),
+                (
+                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    vk::PipelineStageFlags::FRAGMENT_SHADER,
+                    vk::AccessFlags::SHADER_READ,
+                ),
+            );
+            composer.record(cb, output.framebuffers(), (mode, parity), (extent.width, extent.height));
+            transition(
+                d,
+                cb,
+                source,
+                range,
+                (
+                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    vk::PipelineStageFlags::FRAGMENT_SHADER,
+                    vk::AccessFlags::empty(),
+                ),
+                (
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::TRANSFER_READ,
+                ),
+            );
+        })
+    }
+
+    /// Copies the last composition to the host: one image of the mode's output size, or two
+    /// (left, right) for quad-buffer.
+    pub fn read_back_composed(&mut self) -> Result<Vec<image::RgbaImage>, RenderError> {
+        match &mut self.composed {
+            Some(output) => output.read_back(&self.device),
+            None => Err(RenderError::NothingDrawn),
+        }
     }
 }
 
@@ -893,10 +977,18 @@ fn make_pipelines(
         depth_test: true,
         depth_write: false,
         blend: false,
+        fragment_constant: None,
     };
     let pipelines_for = |pass: &ViewPass| -> Result<Pipelines, RenderError> {
         let make = |desc: PipelineDesc| {
-            Pipeline::new(device, &desc, layout, pass.render_pass, target.extent, target.samples)
+            Pipeline::new(
+                device,
+                &desc,
+                layout.pipeline,
+                pass.render_pass,
+                Some(target.extent),
+                target.samples,
+            )
         };
         Ok(Pipelines {
             background: make(base)?,
@@ -929,6 +1021,7 @@ fn make_pipelines(
                 depth_test: true,
                 depth_write: false,
                 blend: true,
+                ..base
             })?,
             hud: make(PipelineDesc {
                 name: "heads-up display",
@@ -939,6 +1032,7 @@ fn make_pipelines(
                 depth_test: false,
                 depth_write: false,
                 blend: true,
+                ..base
             })?,
         })
     };
@@ -1087,6 +1181,7 @@ pub fn probe_devices() -> Result<DeviceProbe, RenderError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::Environment;
 
     /// The log really receives what the layer says: an invalid call (a buffer of size 0) is
     /// reported. Needs Vulkan and the validation layer; fails without them.
@@ -1108,6 +1203,64 @@ mod tests {
         assert!(messages.iter().any(|m| m.contains("size")), "the layer reported {messages:?}");
         drop(device);
         assert!(log.take().is_empty(), "a clean teardown reports nothing");
+    }
+
+    /// A window's swapchain may be UNORM: the composition then encodes sRGB in the shader, and
+    /// must give what an sRGB destination stores (within the rounding of the two encoders).
+    #[test]
+    fn a_unorm_destination_gets_the_same_srgb_values_as_an_srgb_one() {
+        let desc = RendererDesc { width: 40, height: 24, samples: 1, validation: true, view_passes: None };
+        let mut renderer = Renderer::new(&desc, &Environment::Studio, 1.0).expect("a Vulkan device");
+        let log = renderer.validation_log();
+        let rig = crate::stereo::StereoRig {
+            eye_m: Vec3::new(0.0, 0.2, 0.6),
+            target_m: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y_deg: 60.0,
+            interaxial_m: 0.063,
+            convergence_m: 0.6,
+            near_m: 0.05,
+            far_m: 10.0,
+        };
+        let frame = Frame {
+            views: rig.views(40.0 / 24.0),
+            lights: Vec::new(),
+            material: Default::default(),
+            tools: Vec::new(),
+            stage: None,
+            show_environment: true,
+            background: Vec3::ZERO,
+            hud: Vec::new(),
+        };
+        renderer.draw(&frame).unwrap();
+        let format = vk::Format::R8G8B8A8_UNORM;
+        let mut unorm = Composer::new(
+            &renderer.device,
+            renderer.target.output.view,
+            format,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        )
+        .unwrap();
+        for mode in [DisplayMode::Anaglyph, DisplayMode::SideBySideHalf, DisplayMode::Mono] {
+            renderer.compose(mode, Parity::LeftEven).unwrap();
+            let srgb = renderer.read_back_composed().unwrap().remove(0);
+            let mut output = ComposedOutput::new(&renderer.device, &unorm, mode, (40, 24), format).unwrap();
+            unorm.prepare(mode).unwrap();
+            renderer.compose_into(&unorm, &output, (mode, Parity::LeftEven)).unwrap();
+            let encoded = output.read_back(&renderer.device).unwrap().remove(0);
+            let distinct: std::collections::HashSet<_> = srgb.pixels().collect();
+            assert!(distinct.len() > 20, "{mode}: the studio gives many colours ({})", distinct.len());
+            for (a, b) in srgb.pixels().zip(encoded.pixels()) {
+                assert!(
+                    (0..4).all(|c| a[c].abs_diff(b[c]) <= 2),
+                    "{mode}: {a:?} (sRGB) against {b:?} (UNORM)"
+                );
+            }
+        }
+        drop(unorm);
+        drop(renderer);
+        let messages = log.take();
+        assert!(messages.is_empty(), "the validation layer reported {messages:#?}");
     }
 
     #[test]

@@ -121,7 +121,9 @@ impl StereoTarget {
             mip_levels: 1,
             format: COLOUR_FORMAT,
             samples: vk::SampleCountFlags::TYPE_1,
-            usage: vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+            usage: vk::ImageUsageFlags::COLOR_ATTACHMENT
+                | vk::ImageUsageFlags::TRANSFER_SRC
+                | vk::ImageUsageFlags::SAMPLED,
             cube: false,
         };
         let output = Image::new(device, base)?;
@@ -206,6 +208,18 @@ impl Drop for StereoTarget {
     }
 }
 
+/// The dependency that makes a pass's colour writes visible to a transfer (the readback copy)
+/// after it.
+pub(crate) fn colour_to_transfer() -> vk::SubpassDependency {
+    vk::SubpassDependency::default()
+        .src_subpass(0)
+        .dst_subpass(vk::SUBPASS_EXTERNAL)
+        .src_stage_mask(vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT)
+        .dst_stage_mask(vk::PipelineStageFlags::TRANSFER)
+        .src_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE)
+        .dst_access_mask(vk::AccessFlags::TRANSFER_READ)
+}
+
 /// A render pass drawing the views in `view_mask`, and its framebuffer over `views` (drawn
 /// colour, depth, and with MSAA the resolve target). A pass that `follows` another keeps the
 /// output image's other layer: its output starts in the layout the previous pass left it in.
@@ -287,13 +301,7 @@ fn create_pass(
                 vk::AccessFlags::COLOR_ATTACHMENT_WRITE | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE,
             ),
         // The readback copy sees this frame's (resolved) colour.
-        vk::SubpassDependency::default()
-            .src_subpass(0)
-            .dst_subpass(vk::SUBPASS_EXTERNAL)
-            .src_stage_mask(vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT)
-            .dst_stage_mask(vk::PipelineStageFlags::TRANSFER)
-            .src_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE)
-            .dst_access_mask(vk::AccessFlags::TRANSFER_READ),
+        colour_to_transfer(),
     ];
     // Every draw is rendered for each view in the mask, view i into layer i.
     let view_masks = [view_mask];

@@ -33,6 +33,8 @@ pub(super) struct SceneFile {
     pub key: Vec<Spanned<KeySpec>>,
     #[serde(default)]
     pub capture: Vec<Spanned<CaptureSpec>>,
+    #[serde(default)]
+    pub display: DisplaySpec,
 }
 
 #[derive(Deserialize)]
@@ -465,4 +467,13 @@ pub(super) struct CaptureSpec {
     pub time_s: f32,
     #[serde(default = "yes")]
     pub show_tools: bool,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub(super) struct DisplaySpec {
+    pub mode: Option<crate::stereo::display::DisplayMode>,
+    #[serde(default)]
+    pub parity: crate::stereo::display::Parity,
+    pub fallback: Option<Spanned<String>>,
 }

@@ -3,7 +3,8 @@
 //! `scenes/README.md`.
 //!
 //! Every error names the file, and the line and column where the problem is. Knows nothing of
-//! Vulkan; depends on `math`, `tool` (solids and tools) and `stereo` (the camera rig).
+//! Vulkan; depends on `math`, `tool` (solids and tools) and `stereo` (the camera rig and the
+//! display modes).
 
 mod colour;
 mod file;
@@ -18,6 +19,7 @@ pub use tool::SceneToolShape;
 
 use crate::field::Colour;
 use crate::math::{Pose, Quat, Vec3};
+use crate::stereo::display::{DisplayMode, Parity};
 use crate::stereo::StereoRig;
 use crate::tool::{Action, CsgOp, PlacedSolid, Solid};
 use file::{AttachSpec, ClaySpec, EnvironmentKind, LightKind, OpSpec, SceneFile, ShapeKind};
@@ -156,6 +158,23 @@ pub struct OutputSettings {
     pub samples: u32,
 }
 
+/// How the scene's stereo pairs are shown (`[display]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DisplaySettings {
+    /// The display mode; `argile render` also writes the composed image when set.
+    pub mode: Option<DisplayMode>,
+    /// Which output rows or columns carry the left eye in interlaced modes.
+    pub parity: Parity,
+    /// The mode shown where quad-buffer stereo cannot be (`None`: refuse instead).
+    pub fallback: Option<DisplayMode>,
+}
+
+impl Default for DisplaySettings {
+    fn default() -> Self {
+        Self { mode: None, parity: Parity::LeftEven, fallback: Some(DisplayMode::Anaglyph) }
+    }
+}
+
 /// A named tool of the scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneTool {
@@ -222,6 +241,8 @@ pub struct Scene {
     pub timeline: Timeline,
     /// Captures, in time order.
     pub captures: Vec<Capture>,
+    /// Display mode settings.
+    pub display: DisplaySettings,
 }
 
 impl Scene {
@@ -611,6 +632,26 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
     }
     captures.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
 
+    let fallback = match &file.display.fallback {
+        None => DisplaySettings::default().fallback,
+        Some(spanned) => match spanned.get_ref().trim() {
+            "none" => None,
+            text => match text.parse::<DisplayMode>() {
+                Ok(DisplayMode::QuadBuffer) => {
+                    return Err(at(
+                        Some(spanned.span()),
+                        "[display] fallback cannot be quad-buffer: it is shown where quad-buffer \
+                         cannot be"
+                            .to_owned(),
+                    ))
+                }
+                Ok(mode) => Some(mode),
+                Err(e) => return Err(at(Some(spanned.span()), format!("[display] fallback: {e}, or none"))),
+            },
+        },
+    };
+    let display = DisplaySettings { mode: file.display.mode, parity: file.display.parity, fallback };
+
     Ok(Scene {
         source: name.to_owned(),
         voxel_size_m: field_voxel,
@@ -625,6 +666,7 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
         tools,
         timeline,
         captures,
+        display,
     })
 }
 

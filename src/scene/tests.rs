@@ -167,3 +167,40 @@ fn tool_errors_name_the_line_and_what_to_change() {
     assert_eq!(line, 4);
     assert!(message.contains("unknown variant `polish`"), "{message}");
 }
+
+#[test]
+fn the_display_table_names_a_mode_parity_and_fallback() {
+    use crate::stereo::display::{DisplayMode, Parity};
+    let s = Scene::parse("", "t.toml", None).unwrap();
+    assert_eq!(s.display, DisplaySettings::default());
+    assert_eq!(s.display.mode, None);
+    assert_eq!(s.display.fallback, Some(DisplayMode::Anaglyph));
+    let s = Scene::parse(
+        "[display]\nmode = \"row-interlaced\"\nparity = \"left-odd\"\nfallback = \"side-by-side-half\"\n",
+        "t.toml",
+        None,
+    )
+    .unwrap();
+    assert_eq!(s.display.mode, Some(DisplayMode::RowInterlaced));
+    assert_eq!(s.display.parity, Parity::LeftOdd);
+    assert_eq!(s.display.fallback, Some(DisplayMode::SideBySideHalf));
+    assert_eq!(
+        Scene::parse("[display]\nfallback = \"none\"\n", "t.toml", None).unwrap().display.fallback,
+        None
+    );
+
+    let (line, _, message) = err("[display]\n\nmode = \"3d\"\n");
+    assert_eq!(line, 3);
+    assert!(
+        message.contains("`3d` is not a display mode") && message.contains("anaglyph, mono"),
+        "{message}"
+    );
+    let (line, _, message) = err("[display]\nparity = \"even\"\n");
+    assert_eq!(line, 2);
+    assert!(message.contains("left-even"), "{message}");
+    let (line, _, message) = err("[display]\nmode = \"quad-buffer\"\nfallback = \"quad-buffer\"\n");
+    assert_eq!(line, 3);
+    assert!(message.contains("fallback cannot be quad-buffer"), "{message}");
+    let (_, _, message) = err("[display]\nfallback = \"stereo\"\n");
+    assert!(message.contains("`stereo` is not a display mode") && message.contains("or none"), "{message}");
+}

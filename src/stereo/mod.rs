@@ -1,4 +1,5 @@
-//! The desktop stereo camera rig and the composition of stereo pairs into preview images.
+//! The desktop stereo camera rig, and the display modes that show its stereo pairs
+//! ([`display`]).
 //!
 //! Off-axis (asymmetric) frusta, never toe-in: both eyes look along the same axis; each eye's
 //! frustum passes through the same window on the convergence plane, so points on that plane
@@ -17,6 +18,8 @@
 //! Screen parallax of a point at distance `Z` along the view axis, on the convergence plane:
 //! `p = e · (Z − C) / Z` (metres on that plane), which is `p / W · width` pixels.
 //! Knows nothing of Vulkan handles; it hands the renderer plain [`StereoViews`].
+
+pub mod display;
 
 use crate::math::{Mat4, Vec3};
 use crate::render::{EyeView, StereoViews};
@@ -109,65 +112,6 @@ pub fn vulkan_frustum(l: f32, r: f32, b: f32, t: f32, near: f32, far: f32) -> Ma
     )
 }
 
-/// How a stereo pair is combined into one preview image.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Preview {
-    /// Left image on the left, right image on the right, full width each.
-    Sbs,
-    /// Red–cyan anaglyph with Dubois' least-squares matrices (computed in linear RGB).
-    Anaglyph,
-}
-
-/// Dubois' least-squares red–cyan matrices (rows: output R, G, B; columns: input R, G, B).
-const DUBOIS_LEFT: [[f32; 3]; 3] =
-    [[0.437, 0.449, 0.164], [-0.062, -0.062, -0.024], [-0.048, -0.050, -0.017]];
-const DUBOIS_RIGHT: [[f32; 3]; 3] =
-    [[-0.011, -0.032, -0.007], [0.377, 0.761, 0.009], [-0.026, -0.093, 1.234]];
-
-fn srgb_to_linear(c: u8) -> f32 {
-    let c = f32::from(c) / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-fn linear_to_srgb(c: f32) -> u8 {
-    let c = c.clamp(0.0, 1.0);
-    let s = if c <= 0.003_130_8 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
-    (s * 255.0).round() as u8
-}
-
-/// Combines a stereo pair (sRGB-encoded, same size) into a preview image.
-pub fn compose(preview: Preview, left: &image::RgbaImage, right: &image::RgbaImage) -> image::RgbaImage {
-    let (w, h) = left.dimensions();
-    debug_assert_eq!(right.dimensions(), (w, h));
-    match preview {
-        Preview::Sbs => {
-            let mut out = image::RgbaImage::new(w * 2, h);
-            image::imageops::replace(&mut out, left, 0, 0);
-            image::imageops::replace(&mut out, right, i64::from(w), 0);
-            out
-        }
-        Preview::Anaglyph => {
-            let lut: Vec<f32> = (0..=255u8).map(srgb_to_linear).collect();
-            image::RgbaImage::from_fn(w, h, |x, y| {
-                let (l, r) = (left.get_pixel(x, y), right.get_pixel(x, y));
-                let lin_l = [lut[usize::from(l[0])], lut[usize::from(l[1])], lut[usize::from(l[2])]];
-                let lin_r = [lut[usize::from(r[0])], lut[usize::from(r[1])], lut[usize::from(r[2])]];
-                let channel = |row: usize| {
-                    let v: f32 = (0..3)
-                        .map(|k| DUBOIS_LEFT[row][k] * lin_l[k] + DUBOIS_RIGHT[row][k] * lin_r[k])
-                        .sum();
-                    linear_to_srgb(v)
-                };
-                image::Rgba([channel(0), channel(1), channel(2), 255])
-            })
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -226,15 +170,5 @@ mod tests {
         let v = rig().views(1.0);
         let (_, y_high, _) = to_pixel(&v.eyes[0], Vec3::new(0.0, 0.1, 0.0), 100.0, 100.0);
         assert!(y_high < 50.0, "a point above the axis lands in the top half (row 0 is the top)");
-    }
-
-    #[test]
-    fn anaglyph_of_grey_is_near_grey_and_sbs_doubles_width() {
-        let grey = image::RgbaImage::from_pixel(4, 2, image::Rgba([128, 128, 128, 255]));
-        let sbs = compose(Preview::Sbs, &grey, &grey);
-        assert_eq!(sbs.dimensions(), (8, 2));
-        let a = compose(Preview::Anaglyph, &grey, &grey);
-        let p = a.get_pixel(1, 1);
-        assert!(p[0] > 90 && p[1] > 90 && p[2] > 90, "{p:?}");
     }
 }

@@ -20,14 +20,17 @@ pub(crate) struct PipelineDesc {
     pub(crate) vertex: &'static [u8],
     /// SPIR-V of the fragment shader.
     pub(crate) fragment: &'static [u8],
-    /// How many of the [`Vertex`] attributes the vertex shader reads, in order: 1 position,
-    /// 2 and normal, 3 and colour.
+    /// How many of the [`Vertex`] attributes the vertex shader reads, in order: 0 none (no
+    /// vertex buffer), 1 position, 2 and normal, 3 and colour.
     pub(crate) attributes: usize,
     pub(crate) cull: vk::CullModeFlags,
     pub(crate) depth_test: bool,
     pub(crate) depth_write: bool,
     /// Premultiplied-free alpha blending (`src·a + dst·(1−a)`).
     pub(crate) blend: bool,
+    /// The value of the fragment shader's specialization constant 0 (`constant_id = 0`), for
+    /// shaders that have one.
+    pub(crate) fragment_constant: Option<u32>,
 }
 
 /// The descriptor set layout and pipeline layout shared by every pipeline: binding 0 the frame
@@ -121,28 +124,36 @@ impl Drop for ShaderModule<'_> {
 }
 
 impl Pipeline {
-    /// Creates the pipeline for `render_pass` (subpass 0) with a fixed viewport of
-    /// `extent` and `samples` rasterisation samples.
+    /// Creates the pipeline for `render_pass` (subpass 0) with `layout`, a fixed viewport of
+    /// `extent` (or, with `None`, a viewport and scissor set when recording) and `samples`
+    /// rasterisation samples.
     pub(crate) fn new(
         device: &Arc<Device>,
         desc: &PipelineDesc,
-        layout: &Layout,
+        layout: vk::PipelineLayout,
         render_pass: vk::RenderPass,
-        extent: vk::Extent2D,
+        extent: Option<vk::Extent2D>,
         samples: vk::SampleCountFlags,
     ) -> Result<Self, RenderError> {
         let d = &device.raw;
-        let vs = ShaderModule::new(d, desc.vertex, desc.name)?;
-        let fs = ShaderModule::new(d, desc.fragment, desc.name)?;
+        let (vs, fs) =
+            (ShaderModule::new(d, desc.vertex, desc.name)?, ShaderModule::new(d, desc.fragment, desc.name)?);
+        let constant = desc.fragment_constant.unwrap_or(0).to_ne_bytes();
+        let entries = [vk::SpecializationMapEntry::default().constant_id(0).offset(0).size(constant.len())];
+        let specialization = vk::SpecializationInfo::default().map_entries(&entries).data(&constant);
+        let mut fragment_stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::FRAGMENT)
+            .module(fs.raw)
+            .name(c"main");
+        if desc.fragment_constant.is_some() {
+            fragment_stage = fragment_stage.specialization_info(&specialization);
+        }
         let stages = [
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::VERTEX)
                 .module(vs.raw)
                 .name(c"main"),
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::FRAGMENT)
-                .module(fs.raw)
-                .name(c"main"),
+            fragment_stage,
         ];
         let bindings = [vk::VertexInputBindingDescription::default()
             .binding(0)
@@ -165,22 +176,34 @@ impl Pipeline {
                 .format(vk::Format::R32G32B32A32_SFLOAT)
                 .offset(24),
         ];
+        // With no attribute, the vertex shader works from gl_VertexIndex alone.
+        let used = desc.attributes.min(attributes.len());
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
-            .vertex_binding_descriptions(&bindings)
-            .vertex_attribute_descriptions(&attributes[..desc.attributes.min(attributes.len())]);
+            .vertex_binding_descriptions(if used == 0 { &[] } else { &bindings })
+            .vertex_attribute_descriptions(&attributes[..used]);
         let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
             .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let fixed = extent.unwrap_or_default();
         let viewports = [vk::Viewport {
             x: 0.0,
             y: 0.0,
-            width: extent.width as f32,
-            height: extent.height as f32,
+            width: fixed.width as f32,
+            height: fixed.height as f32,
             min_depth: 0.0,
             max_depth: 1.0,
         }];
-        let scissors = [vk::Rect2D { offset: vk::Offset2D::default(), extent }];
-        let viewport =
-            vk::PipelineViewportStateCreateInfo::default().viewports(&viewports).scissors(&scissors);
+        let scissors = [vk::Rect2D { offset: vk::Offset2D::default(), extent: fixed }];
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let (viewport, dynamic) = match extent {
+            Some(_) => (
+                vk::PipelineViewportStateCreateInfo::default().viewports(&viewports).scissors(&scissors),
+                vk::PipelineDynamicStateCreateInfo::default(),
+            ),
+            None => (
+                vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1),
+                vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states),
+            ),
+        };
         // The projections flip y (clip y points down), so counter-clockwise triangles seen
         // from outside stay counter-clockwise on screen.
         let raster = vk::PipelineRasterizationStateCreateInfo::default()
@@ -212,11 +235,12 @@ impl Pipeline {
             .vertex_input_state(&vertex_input)
             .input_assembly_state(&assembly)
             .viewport_state(&viewport)
+            .dynamic_state(&dynamic)
             .rasterization_state(&raster)
             .multisample_state(&multisample)
             .depth_stencil_state(&depth)
             .color_blend_state(&blend)
-            .layout(layout.pipeline)
+            .layout(layout)
             .render_pass(render_pass)
             .subpass(0);
         // SAFETY: every state struct lives across the call; the layout and render pass are live.

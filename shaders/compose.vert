@@ -1,0 +1,8 @@
+#version 450
+// One triangle covering the viewport: (-1,-1), (3,-1), (-1,3) in normalised device coordinates.
+// No vertex buffer; the fragment shader works from gl_FragCoord alone.
+
+void main() {
+    vec2 p = vec2(float((gl_VertexIndex << 1) & 2), float(gl_VertexIndex & 2));
+    gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);
+}
