@@ -1,7 +1,8 @@
 #version 450
 // The display-mode composition: one output pixel from the 2-layer stereo image (layer 0 the
 // left eye, layer 1 the right). The mode is a specialization constant: each mode's pipeline
-// keeps only its own branch (on lavapipe a mode chosen at run time cost about 3 times more). The source is read with texelFetch through an sRGB view, so the
+// keeps only its own branch (on lavapipe a mode chosen at run time made the pass 5 to 14 times
+// slower, see BENCHMARKS.md). The source is read with texelFetch through an sRGB view, so the
 // values are linear and exact (no filtering); averages and the anaglyph matrices work on linear
 // values. Modes and their layouts: src/stereo/display.rs. Mode numbers: src/render/compose.rs.
 

@@ -3,8 +3,8 @@
 //!
 //! One full-screen triangle, one fragment shader (`shaders/compose.frag`) with the mode as a
 //! specialization constant (a pipeline per mode, made when the mode is first used: on lavapipe
-//! a mode chosen at run time made the pass about three times slower) and the interlace parity
-//! and the anaglyph matrices in push constants. The destination is any colour image view with its
+//! a mode chosen at run time made the pass 5 to 14 times slower, see `BENCHMARKS.md`) and the
+//! interlace parity and the anaglyph matrices in push constants. The destination is any colour image view with its
 //! format and final layout given by the caller: the offscreen [`ComposedOutput`] here, and a
 //! window's swapchain images (final layout `PRESENT_SRC_KHR`) alike. Colour arithmetic is done
 //! on linear values: the stereo image is read through its sRGB view, and the shader encodes
