@@ -7,12 +7,14 @@
 
 mod colour;
 mod file;
+mod screen;
 mod timeline;
 mod tool;
 
 use std::path::{Path, PathBuf};
 
 pub use colour::{parse_hex, SceneColour};
+pub use screen::{ScreenCalibration, TrackerCalibration, SHIPPED_SCREEN_TOML};
 pub use timeline::{Hand, HandState, Key, Timeline};
 pub use tool::SceneToolShape;
 
