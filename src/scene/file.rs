@@ -33,6 +33,7 @@ pub(super) struct SceneFile {
     pub key: Vec<Spanned<KeySpec>>,
     #[serde(default)]
     pub capture: Vec<Spanned<CaptureSpec>>,
+    pub head: Option<super::head::HeadSpec>,
 }
 
 #[derive(Deserialize)]

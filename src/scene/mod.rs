@@ -7,6 +7,7 @@
 
 mod colour;
 mod file;
+mod head;
 mod screen;
 mod timeline;
 mod tool;
@@ -14,13 +15,14 @@ mod tool;
 use std::path::{Path, PathBuf};
 
 pub use colour::{parse_hex, SceneColour};
+pub use head::{HeadKey, HeadPath};
 pub use screen::{ScreenCalibration, TrackerCalibration, SHIPPED_SCREEN_TOML};
 pub use timeline::{Hand, HandState, Key, Timeline};
 pub use tool::SceneToolShape;
 
 use crate::field::Colour;
 use crate::math::{Pose, Quat, Vec3};
-use crate::stereo::StereoRig;
+use crate::stereo::{HeadTrackedRig, Placement, StereoRig};
 use crate::tool::{Action, CsgOp, PlacedSolid, Solid};
 use file::{AttachSpec, ClaySpec, EnvironmentKind, LightKind, OpSpec, SceneFile, ShapeKind};
 
@@ -224,6 +226,8 @@ pub struct Scene {
     pub timeline: Timeline,
     /// Captures, in time order.
     pub captures: Vec<Capture>,
+    /// The scripted head, for head-tracked views of a calibrated screen (`[head]`).
+    pub head: Option<HeadPath>,
 }
 
 impl Scene {
@@ -235,6 +239,19 @@ impl Scene {
             source,
         })?;
         Scene::parse(&text, &path.display().to_string(), path.parent())
+    }
+
+    /// The head-tracked rig of a scene with a `[head]`: the calibrated screen placed so that
+    /// from the default eye it shows what `[camera]` shows, its plane on the convergence plane.
+    pub fn head_tracked_rig(&self) -> Option<HeadTrackedRig> {
+        let c = &self.head.as_ref()?.calibration;
+        Some(HeadTrackedRig {
+            screen: c.screen,
+            placement: Placement::from_rig(&c.screen, c.default_eye_m, &self.rig),
+            interaxial_m: c.ipd_m,
+            near_m: self.rig.near_m,
+            far_m: self.rig.far_m,
+        })
     }
 
     /// The built-in default scene.
@@ -612,6 +629,7 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
         captures.push(Capture { name: "final".to_owned(), time_s: timeline.duration_s(), show_tools: true });
     }
     captures.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+    let head = file.head.as_ref().map(|h| head::resolve_head(h, base_dir, at)).transpose()?;
 
     Ok(Scene {
         source: name.to_owned(),
@@ -627,6 +645,7 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
         tools,
         timeline,
         captures,
+        head,
     })
 }
 
