@@ -3,6 +3,7 @@
 //! The only module that knows every other; the CLI in `main.rs` is a thin shell over it.
 
 pub mod bench;
+mod calibrate;
 mod capture;
 mod environment;
 mod export;
@@ -11,6 +12,7 @@ mod frame;
 mod playback;
 mod sculpt;
 
+pub use calibrate::{calibrate, describe, test_pattern, CalibrateOptions, Calibrated, Marker, TestPattern};
 pub use capture::{render_scene, renderer_for, save_png_atomically, RenderOptions, WrittenCapture};
 pub use environment::{load_environment, EnvironmentError};
 pub use export::{export, final_field, final_mesh, welded_surface, ExportSummary};
