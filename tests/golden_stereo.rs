@@ -241,3 +241,10 @@ fn near_objects_have_crossed_and_far_objects_uncrossed_parallax() {
         }
     }
 }
+
+/// Head-tracked stereo (`[head]` with a calibrated 30 cm square screen): the head has moved up
+/// and to the right, so the scene is seen from there through the fixed screen.
+#[test]
+fn head_tracked_scene_matches_golden() {
+    golden_case("head-tracked", "scenes/tests/head-tracked.toml", None);
+}

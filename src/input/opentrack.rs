@@ -259,6 +259,57 @@ mod tests {
         assert!((p.to_screen(&t).position_m.x + 0.1).abs() < 1e-6, "a flipped axis");
     }
 
+    #[test]
+    fn loopback_datagrams_move_the_head_tracked_views() {
+        use crate::input::head::{DropoutTimings, HeadFilter};
+        use crate::stereo::screen::to_pixel;
+        use crate::stereo::{HeadTrackedRig, Placement};
+
+        let mut calibration = ScreenCalibration::shipped();
+        // A tracker at the screen's centre, axes along the screen's.
+        calibration.tracker.to_screen = Pose::default();
+        let rig = HeadTrackedRig {
+            screen: calibration.screen,
+            placement: Placement::IDENTITY,
+            interaxial_m: calibration.ipd_m,
+            near_m: 0.05,
+            far_m: 20.0,
+        };
+        // A long hold: a slow machine must not see a dropout between two steps of this test.
+        let timings = DropoutTimings { hold_s: 60.0, ease_s: calibration.tracker.ease_s };
+        let mut filter = HeadFilter::new(calibration.default_head(), timings);
+        let receiver = OpentrackReceiver::bind("127.0.0.1:0".parse().unwrap()).unwrap();
+        let sender = UdpSocket::bind("127.0.0.1:0").unwrap();
+        let epoch = Instant::now();
+        let head_now = |filter: &mut HeadFilter, r: &OpentrackReceiver| {
+            let newest = r.latest().map(|s| {
+                (s.pose.to_screen(&calibration.tracker), s.at.duration_since(epoch).as_secs_f64(), s.sequence)
+            });
+            filter.update(newest, epoch.elapsed().as_secs_f64())
+        };
+        // A point 20 cm behind the screen, where the screen is 531 mm wide and 1920 px across.
+        let p = Vec3::new(0.0, 0.0, -0.2);
+        let column = |head: &Pose| {
+            let v = rig.views(head);
+            (to_pixel(&v.eyes[0], p, 1920.0, 1080.0).0 + to_pixel(&v.eyes[1], p, 1920.0, 1080.0).0) * 0.5
+        };
+        let centred = head_now(&mut filter, &receiver);
+        assert!((column(&centred) - 960.0).abs() < 1e-3, "straight ahead of the default eye");
+        // The head moves 10 cm to the right (x = 10 cm, z = 60 cm): the point, behind the
+        // screen, is seen through the screen further right, by 10 cm · 20 / 80 = 25 mm.
+        sender.send_to(&encode_packet([10.0, 0.0, 60.0], [0.0; 3]), receiver.local_addr()).unwrap();
+        wait_for(&receiver, |r| r.counts().accepted == 1);
+        let moved = head_now(&mut filter, &receiver);
+        assert!((moved.position_m - Vec3::new(0.1, 0.0, 0.6)).length() < 1e-5);
+        let expected = 960.0 + 0.025 / calibration.screen.width_m() * 1920.0;
+        assert!((column(&moved) - expected).abs() < 0.05, "{} vs {expected}", column(&moved));
+        // Garbage does not move it.
+        sender.send_to(&[0xff; 48], receiver.local_addr()).unwrap();
+        sender.send_to(&[1, 2, 3], receiver.local_addr()).unwrap();
+        wait_for(&receiver, |r| r.counts().malformed() == 2);
+        assert_eq!(head_now(&mut filter, &receiver), moved);
+    }
+
     fn wait_for(receiver: &OpentrackReceiver, done: impl Fn(&OpentrackReceiver) -> bool) {
         let start = Instant::now();
         while !done(receiver) {
