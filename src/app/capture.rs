@@ -89,6 +89,12 @@ pub fn render_scene(scene: &Scene, options: &RenderOptions) -> Result<Vec<Writte
     let mut playback = Playback::new(&scene);
     let initial = mesh_all(playback.field());
     playback.field_mut().take_dirty();
+    let clay = initial.upserted.iter().fold(crate::math::Aabb::EMPTY, |b, (_, c)| b.union(&c.bounds()));
+    // The views' copy of the scene, whose interaxial the parallax budget may lower.
+    let mut viewed = scene.clone();
+    if let Some((_, warning)) = super::comfort::apply_parallax_budget(&mut viewed, clay) {
+        tracing::warn!("{warning}");
+    }
     renderer.apply(&initial)?;
 
     let end = scene.captures.last().map_or(0.0, |c| c.time_s);
@@ -98,8 +104,8 @@ pub fn render_scene(scene: &Scene, options: &RenderOptions) -> Result<Vec<Writte
         playback.advance_to(capture.time_s, |t| bar.set_position((t * 1000.0) as u64));
         let diff = remesh_dirty(playback.field_mut());
         renderer.apply(&diff)?;
-        let mut frame = build_frame(&scene, &playback.hands(), capture.show_tools);
-        if let (Some(head), Some(rig)) = (&scene.head, scene.head_tracked_rig()) {
+        let mut frame = build_frame(&viewed, &playback.hands(), capture.show_tools);
+        if let (Some(head), Some(rig)) = (&viewed.head, viewed.head_tracked_rig()) {
             frame.views = rig.views(&head.pose_at(capture.time_s));
         }
         renderer.draw(&frame)?;

@@ -5,6 +5,7 @@
 pub mod bench;
 mod calibrate;
 mod capture;
+mod comfort;
 mod environment;
 mod export;
 mod files;
@@ -14,6 +15,7 @@ mod sculpt;
 
 pub use calibrate::{calibrate, describe, test_pattern, CalibrateOptions, Calibrated, Marker, TestPattern};
 pub use capture::{render_scene, renderer_for, save_png_atomically, RenderOptions, WrittenCapture};
+pub use comfort::apply_parallax_budget;
 pub use environment::{load_environment, EnvironmentError};
 pub use export::{export, final_field, final_mesh, welded_surface, ExportSummary};
 pub use files::write_atomically;

@@ -29,7 +29,7 @@
 //! translation and uniform scale), which is how "convergence" reads with a physical screen: the
 //! scene's convergence plane is mapped onto the screen.
 
-use super::{vulkan_frustum, StereoRig};
+use super::{vulkan_frustum, StereoRig, Viewing};
 use crate::math::{Mat3, Mat4, Pose, Quat, Vec3, Vec4};
 use crate::render::{EyeView, StereoViews};
 
@@ -280,6 +280,27 @@ impl HeadTrackedRig {
         StereoViews { eyes: eyes.map(|e| generalized_perspective(&screen, e, self.near_m, self.far_m)) }
     }
 
+    /// How the views of a head at `head` map onto the physical screen, for the parallax
+    /// budget: distances in world metres, the screen 1 / scale physical metres per world metre.
+    pub fn viewing(&self, head: &Pose) -> Viewing {
+        let d = self.screen.signed_distance_m(self.screen.clamp_eye(head.position_m));
+        let s = self.placement.scale;
+        Viewing {
+            interaxial_m: self.interaxial_m * s,
+            convergence_m: d * s,
+            display_per_world: 1.0 / s,
+            viewing_distance_m: d,
+            eye_separation_m: self.interaxial_m,
+        }
+    }
+
+    /// Distance of a world point from the head's eyes along the screen normal (world metres).
+    pub fn depth_of(&self, head: &Pose, point_m: Vec3) -> f32 {
+        let screen = self.screen.transformed(&self.placement.to_matrix());
+        let eye = self.placement.point(self.screen.clamp_eye(head.position_m));
+        screen.signed_distance_m(eye) - screen.signed_distance_m(point_m)
+    }
+
     /// Both eyes' frusta in screen space (physical metres) for a head at `head`, with the near
     /// plane at `near_m` physical metres.
     pub fn frusta(&self, head: &Pose, near_m: f32) -> [Frustum; 2] {
@@ -477,6 +498,39 @@ mod tests {
                 prop_assert!(f.lrbt.iter().all(|e| e.is_finite()) && f.screen_distance_m > 0.0);
             }
         }
+    }
+
+    #[test]
+    fn the_viewing_of_a_placed_screen_predicts_its_disparities() {
+        // The screen scaled 2× into the world: world distances double, display parallax does not.
+        let s = monitor();
+        let standard = StereoRig {
+            eye_m: Vec3::new(0.0, 0.0, 1.2),
+            target_m: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y_deg: 30.0,
+            interaxial_m: 0.1,
+            convergence_m: 1.2,
+            near_m: 0.05,
+            far_m: 20.0,
+        };
+        let default_eye = Vec3::new(0.0, 0.0, 0.6);
+        let r =
+            HeadTrackedRig { placement: Placement::from_rig(&s, default_eye, &standard), ..rig(s, 0.063) };
+        let head = Pose { position_m: default_eye, rotation: Quat::IDENTITY };
+        let v = r.viewing(&head);
+        let p = Vec3::new(0.1, 0.05, -0.4);
+        let z = r.depth_of(&head, p);
+        assert!((z - 1.6).abs() < 1e-5, "{z}");
+        let views = r.views(&head);
+        let (xl, _, _) = to_pixel(&views.eyes[0], p, 1920.0, 1080.0);
+        let (xr, _, _) = to_pixel(&views.eyes[1], p, 1920.0, 1080.0);
+        let measured_m = (xr - xl) / 1920.0 * s.width_m();
+        assert!(
+            (measured_m - v.display_parallax_m(z)).abs() < 1e-5,
+            "{measured_m} vs {}",
+            v.display_parallax_m(z)
+        );
     }
 
     #[test]
