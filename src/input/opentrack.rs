@@ -11,6 +11,8 @@
 //!      ──► TrackerPose::to_screen (calibrated signs, tracker → screen) ──► head Pose
 //!      ──► head::HeadFilter (dropout: hold, then ease to the default eye) ──► stereo rig
 //! ```
+//!
+//! [`OpentrackHead`] puts the three together for a frame loop: `pose()` each frame.
 
 use std::net::{SocketAddr, UdpSocket};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -18,8 +20,9 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use super::head::{DropoutTimings, HeadFilter};
 use crate::math::{Pose, Quat, Vec3};
-use crate::scene::TrackerCalibration;
+use crate::scene::{ScreenCalibration, TrackerCalibration};
 
 /// opentrack's default UDP port.
 pub const DEFAULT_PORT: u16 = 4242;
@@ -220,6 +223,49 @@ fn receive(socket: &UdpSocket, shared: &Shared) {
     }
 }
 
+/// The head pose from opentrack, ready for the stereo rig each frame: the receiver, the
+/// calibration's tracker → screen transform and the dropout filter together.
+#[derive(Debug)]
+pub struct OpentrackHead {
+    receiver: OpentrackReceiver,
+    filter: HeadFilter,
+    tracker: TrackerCalibration,
+    epoch: Instant,
+}
+
+impl OpentrackHead {
+    /// Listens on `addr`, or on every interface at the calibration's port when `None`.
+    pub fn start(calibration: &ScreenCalibration, addr: Option<SocketAddr>) -> std::io::Result<Self> {
+        let tracker = calibration.tracker;
+        let addr = addr.unwrap_or_else(|| SocketAddr::from(([0, 0, 0, 0], tracker.port)));
+        let timings = DropoutTimings { hold_s: tracker.hold_s, ease_s: tracker.ease_s };
+        Ok(Self {
+            receiver: OpentrackReceiver::bind(addr)?,
+            filter: HeadFilter::new(calibration.default_head(), timings),
+            tracker,
+            epoch: Instant::now(),
+        })
+    }
+
+    /// The head pose to render from now, screen space.
+    pub fn pose(&mut self) -> Pose {
+        let seconds = |t: Instant| t.saturating_duration_since(self.epoch).as_secs_f64();
+        let newest =
+            self.receiver.latest().map(|r| (r.pose.to_screen(&self.tracker), seconds(r.at), r.sequence));
+        self.filter.update(newest, seconds(Instant::now()))
+    }
+
+    /// Whether the tracker counts as lost (no datagram for longer than the hold time).
+    pub fn lost(&self) -> bool {
+        self.filter.lost(Instant::now().saturating_duration_since(self.epoch).as_secs_f64())
+    }
+
+    /// The receiver (its address and datagram counters).
+    pub fn receiver(&self) -> &OpentrackReceiver {
+        &self.receiver
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -261,13 +307,14 @@ mod tests {
 
     #[test]
     fn loopback_datagrams_move_the_head_tracked_views() {
-        use crate::input::head::{DropoutTimings, HeadFilter};
         use crate::stereo::screen::to_pixel;
         use crate::stereo::{HeadTrackedRig, Placement};
 
         let mut calibration = ScreenCalibration::shipped();
-        // A tracker at the screen's centre, axes along the screen's.
+        // A tracker at the screen's centre, axes along the screen's; a long hold, so that a slow
+        // machine sees no dropout between two steps of this test.
         calibration.tracker.to_screen = Pose::default();
+        calibration.tracker.hold_s = 59.0;
         let rig = HeadTrackedRig {
             screen: calibration.screen,
             placement: Placement::IDENTITY,
@@ -275,39 +322,33 @@ mod tests {
             near_m: 0.05,
             far_m: 20.0,
         };
-        // A long hold: a slow machine must not see a dropout between two steps of this test.
-        let timings = DropoutTimings { hold_s: 60.0, ease_s: calibration.tracker.ease_s };
-        let mut filter = HeadFilter::new(calibration.default_head(), timings);
-        let receiver = OpentrackReceiver::bind("127.0.0.1:0".parse().unwrap()).unwrap();
+        let mut head = OpentrackHead::start(&calibration, Some("127.0.0.1:0".parse().unwrap())).unwrap();
+        let to = head.receiver().local_addr();
         let sender = UdpSocket::bind("127.0.0.1:0").unwrap();
-        let epoch = Instant::now();
-        let head_now = |filter: &mut HeadFilter, r: &OpentrackReceiver| {
-            let newest = r.latest().map(|s| {
-                (s.pose.to_screen(&calibration.tracker), s.at.duration_since(epoch).as_secs_f64(), s.sequence)
-            });
-            filter.update(newest, epoch.elapsed().as_secs_f64())
-        };
         // A point 20 cm behind the screen, where the screen is 531 mm wide and 1920 px across.
         let p = Vec3::new(0.0, 0.0, -0.2);
         let column = |head: &Pose| {
             let v = rig.views(head);
             (to_pixel(&v.eyes[0], p, 1920.0, 1080.0).0 + to_pixel(&v.eyes[1], p, 1920.0, 1080.0).0) * 0.5
         };
-        let centred = head_now(&mut filter, &receiver);
+        assert!(head.lost(), "nothing tracked yet");
+        let centred = head.pose();
+        assert_eq!(centred, calibration.default_head());
         assert!((column(&centred) - 960.0).abs() < 1e-3, "straight ahead of the default eye");
         // The head moves 10 cm to the right (x = 10 cm, z = 60 cm): the point, behind the
         // screen, is seen through the screen further right, by 10 cm · 20 / 80 = 25 mm.
-        sender.send_to(&encode_packet([10.0, 0.0, 60.0], [0.0; 3]), receiver.local_addr()).unwrap();
-        wait_for(&receiver, |r| r.counts().accepted == 1);
-        let moved = head_now(&mut filter, &receiver);
+        sender.send_to(&encode_packet([10.0, 0.0, 60.0], [0.0; 3]), to).unwrap();
+        wait_for(head.receiver(), |r| r.counts().accepted == 1);
+        let moved = head.pose();
+        assert!(!head.lost());
         assert!((moved.position_m - Vec3::new(0.1, 0.0, 0.6)).length() < 1e-5);
         let expected = 960.0 + 0.025 / calibration.screen.width_m() * 1920.0;
         assert!((column(&moved) - expected).abs() < 0.05, "{} vs {expected}", column(&moved));
         // Garbage does not move it.
-        sender.send_to(&[0xff; 48], receiver.local_addr()).unwrap();
-        sender.send_to(&[1, 2, 3], receiver.local_addr()).unwrap();
-        wait_for(&receiver, |r| r.counts().malformed() == 2);
-        assert_eq!(head_now(&mut filter, &receiver), moved);
+        sender.send_to(&[0xff; 48], to).unwrap();
+        sender.send_to(&[1, 2, 3], to).unwrap();
+        wait_for(head.receiver(), |r| r.counts().malformed() == 2);
+        assert_eq!(head.pose(), moved);
     }
 
     fn wait_for(receiver: &OpentrackReceiver, done: impl Fn(&OpentrackReceiver) -> bool) {
