@@ -249,6 +249,12 @@ impl Placement {
 
 /// A head-tracked stereo camera: a calibrated screen placed in the world, an eye separation,
 /// and clipping distances (world metres).
+///
+/// At runtime, `interaxial_m` may be lowered (flatter depth) and the convergence changed by
+/// placing the screen again with [`Placement::from_rig`] from a [`StereoRig`] whose convergence
+/// was set ([`StereoRig::set_convergence_m`], or auto-convergence with
+/// [`StereoRig::converge_on`]): the world then scales about the default eye, and the point at
+/// the new convergence distance lies on the screen.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HeadTrackedRig {
     /// The physical screen, screen space.
@@ -531,6 +537,39 @@ mod tests {
             "{measured_m} vs {}",
             v.display_parallax_m(z)
         );
+    }
+
+    #[test]
+    fn changing_the_rigs_convergence_moves_the_screen_to_it() {
+        let s = monitor();
+        let mut standard = StereoRig {
+            eye_m: Vec3::new(0.1, 0.2, 0.9),
+            target_m: Vec3::new(0.0, 0.0, 0.0),
+            up: Vec3::Y,
+            fov_y_deg: 30.0,
+            interaxial_m: 0.063,
+            convergence_m: 0.9,
+            near_m: 0.05,
+            far_m: 20.0,
+        };
+        let default_eye = Vec3::new(0.0, 0.0, 0.6);
+        let head = Pose { position_m: Vec3::new(0.05, -0.03, 0.55), rotation: Quat::IDENTITY };
+        for convergence in [0.3f32, 0.9, 1.7] {
+            standard.set_convergence_m(convergence);
+            let r = HeadTrackedRig {
+                placement: Placement::from_rig(&s, default_eye, &standard),
+                ..rig(s, 0.063)
+            };
+            let up = standard.right().cross(standard.forward());
+            let p = standard.eye_m + standard.forward() * convergence + standard.right() * 0.03 + up * 0.02;
+            let v = r.views(&head);
+            let (xl, yl, _) = to_pixel(&v.eyes[0], p, 1920.0, 1080.0);
+            let (xr, yr, _) = to_pixel(&v.eyes[1], p, 1920.0, 1080.0);
+            assert!(
+                (xl - xr).abs() < 0.02 && (yl - yr).abs() < 0.02,
+                "convergence {convergence}: {xl},{yl} vs {xr},{yr}"
+            );
+        }
     }
 
     #[test]
