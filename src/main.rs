@@ -115,6 +115,20 @@ enum Command {
         #[arg(value_enum)]
         workloads: Vec<bench::Workload>,
     },
+    /// Prints the stereo frusta a screen calibration gives and renders a test-pattern stereo
+    /// pair: a grid on the screen plane (zero parallax) and a near and a far ball with their
+    /// expected disparities.
+    Calibrate {
+        /// The screen calibration (TOML, see calibration/README.md); the shipped one when absent.
+        #[arg(long)]
+        calibration: Option<PathBuf>,
+        /// Folder for calibration-left.png and calibration-right.png (created if missing).
+        #[arg(long, short, default_value = "argile-calibration")]
+        out: PathBuf,
+        /// Width of each eye's image in pixels (the height follows the screen's aspect ratio).
+        #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(64..=8192))]
+        width: u32,
+    },
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -171,6 +185,14 @@ fn main() -> ExitCode {
             .map(|s| println!("wrote {} ({} bricks, {} bytes)", s.path.display(), s.bricks, s.bytes)),
         Some(Command::Info) => info(),
         Some(Command::Bench { json, quick, workloads }) => run_bench(json, quick, &workloads),
+        Some(Command::Calibrate { calibration, out, width }) => {
+            let options =
+                app::CalibrateOptions { calibration, out_dir: out, width_px: width, validation: false };
+            app::calibrate(&options).map(|c| {
+                print!("{}", c.report);
+                print_written(std::slice::from_ref(&c.written));
+            })
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

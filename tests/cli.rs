@@ -147,3 +147,46 @@ fn scene_errors_name_the_file_line_and_column() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("from 16 to 8192"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn calibrate_prints_the_frusta_and_writes_the_test_pattern() {
+    let dir = temp_dir("calibrate");
+    let calibration = dir.join("screen.toml");
+    std::fs::write(&calibration, "[viewer]\ndefault_eye_m = [0.0, 0.0, 0.7]\nipd_m = 0.065\n").unwrap();
+    let out = argile()
+        .args(["calibrate", "--calibration"])
+        .arg(&calibration)
+        .arg("--out")
+        .arg(&dir)
+        .args(["--width", "128"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
+    for words in [
+        "700.0 mm from the screen",
+        "IPD 65.0 mm",
+        "left eye at (-32.5, 0.0, 700.0) mm",
+        "right eye",
+        "crossed",
+    ] {
+        assert!(text.contains(words), "says {words:?}: {text}");
+    }
+    for name in ["calibration-left.png", "calibration-right.png"] {
+        assert!(text.contains(name), "says where {name} is: {text}");
+        assert_eq!(image::open(dir.join(name)).unwrap().width(), 128);
+    }
+
+    std::fs::write(&calibration, "[viewer]\nipd_m = 63\n").unwrap();
+    let out = argile()
+        .args(["calibrate", "--calibration"])
+        .arg(&calibration)
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains(&format!("{}:2:9: `viewer.ipd_m`", calibration.display())), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

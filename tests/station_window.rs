@@ -66,7 +66,7 @@ fn a_scripted_session_in_a_window_matches_its_golden_and_saves_the_sculpt() {
     let _ = std::fs::remove_file(&shot);
     let _ = std::fs::remove_file(&saved);
     let scene = root().join("scenes/tests/station.toml");
-    let script = root().join("scenes/tests/station-input.toml");
+    let script = root().join("tests/fixtures/station-input.toml");
     let out = run_station(
         &x,
         &[

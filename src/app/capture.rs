@@ -81,11 +81,28 @@ pub fn render_scene(scene: &Scene, options: &RenderOptions) -> Result<Vec<Writte
     } else {
         options.display_modes.clone()
     };
+    if let Some(head) = &scene.head {
+        // The image shows the whole screen: a different aspect ratio would stretch the view.
+        let (screen, image) =
+            (head.calibration.screen.aspect(), scene.output.width_px as f32 / scene.output.height_px as f32);
+        if (screen / image - 1.0).abs() > 0.01 {
+            tracing::warn!(
+                "{}: the images' aspect ratio {image:.3} differs from the calibrated screen's {screen:.3}; head-tracked views will look stretched",
+                scene.source
+            );
+        }
+    }
     let mut renderer = renderer_for(&scene, None, options.validation, None)?;
     tracing::info!("rendering {} on {}", scene.source, renderer.device_name());
     let mut playback = Playback::new(&scene);
     let initial = mesh_all(playback.field());
     playback.field_mut().take_dirty();
+    let clay = initial.upserted.iter().fold(crate::math::Aabb::EMPTY, |b, (_, c)| b.union(&c.bounds()));
+    // The views' copy of the scene, whose interaxial the parallax budget may lower.
+    let mut viewed = scene.clone();
+    if let Some((_, warning)) = super::comfort::apply_parallax_budget(&mut viewed, clay) {
+        tracing::warn!("{warning}");
+    }
     renderer.apply(&initial)?;
 
     let end = scene.captures.last().map_or(0.0, |c| c.time_s);
@@ -95,7 +112,10 @@ pub fn render_scene(scene: &Scene, options: &RenderOptions) -> Result<Vec<Writte
         playback.advance_to(capture.time_s, |t| bar.set_position((t * 1000.0) as u64));
         let diff = remesh_dirty(playback.field_mut());
         renderer.apply(&diff)?;
-        let frame = build_frame(&scene, &playback.hands(), capture.show_tools);
+        let mut frame = build_frame(&viewed, &playback.hands(), capture.show_tools);
+        if let (Some(head), Some(rig)) = (&viewed.head, viewed.head_tracked_rig()) {
+            frame.views = rig.views(&head.pose_at(capture.time_s));
+        }
         renderer.draw(&frame)?;
         let StereoImage { left, right } = renderer.read_back()?;
         let left_path = options.out_dir.join(format!("{}-left.png", capture.name));

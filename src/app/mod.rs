@@ -3,7 +3,9 @@
 //! The only module that knows every other; the CLI in `main.rs` is a thin shell over it.
 
 pub mod bench;
+mod calibrate;
 mod capture;
+mod comfort;
 mod environment;
 mod export;
 mod files;
@@ -12,7 +14,9 @@ mod playback;
 mod sculpt;
 mod station;
 
+pub use calibrate::{calibrate, describe, test_pattern, CalibrateOptions, Calibrated, Marker, TestPattern};
 pub use capture::{render_scene, renderer_for, save_png_atomically, RenderOptions, WrittenCapture};
+pub use comfort::apply_parallax_budget;
 pub use environment::{load_environment, EnvironmentError};
 pub use export::{export, final_field, final_mesh, welded_surface, ExportSummary};
 pub use files::write_atomically;

@@ -11,6 +11,8 @@
 //!  gilrs events ──► gamepad::GamepadMapper ──► GamepadMotion + actions
 //!  mouse events ──► mouse::MouseNavigator (trackball, distance, 3D cursor)
 //!      ──► desk::DeskInput (per frame) ──► motion::integrate ──► the mapped Target's pose
+//!  opentrack UDP datagrams ──► opentrack::OpentrackReceiver (thread) ──► screen-space head pose
+//!      ──► head::HeadFilter (dropout: hold, then ease to the default eye) ──► stereo rig
 //! ```
 //!
 //! Contract: every stage is a pure function or a small state machine fed plain values, tested
@@ -24,8 +26,10 @@ pub mod calibration;
 pub mod clutch;
 pub mod desk;
 pub mod gamepad;
+pub mod head;
 pub mod motion;
 pub mod mouse;
+pub mod opentrack;
 pub mod reader;
 pub mod smoothing;
 pub mod spacemouse;

@@ -35,6 +35,7 @@ pub(super) struct SceneFile {
     pub capture: Vec<Spanned<CaptureSpec>>,
     #[serde(default)]
     pub display: DisplaySpec,
+    pub head: Option<super::head::HeadSpec>,
 }
 
 #[derive(Deserialize)]

@@ -8,19 +8,23 @@
 
 mod colour;
 mod file;
+mod head;
+mod screen;
 mod timeline;
 mod tool;
 
 use std::path::{Path, PathBuf};
 
 pub use colour::{parse_hex, SceneColour};
+pub use head::{HeadKey, HeadPath};
+pub use screen::{ScreenCalibration, TrackerCalibration, SHIPPED_SCREEN_TOML};
 pub use timeline::{Hand, HandState, Key, Timeline};
 pub use tool::SceneToolShape;
 
 use crate::field::Colour;
 use crate::math::{Pose, Quat, Vec3};
 use crate::stereo::display::{DisplayMode, Parity};
-use crate::stereo::StereoRig;
+use crate::stereo::{HeadTrackedRig, Placement, StereoRig};
 use crate::tool::{Action, CsgOp, PlacedSolid, Solid};
 use file::{AttachSpec, ClaySpec, EnvironmentKind, LightKind, OpSpec, SceneFile, ShapeKind};
 
@@ -243,6 +247,8 @@ pub struct Scene {
     pub captures: Vec<Capture>,
     /// Display mode settings.
     pub display: DisplaySettings,
+    /// The scripted head, for head-tracked views of a calibrated screen (`[head]`).
+    pub head: Option<HeadPath>,
 }
 
 impl Scene {
@@ -254,6 +260,19 @@ impl Scene {
             source,
         })?;
         Scene::parse(&text, &path.display().to_string(), path.parent())
+    }
+
+    /// The head-tracked rig of a scene with a `[head]`: the calibrated screen placed so that
+    /// from the default eye it shows what `[camera]` shows, its plane on the convergence plane.
+    pub fn head_tracked_rig(&self) -> Option<HeadTrackedRig> {
+        let c = &self.head.as_ref()?.calibration;
+        Some(HeadTrackedRig {
+            screen: c.screen,
+            placement: Placement::from_rig(&c.screen, c.default_eye_m, &self.rig),
+            interaxial_m: c.ipd_m,
+            near_m: self.rig.near_m,
+            far_m: self.rig.far_m,
+        })
     }
 
     /// The built-in default scene.
@@ -631,6 +650,7 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
         captures.push(Capture { name: "final".to_owned(), time_s: timeline.duration_s(), show_tools: true });
     }
     captures.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+    let head = file.head.as_ref().map(|h| head::resolve_head(h, base_dir, at)).transpose()?;
 
     let fallback = match &file.display.fallback {
         None => DisplaySettings::default().fallback,
@@ -667,6 +687,7 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
         timeline,
         captures,
         display,
+        head,
     })
 }
 

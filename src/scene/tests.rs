@@ -10,6 +10,18 @@ fn err(text: &str) -> (usize, usize, String) {
     }
 }
 
+/// Checks each case `(text, "file:line:column", words)`: `parse` refuses the text with an
+/// error that starts with that place and contains the words.
+pub(super) fn assert_refused<T: std::fmt::Debug>(
+    cases: &[(&str, &str, &str)],
+    parse: impl Fn(&str) -> Result<T, SceneError>,
+) {
+    for &(text, place, words) in cases {
+        let e = parse(text).unwrap_err().to_string();
+        assert!(e.starts_with(place) && e.contains(words), "{text:?}: {e}");
+    }
+}
+
 #[test]
 fn the_default_scene_is_valid() {
     let s = Scene::default_scene();

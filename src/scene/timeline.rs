@@ -102,20 +102,35 @@ impl Timeline {
     /// The hand's state at `t`, or `None` if the hand has no key.
     pub fn state_at(&self, hand: Hand, t: f32) -> Option<HandState> {
         let keys = self.keys(hand);
-        let first = keys.first()?;
-        if t < first.time_s {
-            return Some(HandState { tool: first.tool, pose: first.pose, active: false });
-        }
-        let i = keys.partition_point(|k| k.time_s <= t) - 1;
-        let k = &keys[i];
-        match keys.get(i + 1) {
-            None => Some(HandState { tool: k.tool, pose: k.pose, active: false }),
-            Some(next) => {
-                let u = (t - k.time_s) / (next.time_s - k.time_s);
-                Some(HandState { tool: k.tool, pose: k.pose.lerp(&next.pose, u), active: k.active })
+        Some(match locate(keys, t, |k| k.time_s)? {
+            Span::Rest(k) => HandState { tool: k.tool, pose: k.pose, active: false },
+            Span::Between(k, next, u) => {
+                HandState { tool: k.tool, pose: k.pose.lerp(&next.pose, u), active: k.active }
             }
-        }
+        })
     }
+}
+
+/// Where a time falls among keys sorted by time.
+pub(super) enum Span<'k, K> {
+    /// Before the first key or after the last: resting at that key.
+    Rest(&'k K),
+    /// Between two keys, a fraction `u` in [0, 1) of the way.
+    Between(&'k K, &'k K, f32),
+}
+
+/// Finds `t` among `keys` (sorted by `time`, no two at the same time); `None` without keys.
+pub(super) fn locate<K>(keys: &[K], t: f32, time: impl Fn(&K) -> f32) -> Option<Span<'_, K>> {
+    let first = keys.first()?;
+    if t < time(first) {
+        return Some(Span::Rest(first));
+    }
+    let i = keys.partition_point(|k| time(k) <= t) - 1;
+    let k = &keys[i];
+    Some(match keys.get(i + 1) {
+        None => Span::Rest(k),
+        Some(next) => Span::Between(k, next, (t - time(k)) / (time(next) - time(k))),
+    })
 }
 
 #[cfg(test)]

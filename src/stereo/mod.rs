@@ -18,6 +18,16 @@
 //! Screen parallax of a point at distance `Z` along the view axis, on the convergence plane:
 //! `p = e · (Z − C) / Z` (metres on that plane), which is `p / W · width` pixels.
 //! Knows nothing of Vulkan handles; it hands the renderer plain [`StereoViews`].
+//!
+//! Head-tracked projection from a calibrated physical screen is in [`screen`] (this rig is its
+//! special case for an eye centred in front of the screen); interaxial, convergence, the
+//! parallax budget and auto-convergence are in [`comfort`].
+
+pub mod comfort;
+pub mod screen;
+
+pub use comfort::{screen_parallax_m, AutoConvergence, BudgetMode, ParallaxBudget, Viewing};
+pub use screen::{generalized_perspective, HeadTrackedRig, Placement, Screen};
 
 pub mod display;
 
@@ -94,8 +104,58 @@ impl StereoRig {
     /// Expected horizontal parallax (right-eye column minus left-eye column) in pixels of a
     /// point at `distance_m` along the view axis, for images `width_px` wide.
     pub fn parallax_px(&self, distance_m: f32, width_px: u32, aspect: f32) -> f32 {
-        let p = self.interaxial_m * (distance_m - self.convergence_m) / distance_m;
+        let p = screen_parallax_m(self.interaxial_m, self.convergence_m, distance_m);
         p / self.window_width_m(aspect) * width_px as f32
+    }
+
+    /// Largest interaxial distance [`Self::set_interaxial_m`] accepts, metres.
+    pub const MAX_INTERAXIAL_M: f32 = 0.25;
+
+    /// Sets the distance between the eyes at runtime, clamped to
+    /// `0..=`[`Self::MAX_INTERAXIAL_M`] (0 gives mono); a non-finite value is ignored.
+    pub fn set_interaxial_m(&mut self, interaxial_m: f32) {
+        if interaxial_m.is_finite() {
+            self.interaxial_m = interaxial_m.clamp(0.0, Self::MAX_INTERAXIAL_M);
+        }
+    }
+
+    /// Sets the distance of the zero-parallax plane at runtime, clamped between the near and
+    /// far clipping distances; a non-finite value is ignored.
+    pub fn set_convergence_m(&mut self, convergence_m: f32) {
+        if convergence_m.is_finite() {
+            self.convergence_m = convergence_m.clamp(self.near_m, self.far_m);
+        }
+    }
+
+    /// Distance of `point_m` along the view axis (what convergence on it means).
+    pub fn depth_of(&self, point_m: Vec3) -> f32 {
+        (point_m - self.eye_m).dot(self.forward())
+    }
+
+    /// One step of auto-convergence on `point_m` (the active tool or the sculpture's centre):
+    /// the filter moves the convergence towards the point's depth, see [`comfort`].
+    pub fn converge_on(&mut self, filter: &mut AutoConvergence, point_m: Vec3, dt_s: f32) {
+        let c = filter.update(self.depth_of(point_m), dt_s);
+        self.set_convergence_m(c);
+    }
+
+    /// How this rig's zero-parallax window maps onto a physical display `display_width_m`
+    /// wide, seen from `viewing_distance_m` by eyes `eye_separation_m` apart, for images of
+    /// the given aspect ratio (the window fills the display's width).
+    pub fn viewing(
+        &self,
+        display_width_m: f32,
+        viewing_distance_m: f32,
+        eye_separation_m: f32,
+        aspect: f32,
+    ) -> Viewing {
+        Viewing {
+            interaxial_m: self.interaxial_m,
+            convergence_m: self.convergence_m,
+            display_per_world: display_width_m / self.window_width_m(aspect),
+            viewing_distance_m,
+            eye_separation_m,
+        }
     }
 }
 
@@ -115,7 +175,6 @@ pub fn vulkan_frustum(l: f32, r: f32, b: f32, t: f32, near: f32, far: f32) -> Ma
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::Vec4;
 
     fn rig() -> StereoRig {
         StereoRig {
@@ -130,11 +189,7 @@ mod tests {
         }
     }
 
-    fn to_pixel(view: &EyeView, p: Vec3, width: f32, height: f32) -> (f32, f32, f32) {
-        let clip = view.projection * view.view * Vec4::from((p, 1.0));
-        let ndc = clip.truncate() / clip.w;
-        ((ndc.x * 0.5 + 0.5) * width, (ndc.y * 0.5 + 0.5) * height, ndc.z)
-    }
+    use screen::to_pixel;
 
     #[test]
     fn convergence_plane_has_zero_parallax_and_depth_maps_to_unit_range() {
@@ -163,6 +218,54 @@ mod tests {
             assert!(((xr - xl) - expected).abs() < 1e-2, "z {z}: {} vs {expected}", xr - xl);
             assert_eq!(xr - xl < 0.0, z < r.convergence_m, "crossed in front, uncrossed behind");
         }
+    }
+
+    #[test]
+    fn interaxial_and_convergence_change_at_runtime_within_bounds() {
+        let mut r = rig();
+        r.set_interaxial_m(0.03);
+        assert_eq!(r.interaxial_m, 0.03);
+        r.set_interaxial_m(-1.0);
+        assert_eq!(r.interaxial_m, 0.0);
+        r.set_interaxial_m(f32::NAN);
+        assert_eq!(r.interaxial_m, 0.0);
+        r.set_interaxial_m(0.064);
+        r.set_convergence_m(0.4);
+        let v = r.views(1.0);
+        let p = Vec3::new(0.05, 0.02, 0.2);
+        let (xl, _, _) = to_pixel(&v.eyes[0], p, 512.0, 512.0);
+        let (xr, _, _) = to_pixel(&v.eyes[1], p, 512.0, 512.0);
+        assert!((xl - xr).abs() < 1e-3, "the new convergence plane has zero parallax");
+        r.set_convergence_m(1e6);
+        assert_eq!(r.convergence_m, r.far_m);
+    }
+
+    #[test]
+    fn auto_convergence_brings_the_tool_to_zero_parallax() {
+        let mut r = rig();
+        let tool = Vec3::new(0.03, -0.02, 0.25);
+        let mut filter = AutoConvergence::new(r.convergence_m, 0.3, (r.near_m, r.far_m));
+        let mut last = r.convergence_m;
+        for _ in 0..300 {
+            r.converge_on(&mut filter, tool, 1.0 / 90.0);
+            assert!(r.convergence_m <= last + 1e-6, "moves steadily towards the tool");
+            last = r.convergence_m;
+        }
+        assert!((r.convergence_m - 0.35).abs() < 1e-3, "{}", r.convergence_m);
+        let v = r.views(1.0);
+        let (xl, _, _) = to_pixel(&v.eyes[0], tool, 512.0, 512.0);
+        let (xr, _, _) = to_pixel(&v.eyes[1], tool, 512.0, 512.0);
+        assert!((xl - xr).abs() < 0.05, "{}", xr - xl);
+    }
+
+    #[test]
+    fn the_rig_viewing_matches_its_pixel_parallax() {
+        let r = rig();
+        // A window as wide as the display: display parallax is parallax on the plane scaled.
+        let aspect = 16.0 / 9.0;
+        let v = r.viewing(0.531, 0.6, 0.063, aspect);
+        let px = r.parallax_px(1.2, 1920, aspect);
+        assert!((v.display_parallax_m(1.2) - px / 1920.0 * 0.531).abs() < 1e-6);
     }
 
     #[test]

@@ -1,5 +1,5 @@
 //! Criterion benchmarks of the CPU kernels: marching one brick, stamping the band-limited
-//! sphere, and re-meshing what a stroke dirtied. `argile bench` holds the end-to-end workloads.
+//! sphere, re-meshing what a stroke dirtied, and the head-tracked stereo views of a frame. `argile bench` holds the end-to-end workloads.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 
@@ -79,5 +79,27 @@ fn remesh(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, march, stamp, remesh);
+/// Both eyes' head-tracked views (Kooima's projection through the shipped 24" screen) for a
+/// moving head: the per-frame cost of fish-tank stereo.
+fn head_tracked_views(c: &mut Criterion) {
+    let calibration = argile::scene::ScreenCalibration::shipped();
+    let rig = argile::stereo::HeadTrackedRig {
+        screen: calibration.screen,
+        placement: argile::stereo::Placement::IDENTITY,
+        interaxial_m: calibration.ipd_m,
+        near_m: calibration.near_m,
+        far_m: calibration.far_m,
+    };
+    let mut i = 0u32;
+    c.bench_function("head_tracked_views/eyes=2", |b| {
+        b.iter(|| {
+            i = i.wrapping_add(1);
+            let x = (i % 100) as f32 * 0.002 - 0.1;
+            let head = Pose { position_m: Vec3::new(x, 0.02, 0.6), rotation: Quat::from_rotation_y(x) };
+            rig.views(&head)
+        })
+    });
+}
+
+criterion_group!(benches, march, stamp, remesh, head_tracked_views);
 criterion_main!(benches);

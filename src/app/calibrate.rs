@@ -1,0 +1,311 @@
+//! `argile calibrate`: the frusta a screen calibration gives, and a test-pattern stereo pair
+//! that shows whether it is right.
+//!
+//! The pattern is built in screen space (the world is the calibrated room, 1:1): a green grid
+//! of thin bars lying on the screen plane, which must show zero parallax (the two images
+//! agree on it), a red ball 12 % of the viewing distance in front of the screen (crossed
+//! disparity) and a blue ball 18 % of it behind the screen (uncrossed), both within the
+//! default 1° budget, each expected at `IPD · (Z − D) / Z` on the screen. Seen on the calibrated display from the default eye, with
+//! the right eye's image to the right eye, the grid sits on the glass and the balls float at
+//! the printed distances.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use anyhow::Result;
+
+use super::capture::{render_scene, RenderOptions, WrittenCapture};
+use crate::math::{Pose, Quat, Vec3};
+use crate::scene::{ClayPrimitive, HeadPath, Scene, ScreenCalibration};
+use crate::stereo::comfort::disparity_deg;
+use crate::stereo::screen::Frustum;
+use crate::stereo::screen_parallax_m;
+use crate::tool::{CsgOp, PlacedSolid, Solid};
+
+/// A marker of the test pattern and the disparity it must show.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Marker {
+    /// "near" or "far".
+    pub name: &'static str,
+    /// Its colour (linear RGB), for finding it in the images.
+    pub colour: Vec3,
+    /// Its centre, screen space.
+    pub position_m: Vec3,
+    /// Distance in front of the screen plane (negative: behind).
+    pub in_front_m: f32,
+    /// Expected parallax on the screen (right-eye position minus left-eye), metres.
+    pub parallax_m: f32,
+    /// The same in pixels of the rendered images.
+    pub parallax_px: f32,
+    /// Its visual angle from the default eye, degrees.
+    pub disparity_deg: f32,
+}
+
+/// The test pattern: a scene rendering it and what its markers must show.
+#[derive(Clone, Debug)]
+pub struct TestPattern {
+    /// The scene (world = screen space, head at the default eye).
+    pub scene: Scene,
+    /// The near and far markers.
+    pub markers: [Marker; 2],
+    /// The grid's colour (linear RGB).
+    pub grid_colour: Vec3,
+}
+
+/// Grid colour: green, so that neither marker's colour is confused with it.
+const GRID: Vec3 = Vec3::new(0.1, 0.9, 0.1);
+
+/// The test pattern of `calibration` for images `width_px` wide (their height follows the
+/// screen's aspect ratio).
+pub fn test_pattern(calibration: &ScreenCalibration, width_px: u32) -> TestPattern {
+    let c = calibration;
+    let (vr, vu, vn) = c.screen.basis();
+    let (w, h) = (c.screen.width_m(), c.screen.height_m());
+    let d = c.viewing_distance_m();
+    let height_px = ((width_px as f32 / c.screen.aspect()).round() as u32).max(16);
+    let facing = c.default_head().rotation;
+    let at = |x: f32, y: f32, z: f32| c.screen.centre_m() + vr * x + vu * y + vn * z;
+
+    // Bars of about 2 pixels across; the field's voxels a third of that.
+    let radius_m = w / width_px as f32;
+    let voxel_m = (radius_m / 1.5).clamp(1e-4, 0.05);
+    let mut scene = Scene::parse(
+        &format!(
+            "[field]\nvoxel_size_m = {voxel_m}\n[output]\nwidth_px = {width_px}\nheight_px = {height_px}\nsamples = 4\n\
+             [environment]\nshow = false\nbackground = [0.0, 0.0, 0.0]\n[stage]\nshow = false\n\
+             [[light]]\nkind = \"directional\"\ndirection = [0.3, -0.4, -1.0]\nattached_to = \"viewer\"\n\
+             [[capture]]\nname = \"calibration\"\ntime_s = 0.0\nshow_tools = false\n"
+        ),
+        "<calibration test pattern>",
+        None,
+    )
+    .expect("the generated test pattern scene is valid (tested)");
+    // The camera at the default eye looking along the screen's normal, its convergence plane on
+    // the screen: the world is screen space, 1:1.
+    scene.rig.eye_m = c.default_eye_m;
+    scene.rig.target_m = c.default_eye_m - vn * d;
+    scene.rig.up = vu;
+    scene.rig.convergence_m = d;
+    scene.rig.interaxial_m = c.ipd_m;
+    scene.rig.near_m = c.near_m;
+    scene.rig.far_m = c.far_m;
+    scene.head = Some(HeadPath { calibration: *c, keys: Vec::new() });
+
+    let bar = |centre: Vec3, half_length_m: f32, turn: Quat, colour: Vec3| ClayPrimitive {
+        solid: PlacedSolid {
+            solid: Solid::Bar { half_length_m, radius_m },
+            pose: Pose { position_m: centre, rotation: facing * turn },
+            scale: 1.0,
+        },
+        op: CsgOp::Union,
+        colour: colour.extend(1.0).to_array(),
+    };
+    for i in 1..8 {
+        let x = (i as f32 / 8.0 - 0.5) * w;
+        scene.clay.push(bar(
+            at(x, 0.0, 0.0),
+            0.5 * h,
+            Quat::from_rotation_z(std::f32::consts::FRAC_PI_2),
+            GRID,
+        ));
+    }
+    for j in 1..4 {
+        let y = (j as f32 / 4.0 - 0.5) * h;
+        scene.clay.push(bar(at(0.0, y, 0.0), 0.5 * w, Quat::IDENTITY, GRID));
+    }
+
+    let mut marker = |name, colour: Vec3, (x, y): (f32, f32), in_front_m: f32, radius_m: f32| {
+        let parallax_m = screen_parallax_m(c.ipd_m, d, d - in_front_m);
+        Marker {
+            name,
+            colour,
+            position_m: at(x, y, in_front_m),
+            in_front_m,
+            parallax_m,
+            parallax_px: parallax_m / w * width_px as f32,
+            disparity_deg: disparity_deg(parallax_m, d),
+        }
+        .with_ball(&mut scene.clay, radius_m)
+    };
+    let markers = [
+        // Each ball in a cell of the grid, clear of its bars, so neither eye sees a bar cut it.
+        marker("near", Vec3::new(1.0, 0.12, 0.08), (-0.3125 * w, -0.125 * h), 0.12 * d, 0.035 * h),
+        marker("far", Vec3::new(0.08, 0.25, 1.0), (0.3125 * w, 0.125 * h), -0.18 * d, 0.07 * h),
+    ];
+    TestPattern { scene, markers, grid_colour: GRID }
+}
+
+impl Marker {
+    fn with_ball(self, clay: &mut Vec<ClayPrimitive>, radius_m: f32) -> Self {
+        clay.push(ClayPrimitive {
+            solid: PlacedSolid {
+                solid: Solid::Sphere { radius_m },
+                pose: Pose { position_m: self.position_m, rotation: Quat::IDENTITY },
+                scale: 1.0,
+            },
+            op: CsgOp::Union,
+            colour: self.colour.extend(1.0).to_array(),
+        });
+        self
+    }
+}
+
+/// The calibration and its frusta in words and millimetres, for the terminal.
+pub fn describe(calibration: &ScreenCalibration, source: &str, pattern: &TestPattern) -> String {
+    let c = calibration;
+    let d = c.viewing_distance_m();
+    let mm = |v: Vec3| format!("({:.1}, {:.1}, {:.1}) mm", v.x * 1000.0, v.y * 1000.0, v.z * 1000.0);
+    let mut s = String::new();
+    let diagonal_in = c.screen.width_m().hypot(c.screen.height_m()) / 0.0254;
+    let _ = writeln!(s, "Screen calibration: {source}");
+    let _ = writeln!(
+        s,
+        "  screen: {:.1} × {:.1} mm ({diagonal_in:.1}\", aspect {:.3}), centre {}",
+        c.screen.width_m() * 1000.0,
+        c.screen.height_m() * 1000.0,
+        c.screen.aspect(),
+        mm(c.screen.centre_m())
+    );
+    let _ = writeln!(
+        s,
+        "  corners: lower left {}, lower right {}, upper left {}",
+        mm(c.screen.lower_left_m),
+        mm(c.screen.lower_right_m),
+        mm(c.screen.upper_left_m)
+    );
+    let _ = writeln!(
+        s,
+        "  default eye {} ({:.1} mm from the screen), IPD {:.1} mm, clipping {:.0} mm to {:.1} m",
+        mm(c.default_eye_m),
+        d * 1000.0,
+        c.ipd_m * 1000.0,
+        c.near_m * 1000.0,
+        c.far_m
+    );
+    let _ = writeln!(
+        s,
+        "  tracker at {}, opentrack UDP port {}",
+        mm(c.tracker.to_screen.position_m),
+        c.tracker.port
+    );
+    let head = c.default_head();
+    let half = head.rotation * Vec3::X * (0.5 * c.ipd_m);
+    for (name, eye) in [("left", head.position_m - half), ("right", head.position_m + half)] {
+        // On the screen plane (near = distance to the screen), the edges are physical offsets.
+        let f = Frustum::new(&c.screen, eye, d, c.far_m);
+        let [l, r, b, t] = f.lrbt;
+        let [al, ar, ab, at] = f.angles_deg();
+        let _ = writeln!(
+            s,
+            "  {name} eye at {}: screen edges from the eye's foot left {:.1}, right {:.1}, bottom {:.1}, top {:.1} mm; \
+             frustum angles left {al:.2}°, right {ar:.2}°, bottom {ab:.2}°, top {at:.2}° (field of view {:.2}° × {:.2}°)",
+            mm(f.eye_m),
+            l * 1000.0,
+            r * 1000.0,
+            b * 1000.0,
+            t * 1000.0,
+            ar - al,
+            at - ab
+        );
+    }
+    // The depth range within the budget, from p = IPD · (Z − D) / Z at p = ±the budget's parallax.
+    let p = 2.0 * d * (0.5 * c.budget.max_disparity_deg.to_radians()).tan();
+    let front = d - d * c.ipd_m / (c.ipd_m + p);
+    let behind = if p >= c.ipd_m { None } else { Some(d * c.ipd_m / (c.ipd_m - p) - d) };
+    let _ = writeln!(
+        s,
+        "  parallax budget ±{:.2}° ({:.1} mm on the screen): comfortable from {:.0} mm in front of the screen to {}",
+        c.budget.max_disparity_deg,
+        p * 1000.0,
+        front * 1000.0,
+        behind.map_or("infinity".to_owned(), |b| format!("{:.0} mm behind it", b * 1000.0))
+    );
+    let (w, h) = (pattern.scene.output.width_px, pattern.scene.output.height_px);
+    let _ =
+        writeln!(s, "Test pattern ({w} × {h} per eye): the green grid lies on the screen (zero parallax)");
+    for m in &pattern.markers {
+        let _ = writeln!(
+            s,
+            "  {} ball {:.0} mm {} the screen: parallax {:+.1} mm = {:+.2} px, {:+.2}° ({})",
+            m.name,
+            m.in_front_m.abs() * 1000.0,
+            if m.in_front_m > 0.0 { "in front of" } else { "behind" },
+            m.parallax_m * 1000.0,
+            m.parallax_px,
+            m.disparity_deg,
+            if m.parallax_m < 0.0 { "crossed" } else { "uncrossed" }
+        );
+    }
+    s
+}
+
+/// Options of `argile calibrate`.
+#[derive(Clone, Debug)]
+pub struct CalibrateOptions {
+    /// The calibration file (the shipped one when `None`).
+    pub calibration: Option<PathBuf>,
+    /// Folder for the test pattern pair.
+    pub out_dir: PathBuf,
+    /// Width of each eye's image.
+    pub width_px: u32,
+    /// Turn the Vulkan validation layer on.
+    pub validation: bool,
+}
+
+/// What `argile calibrate` did.
+#[derive(Clone, Debug)]
+pub struct Calibrated {
+    /// The description printed to the user.
+    pub report: String,
+    /// The test pattern.
+    pub pattern: TestPattern,
+    /// The rendered pair.
+    pub written: WrittenCapture,
+}
+
+/// Loads the calibration, describes its frusta and renders the test pattern pair.
+pub fn calibrate(options: &CalibrateOptions) -> Result<Calibrated> {
+    let (calibration, source) = match &options.calibration {
+        Some(path) => (ScreenCalibration::load(path)?, path.display().to_string()),
+        None => (ScreenCalibration::shipped(), "calibration/screen.toml (built in)".to_owned()),
+    };
+    let pattern = test_pattern(&calibration, options.width_px);
+    let report = describe(&calibration, &source, &pattern);
+    let render = RenderOptions {
+        out_dir: options.out_dir.clone(),
+        display_modes: Vec::new(),
+        progress: false,
+        validation: options.validation,
+        size_px: None,
+    };
+    let mut written = render_scene(&pattern.scene, &render)?;
+    let written = written.pop().expect("the test pattern has one capture");
+    Ok(Calibrated { report, pattern, written })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_shipped_pattern_expects_opposite_disparities_within_the_budget() {
+        let c = ScreenCalibration::shipped();
+        let p = test_pattern(&c, 512);
+        assert_eq!((p.scene.output.width_px, p.scene.output.height_px), (512, 288));
+        let [near, far] = &p.markers;
+        assert!(near.parallax_m < 0.0 && far.parallax_m > 0.0);
+        // 72 mm in front of a screen 600 mm away: 63 mm · (528 − 600) / 528 = −8.59 mm; 108 mm
+        // behind: 63 mm · 108 / 708 = 9.61 mm.
+        assert!((near.parallax_m + 0.008_591).abs() < 1e-5, "{}", near.parallax_m);
+        assert!((far.parallax_m - 0.009_610).abs() < 1e-5, "{}", far.parallax_m);
+        assert!(near.disparity_deg.abs() < 1.0 && far.disparity_deg < 1.0, "within the shipped budget");
+        let rig = p.scene.head_tracked_rig().unwrap();
+        assert!((rig.placement.scale - 1.0).abs() < 1e-5, "the world is screen space, 1:1");
+        assert!(rig.placement.translation_m.length() < 1e-5);
+        let text = describe(&c, "shipped", &p);
+        assert!(
+            text.contains("left eye") && text.contains("crossed") && text.contains("uncrossed"),
+            "{text}"
+        );
+    }
+}
