@@ -48,6 +48,10 @@ enum Command {
         /// Window size, WIDTHxHEIGHT, instead of the scene's output size.
         #[arg(long, value_parser = parse_size)]
         size: Option<(u32, u32)>,
+        /// How the window shows the stereo pair (default: the scene's `[display] mode`, else
+        /// anaglyph); the M key cycles the modes.
+        #[arg(long)]
+        display_mode: Option<DisplayMode>,
         /// Turn the Vulkan validation layer on (fails on any validation message).
         #[arg(long)]
         validation: bool,
@@ -154,20 +158,29 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         None => station(None, app::StationOptions::default()),
-        Some(Command::Run { scene, frames, screenshot, input_script, keys, save_to, size, validation }) => {
-            station(
-                scene,
-                app::StationOptions {
-                    frames,
-                    screenshot,
-                    script: input_script,
-                    keys,
-                    save_to,
-                    window_px: size,
-                    validation,
-                },
-            )
-        }
+        Some(Command::Run {
+            scene,
+            frames,
+            screenshot,
+            input_script,
+            keys,
+            save_to,
+            size,
+            display_mode,
+            validation,
+        }) => station(
+            scene,
+            app::StationOptions {
+                frames,
+                screenshot,
+                script: input_script,
+                keys,
+                save_to,
+                window_px: size,
+                validation,
+                display_mode,
+            },
+        ),
         Some(Command::Render { scene, out, display_mode, size, validation }) => {
             render(&scene, out, display_mode, size, validation)
         }

@@ -119,3 +119,30 @@ fn a_bad_input_script_is_refused_by_name_before_any_window_opens() {
     );
     assert!(Path::new(&script).exists());
 }
+
+#[test]
+fn quad_buffer_stereo_falls_back_with_a_notice_where_the_surface_has_one_layer() {
+    // Xvfb's surfaces offer a single image layer: quad-buffer cannot be shown there.
+    let x = Xvfb::start();
+    let scene = root().join("scenes/tests/station.toml");
+    let out = run_station(
+        &x,
+        &[
+            scene.to_str().unwrap(),
+            "--frames",
+            "2",
+            "--size",
+            "64x48",
+            "--display-mode",
+            "quad-buffer",
+            "--validation",
+        ],
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        stdout.contains("offers no stereo swapchain (maxImageArrayLayers is 1)")
+            && stdout.contains("showing anaglyph (the display fallback)"),
+        "{stdout}"
+    );
+}

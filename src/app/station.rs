@@ -40,6 +40,7 @@ use crate::math::{Mat4, Quat, Vec2, Vec3, Vec4};
 use crate::mesh::remesh_dirty;
 use crate::render::{Light, Presented, Renderer, RendererDesc, ToolGlyph, ValidationLog};
 use crate::scene::{line_column, FileError, Scene};
+use crate::stereo::display::{choose_mode, DisplayMode, Parity};
 use crate::tool::{Action, Stroke, Tool, ToolShape};
 
 /// The time step of a scripted run, seconds.
@@ -68,6 +69,8 @@ pub struct StationOptions {
     pub window_px: Option<(u32, u32)>,
     /// Run with the Vulkan validation layer; any message it reports fails the run.
     pub validation: bool,
+    /// The display mode (the scene's `[display] mode` when absent, else anaglyph).
+    pub display_mode: Option<DisplayMode>,
 }
 
 /// How a station run ended.
@@ -272,6 +275,13 @@ pub struct Station<'s> {
     stroke: Option<Stroke>,
     convergence_factor: f32,
     lights_follow_viewer: bool,
+    /// How the window shows the stereo pair.
+    display_mode: DisplayMode,
+    /// Whether the window's surface can show quad-buffer stereo.
+    quad_buffer: bool,
+    /// The window's top-left corner on the screen, pixels (interlace parity follows it).
+    window_origin: (i32, i32),
+    window_px: (u32, u32),
     save_to: PathBuf,
     saved: Option<PathBuf>,
     quit: bool,
@@ -319,6 +329,10 @@ impl<'s> Station<'s> {
             stroke: None,
             convergence_factor: scene.rig.convergence_m / distance.max(1e-6),
             lights_follow_viewer: false,
+            display_mode: scene.display.mode.unwrap_or(DisplayMode::Anaglyph),
+            quad_buffer: false,
+            window_origin: (0, 0),
+            window_px,
             save_to,
             saved: None,
             quit: false,
@@ -336,10 +350,17 @@ impl<'s> Station<'s> {
 
     /// The window changed size.
     pub fn resize(&mut self, window_px: (u32, u32)) {
+        self.window_px = window_px;
         self.mouse.resize(Vec2::new(window_px.0 as f32, window_px.1 as f32));
-        // The frame's views take their aspect from the output size.
-        self.view.output.width_px = window_px.0.max(1);
-        self.view.output.height_px = window_px.1.max(1);
+        self.fit_views();
+    }
+
+    /// The frame's views take their aspect from the output size: each eye's part of the window
+    /// in the display mode.
+    fn fit_views(&mut self) {
+        let (w, h) = self.display_mode.eye_size_for_output(self.window_px);
+        self.view.output.width_px = w.max(1);
+        self.view.output.height_px = h.max(1);
     }
 
     /// The modifiers held now.
@@ -490,7 +511,15 @@ impl<'s> Station<'s> {
                 self.view.rig = self.scene.rig;
                 self.convergence_factor = self.scene.rig.convergence_m / distance.max(1e-6);
             }
-            StationAction::NextDisplayMode => self.messages.push("this window shows one display mode".into()),
+            StationAction::NextDisplayMode => {
+                let modes = DisplayMode::ALL;
+                let at = modes.iter().position(|m| *m == self.display_mode).unwrap_or(0);
+                let usable = |m: &DisplayMode| self.quad_buffer || m.layers() == 1;
+                if let Some(next) = (1..=modes.len()).map(|i| modes[(at + i) % modes.len()]).find(usable) {
+                    self.display_mode = next;
+                    self.fit_views();
+                }
+            }
             StationAction::Apply
             | StationAction::PointerLeft
             | StationAction::PointerRight
@@ -515,9 +544,47 @@ impl<'s> Station<'s> {
                 (self.desk_tool.size_m() * 1000.0).round(),
                 self.desk_tool.action.name()
             ),
-            format!("convergence {:.2} m, eyes {:.0} mm", rig.convergence_m, rig.interaxial_m * 1000.0),
+            format!(
+                "{}: convergence {:.2} m, eyes {:.0} mm",
+                self.display_mode,
+                rig.convergence_m,
+                rig.interaxial_m * 1000.0
+            ),
             format!("{:.1} ms/frame, mouse {mouse}", self.frame_ms),
         ]
+    }
+
+    /// The display mode and, for interlaced modes, the parity in window pixels (the scene's
+    /// parity is the screen's; a window on an odd row or column flips it).
+    pub fn display(&self) -> (DisplayMode, Parity) {
+        let screen = self.scene.display.parity;
+        let parity = match self.display_mode {
+            DisplayMode::ColumnInterlaced => screen.for_origin(self.window_origin.0),
+            _ => screen.for_origin(self.window_origin.1),
+        };
+        (self.display_mode, parity)
+    }
+
+    /// Chooses the display mode for a surface of `max_layers` image layers on `device`:
+    /// quad-buffer stereo falls back to the scene's fallback mode where the surface cannot show
+    /// it. Returns the notice to show the user, if any.
+    pub fn set_surface(
+        &mut self,
+        wanted: DisplayMode,
+        device: &str,
+        max_layers: u32,
+    ) -> Result<Option<String>> {
+        self.quad_buffer = max_layers >= 2;
+        let choice = choose_mode(wanted, self.scene.display.fallback, device, max_layers)
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        self.display_mode = choice.mode;
+        self.fit_views();
+        Ok(choice.notice)
+    }
+
+    /// The window moved to `origin` (its top-left corner on the screen, pixels).
+    pub fn set_window_origin(&mut self, origin: (i32, i32)) {
+        self.window_origin = origin;
     }
 
     /// The last frame's duration, milliseconds (shown in the HUD).
@@ -721,6 +788,14 @@ impl WindowApp<'_, '_> {
             self.window_px,
         )?;
         tracing::info!("station window on {}", renderer.device_name());
+        let wanted = self.options.display_mode.unwrap_or(self.station.display_mode);
+        let layers = renderer.window_max_layers()?.unwrap_or(1);
+        if let Some(notice) = self.station.set_surface(wanted, renderer.device_name(), layers)? {
+            println!("{notice}");
+        }
+        if let Ok(p) = window.inner_position() {
+            self.station.set_window_origin((p.x, p.y));
+        }
         self.validation = Some(renderer.validation_log());
         // The 6-DoF devices, unless the run is scripted (its input is the script alone).
         if self.options.frames.is_none() {
@@ -780,7 +855,7 @@ impl WindowApp<'_, '_> {
         }
         let last = self.options.frames.is_some_and(|n| index + 1 >= n);
         let want_shot = last && self.options.screenshot.is_some();
-        let presented = renderer.present(&frame, want_shot)?;
+        let presented = renderer.present(&frame, self.station.display(), want_shot)?;
         // A scripted run shows its fixed step, so its pictures do not depend on the machine.
         self.station.set_frame_time(match self.options.frames {
             Some(_) => SCRIPTED_STEP_S * 1e3,
@@ -829,6 +904,11 @@ impl ApplicationHandler for WindowApp<'_, '_> {
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Moved(_) => {
+                if let Some(p) = self.window.as_ref().and_then(|w| w.inner_position().ok()) {
+                    self.station.set_window_origin((p.x, p.y));
+                }
+            }
             WindowEvent::Resized(size) => {
                 self.window_px = (size.width, size.height);
                 self.station.resize(self.window_px);
@@ -1014,5 +1094,34 @@ mod tests {
         station.devices(SCRIPTED_STEP_S, &[], Vec::new());
         station.step(SCRIPTED_STEP_S, |_| {});
         assert!(station.stroke.is_none() && !station.playback.field().in_stroke(), "release ends the stroke");
+    }
+
+    #[test]
+    fn the_display_mode_key_cycles_the_modes_the_surface_can_show_and_parity_follows_the_window() {
+        let scene = Scene::default_scene();
+        let mut station =
+            Station::new(&scene, KeyBindings::shipped(), (200, 100), PathBuf::from("unused.argile"));
+        let notice = station.set_surface(DisplayMode::QuadBuffer, "a flat display", 1).unwrap();
+        assert!(notice.unwrap().contains("a flat display offers no stereo swapchain"));
+        assert_eq!(station.display().0, DisplayMode::Anaglyph, "the scene's fallback");
+        let mut seen = Vec::new();
+        for _ in 0..DisplayMode::ALL.len() - 1 {
+            station.key(KeyCode::KeyM, true);
+            station.key(KeyCode::KeyM, false);
+            seen.push(station.display().0);
+        }
+        assert!(!seen.contains(&DisplayMode::QuadBuffer), "quad-buffer is skipped here: {seen:?}");
+        assert_eq!(seen.last(), Some(&DisplayMode::Anaglyph), "back to the start after every other mode");
+        station.set_surface(DisplayMode::SideBySide, "a flat display", 1).unwrap();
+        assert_eq!(
+            (station.view.output.width_px, station.view.output.height_px),
+            (100, 100),
+            "each eye half the width"
+        );
+        station.set_surface(DisplayMode::RowInterlaced, "a flat display", 1).unwrap();
+        let even = station.display().1;
+        station.set_window_origin((0, 7));
+        assert_eq!(station.display().1, even.flipped(), "a window on an odd row flips the rows' eyes");
+        assert!(station.set_surface(DisplayMode::QuadBuffer, "a flat display", 2).unwrap().is_none());
     }
 }

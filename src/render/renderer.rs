@@ -11,11 +11,11 @@ use ash::vk;
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 
 use super::chunks::{ArenaStorage, ChunkArena};
-use super::compose::{ComposedOutput, Composer, COMPOSED_FORMAT};
+use super::compose::{ComposeFramebuffers, ComposedOutput, Composer, COMPOSED_FORMAT};
 use super::environment::{build_radiance_cube, irradiance_sh9, reflection_lod, CubeMap};
 use super::gpu::buffer::{Buffer, MemoryUse};
 use super::gpu::device::Device;
-use super::gpu::image::{read_layers, transition, Image, ImageDesc, Sampler};
+use super::gpu::image::{read_layers, record_copy_to_buffer, transition, Image, ImageDesc, Sampler};
 use super::gpu::instance::Instance;
 use super::gpu::pipeline::{DescriptorPool, Layout, Pipeline, PipelineDesc, PUSH_CONSTANT_BYTES};
 use super::gpu::swapchain::{color_range, surface_extensions, Surface, SwapchainDesc};
@@ -584,22 +584,42 @@ impl Renderer {
         self.window.as_ref().map(WindowOutput::max_layers).transpose()
     }
 
-    /// Draws `frame` and shows it in the window; with `screenshot`, also reads back what was
-    /// shown. Waits for the frame to finish (one frame in flight).
-    pub fn present(&mut self, frame: &Frame, screenshot: bool) -> Result<Presented, RenderError> {
+    /// Draws `frame` and shows it in the window composed as `mode` (interlaced modes with
+    /// `parity`, in window pixels); with `screenshot`, also reads back what was shown (the
+    /// first layer). Each eye is rendered at the size the mode needs to fill the window. Waits
+    /// for the frame to finish (one frame in flight).
+    pub fn present(
+        &mut self,
+        frame: &Frame,
+        (mode, parity): (DisplayMode, Parity),
+        screenshot: bool,
+    ) -> Result<Presented, RenderError> {
         let Some(window) = self.window.as_mut() else {
             return Err(RenderError::Unsupported("this renderer draws offscreen; it has no window".into()));
         };
+        if window.desc.layers != mode.layers() {
+            window.desc.layers = mode.layers();
+            window.stale = true;
+        }
         window.refresh()?;
-        let Some(swapchain) = window.swapchain.as_ref() else {
+        let Some(extent) = window.swapchain.as_ref().map(|s| s.extent) else {
             return Ok(Presented::Skipped);
         };
+        let (eye_w, eye_h) = mode.eye_size_for_output((extent.width, extent.height));
+        if (eye_w.max(1), eye_h.max(1)) != (self.target.extent.width, self.target.extent.height) {
+            self.resize_eyes(eye_w.max(1), eye_h.max(1))?;
+        }
+        let source = self.target.output.view;
+        let window = self.window.as_mut().expect("checked above");
+        window.ensure_composer(source)?;
+        let composer = window.composer.as_mut().expect("made with the swapchain");
+        composer.prepare(mode)?;
+        let swapchain = window.swapchain.as_ref().expect("checked above");
         let Some((index, suboptimal)) = swapchain.acquire(window.acquired)? else {
             window.stale = true;
             return Ok(Presented::Skipped);
         };
-        let (image, extent, format, layers) =
-            (swapchain.images[index as usize], swapchain.extent, swapchain.format, swapchain.layers);
+        let (image, format, layers) = (swapchain.images[index as usize], swapchain.format, swapchain.layers);
         let rendered = swapchain.rendered[index as usize];
         let acquired = window.acquired;
         let screenshot = screenshot && swapchain.readable;
@@ -615,128 +635,83 @@ impl Renderer {
         self.write_uniforms(frame);
         self.write_hud(&frame.hud)?;
         let shot_buffer = self.screenshot.as_ref().filter(|_| screenshot).map(|b| b.raw);
+        let window = self.window.as_ref().expect("checked above");
+        let composer = window.composer.as_ref().expect("made above");
+        let framebuffers = &window.framebuffers[index as usize];
         self.submit(
             |cb| {
                 self.record_stereo(cb, frame);
-                self.record_to_window(cb, image, extent, layers);
+                self.record_composition(cb, composer, framebuffers, (mode, parity));
                 if let Some(buffer) = shot_buffer {
-                    transition(
-                        &self.device.raw,
-                        cb,
-                        image,
-                        color_range(layers),
-                        (
-                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                            vk::PipelineStageFlags::TRANSFER,
-                            vk::AccessFlags::TRANSFER_WRITE,
-                        ),
-                        (
-                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                            vk::PipelineStageFlags::TRANSFER,
-                            vk::AccessFlags::TRANSFER_READ,
-                        ),
+                    // The composition left the image ready to present; copy it on the way.
+                    let d = &self.device.raw;
+                    let present = (
+                        vk::ImageLayout::PRESENT_SRC_KHR,
+                        vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                        vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
                     );
-                    copy_to_host(&self.device.raw, cb, image, extent, layers, buffer);
-                    transition(
-                        &self.device.raw,
-                        cb,
-                        image,
-                        color_range(layers),
-                        (
-                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                            vk::PipelineStageFlags::TRANSFER,
-                            vk::AccessFlags::TRANSFER_READ,
-                        ),
-                        (
-                            vk::ImageLayout::PRESENT_SRC_KHR,
-                            vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                            vk::AccessFlags::empty(),
-                        ),
+                    let copy = (
+                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                        vk::PipelineStageFlags::TRANSFER,
+                        vk::AccessFlags::TRANSFER_READ,
                     );
-                } else {
-                    transition(
-                        &self.device.raw,
-                        cb,
-                        image,
-                        color_range(layers),
-                        (
-                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                            vk::PipelineStageFlags::TRANSFER,
-                            vk::AccessFlags::TRANSFER_WRITE,
-                        ),
-                        (
-                            vk::ImageLayout::PRESENT_SRC_KHR,
-                            vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                            vk::AccessFlags::empty(),
-                        ),
+                    transition(d, cb, image, color_range(layers), present, copy);
+                    record_copy_to_buffer(d, cb, image, (extent.width, extent.height, layers), buffer);
+                    let back = (
+                        vk::ImageLayout::PRESENT_SRC_KHR,
+                        vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                        vk::AccessFlags::empty(),
                     );
+                    transition(d, cb, image, color_range(layers), copy, back);
                 }
             },
             Some(acquired),
             Some(rendered),
         )?;
-        let window = self.window.as_mut().expect("checked above");
         let fits = window.swapchain.as_ref().expect("checked above").present(index)?;
         self.finish()?;
         self.drawn = true;
         if !fits || suboptimal {
             self.window.as_mut().expect("checked above").stale = true;
         }
-        let shot = match (&self.screenshot, shot_buffer) {
-            (Some(_), Some(_)) => {
-                let buffer = self.screenshot.as_mut().expect("matched above");
+        let shot = match shot_buffer {
+            Some(_) => {
+                let buffer = self.screenshot.as_mut().expect("made above");
                 let bytes = buffer.read()[..(shot_bytes / u64::from(layers)) as usize].to_vec();
                 Some(to_rgba(format, extent.width, extent.height, bytes))
             }
-            _ => None,
+            None => None,
         };
         Ok(Presented::Shown(shot))
     }
 
-    /// Records the composition of the eyes into swapchain image `image` (layers: 2 for
-    /// quad-buffer stereo), leaving it in `TRANSFER_DST_OPTIMAL`.
-    fn record_to_window(&self, cb: vk::CommandBuffer, image: vk::Image, extent: vk::Extent2D, layers: u32) {
-        let d = &self.device.raw;
-        transition(
-            d,
-            cb,
-            image,
-            color_range(layers),
-            (vk::ImageLayout::UNDEFINED, vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::empty()),
-            (
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::TRANSFER_WRITE,
-            ),
-        );
-        let src = self.target.extent;
-        let layers_of = |count| {
-            vk::ImageSubresourceLayers::default()
-                .aspect_mask(vk::ImageAspectFlags::COLOR)
-                .mip_level(0)
-                .base_array_layer(0)
-                .layer_count(count)
-        };
-        let corner =
-            |w: u32, h: u32| [vk::Offset3D::default(), vk::Offset3D { x: w as i32, y: h as i32, z: 1 }];
-        let blit = vk::ImageBlit::default()
-            .src_subresource(layers_of(layers))
-            .src_offsets(corner(src.width, src.height))
-            .dst_subresource(layers_of(layers))
-            .dst_offsets(corner(extent.width, extent.height));
-        // SAFETY: the render pass left the target's output in TRANSFER_SRC_OPTIMAL, the
-        // swapchain image was moved to TRANSFER_DST_OPTIMAL above; both have `layers` layers.
-        unsafe {
-            d.cmd_blit_image(
-                cb,
-                self.target.output.raw,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                image,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &[blit],
-                vk::Filter::LINEAR,
-            )
-        };
+    /// Remakes the stereo target (and what reads it) for eyes of `width` × `height` pixels.
+    /// No frame is in flight between frames, so the old one can go at once.
+    fn resize_eyes(&mut self, width: u32, height: u32) -> Result<(), RenderError> {
+        let samples = self.target.samples.as_raw();
+        let passes = self.view_passes();
+        self.composed = None;
+        if let Some(w) = &mut self.window {
+            w.framebuffers.clear();
+            w.composer = None;
+        }
+        let target = StereoTarget::new(&self.device, width, height, samples, passes)?;
+        self.pipelines = make_pipelines(&self.device, &self.layout, &target)?;
+        self.composer = Composer::new(
+            &self.device,
+            target.output.view,
+            COMPOSED_FORMAT,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        )?;
+        self.target = target;
+        self.readback = Buffer::new(
+            &self.device,
+            u64::from(width) * u64::from(height) * 4 * 2,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryUse::Readback,
+        )?;
+        self.drawn = false;
+        Ok(())
     }
 
     /// Records one view pass's draws: stage, clay, background (where nothing else is), then
@@ -854,47 +829,59 @@ impl Renderer {
         output: &ComposedOutput,
         (mode, parity): (DisplayMode, Parity),
     ) -> Result<(), RenderError> {
+        self.device.submit_and_wait(|cb| {
+            self.record_composition(cb, composer, output.framebuffers(), (mode, parity))
+        })
+    }
+
+    /// Records the composition of the stereo image into `framebuffers` with `composer`
+    /// (prepared for `mode`). The stereo passes leave the image ready for readback; the
+    /// composition samples it, then hands it back in that layout (which the next frame's
+    /// passes expect).
+    fn record_composition(
+        &self,
+        cb: vk::CommandBuffer,
+        composer: &Composer,
+        framebuffers: &ComposeFramebuffers,
+        (mode, parity): (DisplayMode, Parity),
+    ) {
         let extent = self.target.extent;
         let d = &self.device.raw;
         let source = self.target.output.raw;
         let range = self.target.output.desc.whole();
-        self.device.submit_and_wait(|cb| {
-            // The stereo passes leave the image ready for readback; the composition samples it,
-            // then hands it back in that layout (which the next frame's passes expect).
-            transition(
-                d,
-                cb,
-                source,
-                range,
-                (
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-                    vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
-                ),
-                (
-                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    vk::PipelineStageFlags::FRAGMENT_SHADER,
-                    vk::AccessFlags::SHADER_READ,
-                ),
-            );
-            composer.record(cb, output.framebuffers(), (mode, parity), (extent.width, extent.height));
-            transition(
-                d,
-                cb,
-                source,
-                range,
-                (
-                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    vk::PipelineStageFlags::FRAGMENT_SHADER,
-                    vk::AccessFlags::empty(),
-                ),
-                (
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::TRANSFER_READ,
-                ),
-            );
-        })
+        transition(
+            d,
+            cb,
+            source,
+            range,
+            (
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+            ),
+            (
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                vk::PipelineStageFlags::FRAGMENT_SHADER,
+                vk::AccessFlags::SHADER_READ,
+            ),
+        );
+        composer.record(cb, framebuffers, (mode, parity), (extent.width, extent.height));
+        transition(
+            d,
+            cb,
+            source,
+            range,
+            (
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                vk::PipelineStageFlags::FRAGMENT_SHADER,
+                vk::AccessFlags::empty(),
+            ),
+            (
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_READ,
+            ),
+        );
     }
 
     /// Copies the last composition to the host: one image of the mode's output size, or two
@@ -915,48 +902,6 @@ impl Drop for Renderer {
             let _ = self.device.raw.device_wait_idle();
             self.device.raw.destroy_fence(self.fence, None);
         }
-    }
-}
-
-/// Records a copy of every layer of `image` (in `TRANSFER_SRC_OPTIMAL`) into `buffer`, visible
-/// to the host once the submission finishes.
-fn copy_to_host(
-    d: &ash::Device,
-    cb: vk::CommandBuffer,
-    image: vk::Image,
-    extent: vk::Extent2D,
-    layers: u32,
-    buffer: vk::Buffer,
-) {
-    let region = vk::BufferImageCopy::default()
-        .image_subresource(
-            vk::ImageSubresourceLayers::default()
-                .aspect_mask(vk::ImageAspectFlags::COLOR)
-                .mip_level(0)
-                .base_array_layer(0)
-                .layer_count(layers),
-        )
-        .image_extent(vk::Extent3D { width: extent.width, height: extent.height, depth: 1 });
-    let to_host = vk::BufferMemoryBarrier::default()
-        .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-        .dst_access_mask(vk::AccessFlags::HOST_READ)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .buffer(buffer)
-        .offset(0)
-        .size(vk::WHOLE_SIZE);
-    // SAFETY: the image is in TRANSFER_SRC_OPTIMAL and the buffer holds every layer.
-    unsafe {
-        d.cmd_copy_image_to_buffer(cb, image, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buffer, &[region]);
-        d.cmd_pipeline_barrier(
-            cb,
-            vk::PipelineStageFlags::TRANSFER,
-            vk::PipelineStageFlags::HOST,
-            vk::DependencyFlags::empty(),
-            &[],
-            &[to_host],
-            &[],
-        );
     }
 }
 

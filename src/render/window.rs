@@ -10,6 +10,7 @@ use std::sync::Arc;
 use ash::vk;
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 
+use super::compose::{ComposeFramebuffers, Composer};
 use super::gpu::device::Device;
 use super::gpu::swapchain::{Surface, Swapchain, SwapchainDesc};
 use super::RenderError;
@@ -29,9 +30,14 @@ pub enum Presented {
     Skipped,
 }
 
-/// The window side of a renderer. Field order is drop order: the swapchain, then the surface,
-/// then the window the surface was made from.
+/// The window side of a renderer. Field order is drop order: the composition's framebuffers
+/// and pass, the swapchain, then the surface, then the window the surface was made from.
 pub(crate) struct WindowOutput {
+    /// One framebuffer set per swapchain image (made with `composer`).
+    pub(crate) framebuffers: Vec<ComposeFramebuffers>,
+    /// The composition into this swapchain's format, reading the renderer's stereo image;
+    /// remade with the swapchain or the stereo image.
+    pub(crate) composer: Option<Composer>,
     pub(crate) swapchain: Option<Swapchain>,
     /// Signalled when the acquired image may be written.
     pub(crate) acquired: vk::Semaphore,
@@ -56,6 +62,8 @@ impl WindowOutput {
         let acquired = unsafe { device.raw.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }
             .map_err(RenderError::vk("vkCreateSemaphore"))?;
         let mut output = Self {
+            framebuffers: Vec::new(),
+            composer: None,
             swapchain: None,
             acquired,
             surface,
@@ -84,9 +92,27 @@ impl WindowOutput {
             self.swapchain = None;
             return Ok(());
         }
+        self.framebuffers.clear();
+        self.composer = None;
         let old = self.swapchain.take();
         self.swapchain = Some(Swapchain::new(&self.device, &self.surface, self.desc, old)?);
         self.stale = false;
+        Ok(())
+    }
+
+    /// Makes the composition pass into the swapchain, reading `source` (the stereo image's
+    /// view), and its framebuffers, unless they are made.
+    pub(crate) fn ensure_composer(&mut self, source: vk::ImageView) -> Result<(), RenderError> {
+        let Some(swapchain) = &self.swapchain else { return Ok(()) };
+        if self.composer.is_none() {
+            self.framebuffers.clear();
+            let composer =
+                Composer::new(&self.device, source, swapchain.format, vk::ImageLayout::PRESENT_SRC_KHR)?;
+            for views in &swapchain.layer_views {
+                self.framebuffers.push(composer.framebuffers(views, swapchain.extent)?);
+            }
+            self.composer = Some(composer);
+        }
         Ok(())
     }
 

@@ -194,6 +194,49 @@ pub(crate) fn transition(
     };
 }
 
+/// Records a copy of every layer of `image` (8-bit RGBA, `width` × `height` × `layers`, in
+/// `TRANSFER_SRC_OPTIMAL`, its writes made available to transfers) into `buffer`, made visible
+/// to the host for when the submission has finished.
+pub(crate) fn record_copy_to_buffer(
+    d: &ash::Device,
+    cb: vk::CommandBuffer,
+    image: vk::Image,
+    (width, height, layers): (u32, u32, u32),
+    buffer: vk::Buffer,
+) {
+    let region = vk::BufferImageCopy::default()
+        .image_subresource(
+            vk::ImageSubresourceLayers::default()
+                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                .mip_level(0)
+                .base_array_layer(0)
+                .layer_count(layers),
+        )
+        .image_extent(vk::Extent3D { width, height, depth: 1 });
+    let to_host = vk::BufferMemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(vk::AccessFlags::HOST_READ)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .buffer(buffer)
+        .offset(0)
+        .size(vk::WHOLE_SIZE);
+    // SAFETY: `cb` is recording; the image is in TRANSFER_SRC_OPTIMAL (the caller's contract)
+    // and the buffer holds every layer.
+    unsafe {
+        d.cmd_copy_image_to_buffer(cb, image, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buffer, &[region]);
+        d.cmd_pipeline_barrier(
+            cb,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::HOST,
+            vk::DependencyFlags::empty(),
+            &[],
+            &[to_host],
+            &[],
+        );
+    }
+}
+
 /// Copies every layer of `source` (8-bit RGBA, in `TRANSFER_SRC_OPTIMAL`, its writes made
 /// available to transfers) into `buffer` and returns the layers as images, top row first.
 pub(crate) fn read_layers(
@@ -206,45 +249,7 @@ pub(crate) fn read_layers(
     debug_assert!(buffer.size as usize >= layer_bytes * layers as usize, "the readback buffer is too small");
     let d = &device.raw;
     let (image, raw_buffer) = (source.raw, buffer.raw);
-    device.submit_and_wait(|cb| {
-        let region = vk::BufferImageCopy::default()
-            .image_subresource(
-                vk::ImageSubresourceLayers::default()
-                    .aspect_mask(vk::ImageAspectFlags::COLOR)
-                    .mip_level(0)
-                    .base_array_layer(0)
-                    .layer_count(layers),
-            )
-            .image_extent(vk::Extent3D { width, height, depth: 1 });
-        let to_host = vk::BufferMemoryBarrier::default()
-            .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-            .dst_access_mask(vk::AccessFlags::HOST_READ)
-            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .buffer(raw_buffer)
-            .offset(0)
-            .size(vk::WHOLE_SIZE);
-        // SAFETY: the image is in TRANSFER_SRC_OPTIMAL (the caller's contract) and the buffer
-        // holds every layer.
-        unsafe {
-            d.cmd_copy_image_to_buffer(
-                cb,
-                image,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                raw_buffer,
-                &[region],
-            );
-            d.cmd_pipeline_barrier(
-                cb,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::PipelineStageFlags::HOST,
-                vk::DependencyFlags::empty(),
-                &[],
-                &[to_host],
-                &[],
-            );
-        }
-    })?;
+    device.submit_and_wait(|cb| record_copy_to_buffer(d, cb, image, (width, height, layers), raw_buffer))?;
     let bytes = buffer.read();
     Ok((0..layers as usize)
         .map(|i| {

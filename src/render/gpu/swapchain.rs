@@ -94,7 +94,8 @@ pub(crate) struct Swapchain {
     pub(crate) raw: vk::SwapchainKHR,
     pub(crate) loader: ash::khr::swapchain::Device,
     pub(crate) images: Vec<vk::Image>,
-    pub(crate) views: Vec<vk::ImageView>,
+    /// For each image, one 2D view per layer (the composition renders into each layer).
+    pub(crate) layer_views: Vec<Vec<vk::ImageView>>,
     /// Signalled when image `i`'s rendering is done; presentation waits on it.
     pub(crate) rendered: Vec<vk::Semaphore>,
     pub(crate) format: vk::Format,
@@ -201,7 +202,7 @@ impl Swapchain {
             vk::PresentModeKHR::MAILBOX
         };
         let readable = caps.supported_usage_flags.contains(vk::ImageUsageFlags::TRANSFER_SRC);
-        let mut usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_DST;
+        let mut usage = vk::ImageUsageFlags::COLOR_ATTACHMENT;
         if readable {
             usage |= vk::ImageUsageFlags::TRANSFER_SRC;
         }
@@ -235,7 +236,7 @@ impl Swapchain {
             raw,
             loader,
             images: Vec::new(),
-            views: Vec::new(),
+            layer_views: Vec::new(),
             rendered: Vec::new(),
             format: format.format,
             extent,
@@ -248,20 +249,19 @@ impl Swapchain {
         swapchain.images = unsafe { swapchain.loader.get_swapchain_images(raw) }
             .map_err(RenderError::vk("vkGetSwapchainImagesKHR"))?;
         for &image in &swapchain.images {
-            let view_info = vk::ImageViewCreateInfo::default()
-                .image(image)
-                .view_type(if desc.layers > 1 {
-                    vk::ImageViewType::TYPE_2D_ARRAY
-                } else {
-                    vk::ImageViewType::TYPE_2D
-                })
-                .format(format.format)
-                .subresource_range(color_range(desc.layers));
-            // SAFETY: a view of a live swapchain image with its own format; destroyed in Drop
-            // (pushed before the next fallible call, so a failure still frees it).
-            let view = unsafe { device.raw.create_image_view(&view_info, None) }
-                .map_err(RenderError::vk("vkCreateImageView"))?;
-            swapchain.views.push(view);
+            swapchain.layer_views.push(Vec::new());
+            for layer in 0..desc.layers {
+                let view_info = vk::ImageViewCreateInfo::default()
+                    .image(image)
+                    .view_type(vk::ImageViewType::TYPE_2D)
+                    .format(format.format)
+                    .subresource_range(color_range(1).base_array_layer(layer));
+                // SAFETY: a view of a live swapchain image with its own format; destroyed in
+                // Drop (pushed before the next fallible call, so a failure still frees it).
+                let view = unsafe { device.raw.create_image_view(&view_info, None) }
+                    .map_err(RenderError::vk("vkCreateImageView"))?;
+                swapchain.layer_views.last_mut().expect("pushed above").push(view);
+            }
             // SAFETY: a plain create on a live device; destroyed in Drop.
             let semaphore = unsafe { device.raw.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }
                 .map_err(RenderError::vk("vkCreateSemaphore"))?;
@@ -320,7 +320,7 @@ impl Drop for Swapchain {
             for &s in &self.rendered {
                 self.device.raw.destroy_semaphore(s, None);
             }
-            for &v in &self.views {
+            for &v in self.layer_views.iter().flatten() {
                 self.device.raw.destroy_image_view(v, None);
             }
             self.loader.destroy_swapchain(self.raw, None);
