@@ -39,11 +39,14 @@ pub enum Workload {
     /// The display-mode composition pass after a stereo frame of the default scene, in every
     /// display mode: the pass alone and its read-back.
     Compose,
+    /// The station's frame on the default scene while the desk tool sculpts, split into input,
+    /// tools, mesh, render and composition, in every display mode (offscreen: no present).
+    FrameDesktop,
 }
 
 impl Workload {
     /// Every workload, in the order `argile bench` runs them.
-    pub const ALL: [Workload; 7] = [
+    pub const ALL: [Workload; 8] = [
         Workload::Stamp,
         Workload::StampCarve,
         Workload::MeshFull,
@@ -51,6 +54,7 @@ impl Workload {
         Workload::RenderStereo,
         Workload::InputFrame,
         Workload::Compose,
+        Workload::FrameDesktop,
     ];
 }
 
@@ -119,6 +123,7 @@ pub fn run(workloads: &[Workload], size: BenchSize, mut emit: impl FnMut(Value))
             Workload::RenderStereo => bench_render(size, &mut emit)?,
             Workload::InputFrame => bench_input(size, &mut emit),
             Workload::Compose => bench_compose(size, &mut emit)?,
+            Workload::FrameDesktop => bench_frame_desktop(size, &mut emit)?,
         }
     }
     Ok(())
@@ -543,6 +548,83 @@ fn bench_compose(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> {
     Ok(())
 }
 
+/// The station's frame, offscreen, for a window of `image_px` × `image_px` in every display
+/// mode but quad-buffer: the desk tool (the default scene's first tool) carves while it moves
+/// right, so every frame stamps, re-meshes and uploads. Medians of each stage; the swapchain's
+/// present is not part of an offscreen frame.
+fn bench_frame_desktop(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> {
+    use super::station::{Station, SCRIPTED_STEP_S};
+    use crate::config::KeyBindings;
+    use winit::keyboard::KeyCode;
+    let scene = Scene::default_scene();
+    let window = (size.image_px, size.image_px);
+    for mode in DisplayMode::ALL.into_iter().filter(|m| m.layers() == 1) {
+        let mut station = Station::new(&scene, KeyBindings::shipped(), window, "unused.argile".into());
+        station.set_surface(mode, "offscreen", 1)?;
+        let eye = mode.eye_size_for_output(window);
+        let mut renderer = renderer_for(&scene, Some(eye), false, None)?;
+        renderer.apply(&mesh_all(station.field()))?;
+        station.key(KeyCode::Space, true);
+        station.key(KeyCode::ArrowRight, true);
+        let mut stages: [Vec<f64>; 7] = Default::default();
+        for frame_index in 0..size.frames + 2 {
+            let started = Instant::now();
+            let mut failed = None;
+            let mut upload_ms = 0.0;
+            let frame = station.step(SCRIPTED_STEP_S, |diff| {
+                let t = Instant::now();
+                if let Err(e) = renderer.apply(diff) {
+                    failed = Some(e);
+                }
+                upload_ms = t.elapsed().as_secs_f64() * 1e3;
+            });
+            if let Some(e) = failed {
+                return Err(e.into());
+            }
+            let t = Instant::now();
+            renderer.draw(&frame)?;
+            let render_ms = t.elapsed().as_secs_f64() * 1e3;
+            let t = Instant::now();
+            renderer.compose(mode, Parity::LeftEven)?;
+            let compose_ms = t.elapsed().as_secs_f64() * 1e3;
+            let total_ms = started.elapsed().as_secs_f64() * 1e3;
+            // The first frames make the mode's pipeline and output image.
+            if frame_index >= 2 {
+                let times = station.times();
+                for (v, x) in stages.iter_mut().zip([
+                    times.input_ms,
+                    times.tools_ms,
+                    times.mesh_ms - upload_ms,
+                    upload_ms,
+                    render_ms,
+                    compose_ms,
+                    total_ms,
+                ]) {
+                    v.push(x);
+                }
+            }
+        }
+        let [input, tools, mesh, upload, render, compose, total] = stages.map(median);
+        emit(json!({
+            "workload": "frame-desktop",
+            "mode": mode.name(),
+            "device": renderer.device_name(),
+            "window_px": [window.0, window.1],
+            "eye_px": [eye.0, eye.1],
+            "frames": size.frames,
+            "median_input_ms": input,
+            "median_tools_ms": tools,
+            "median_mesh_ms": mesh,
+            "median_upload_ms": upload,
+            "median_render_ms": render,
+            "median_compose_ms": compose,
+            "median_frame_ms": total,
+            "present": "not measured offscreen",
+        }));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -551,6 +633,31 @@ mod tests {
     fn every_workload_runs_by_default() {
         for w in <Workload as clap::ValueEnum>::value_variants() {
             assert!(Workload::ALL.contains(w), "{w:?} is missing from Workload::ALL");
+        }
+    }
+
+    #[test]
+    fn the_desktop_frame_is_split_into_its_stages_in_every_flat_display_mode() {
+        let mut lines = Vec::new();
+        run(&[Workload::FrameDesktop], BenchSize::QUICK, |v| lines.push(v)).unwrap();
+        assert_eq!(lines.len(), DisplayMode::ALL.len() - 1, "every mode but quad-buffer");
+        for l in &lines {
+            let stage = |k: &str| l[k].as_f64().unwrap_or_else(|| panic!("{k} in {l}"));
+            let parts: f64 = [
+                "median_input_ms",
+                "median_tools_ms",
+                "median_mesh_ms",
+                "median_upload_ms",
+                "median_render_ms",
+                "median_compose_ms",
+            ]
+            .iter()
+            .map(|k| stage(k))
+            .sum();
+            assert!(stage("median_tools_ms") > 0.0, "the desk tool carves every frame: {l}");
+            assert!(stage("median_render_ms") > 0.0 && stage("median_compose_ms") > 0.0, "{l}");
+            // Medians of parts need not add up exactly to the median total, but come close.
+            assert!(parts <= 1.5 * stage("median_frame_ms") + 1.0, "{l}");
         }
     }
 

@@ -237,6 +237,21 @@ impl InputScript {
     }
 }
 
+/// Where a station step spent its time, milliseconds.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepTimes {
+    /// Keys held, pointer and view.
+    pub input_ms: f64,
+    /// The scripted hands' and the desk tool's strokes into the field.
+    pub tools_ms: f64,
+    /// Re-meshing the dirty bricks and handing the diff to the renderer.
+    pub mesh_ms: f64,
+}
+
+fn ms_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
 /// The actions the desk tool cycles through with `next-action`.
 fn action_cycle() -> [Action; 6] {
     [
@@ -286,6 +301,7 @@ pub struct Station<'s> {
     saved: Option<PathBuf>,
     quit: bool,
     frame_ms: f32,
+    times: StepTimes,
     /// Messages for the user (saved, undo had nothing, ...).
     pub messages: Vec<String>,
 }
@@ -337,10 +353,16 @@ impl<'s> Station<'s> {
             saved: None,
             quit: false,
             frame_ms: 0.0,
+            times: StepTimes::default(),
             messages: Vec::new(),
         };
         station.resize(window_px);
         station
+    }
+
+    /// The clay.
+    pub fn field(&self) -> &crate::field::Field {
+        self.playback.field()
     }
 
     /// Whether the user asked to close.
@@ -587,6 +609,11 @@ impl<'s> Station<'s> {
         self.window_origin = origin;
     }
 
+    /// Where the last [`Station::step`] spent its time.
+    pub fn times(&self) -> StepTimes {
+        self.times
+    }
+
     /// The last frame's duration, milliseconds (shown in the HUD).
     pub fn set_frame_time(&mut self, ms: f32) {
         self.frame_ms = ms;
@@ -610,6 +637,7 @@ impl<'s> Station<'s> {
     /// Runs the tools and the field for `dt_s` seconds and returns the frame to draw; mesh
     /// changes go to `apply`.
     pub fn step(&mut self, dt_s: f32, mut apply: impl FnMut(&crate::mesh::MeshDiff)) -> crate::render::Frame {
+        let started = Instant::now();
         // The view first: the pointer moves in it.
         let rig = &mut self.view.rig;
         let base = self.scene.rig;
@@ -638,6 +666,9 @@ impl<'s> Station<'s> {
         tool.position_m = self.mouse.tool_position_m;
         let pose = *tool;
 
+        let tools_started = Instant::now();
+        self.times.input_ms = ms_since(started);
+
         // Tools: the scene's scripted hands, then the desk tool.
         let t = self.playback.time_s() + dt_s;
         self.playback.advance_to(t, |_| {});
@@ -657,11 +688,15 @@ impl<'s> Station<'s> {
             field.end_stroke();
         }
 
+        self.times.tools_ms = ms_since(tools_started);
+
         // Field → mesh → renderer.
+        let mesh_started = Instant::now();
         let diff = remesh_dirty(field);
         if !diff.is_empty() {
             apply(&diff);
         }
+        self.times.mesh_ms = ms_since(mesh_started);
 
         let mut frame = build_frame(&self.view, &self.playback.hands(), true);
         if self.lights_follow_viewer {
@@ -676,8 +711,7 @@ impl<'s> Station<'s> {
         }
         frame.hud = self.hud_lines();
         frame.tools.push(ToolGlyph {
-            model: Mat4::from_translation(pose.position_m)
-                * Mat4::from_scale(self.desk_tool.half_extents_m()),
+            model: pose.to_matrix() * Mat4::from_scale(self.desk_tool.half_extents_m()),
             colour: Vec4::from(self.desk_tool.colour).truncate().extend(0.35),
         });
         frame
