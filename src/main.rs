@@ -52,6 +52,10 @@ enum Command {
         /// anaglyph); the M key cycles the modes.
         #[arg(long)]
         display_mode: Option<DisplayMode>,
+        /// Track the head with opentrack ("UDP over network" output) on this address, e.g.
+        /// 127.0.0.1:4242: head-tracked views through the calibrated screen.
+        #[arg(long)]
+        opentrack: Option<std::net::SocketAddr>,
         /// Turn the Vulkan validation layer on (fails on any validation message).
         #[arg(long)]
         validation: bool,
@@ -167,6 +171,7 @@ fn main() -> ExitCode {
             save_to,
             size,
             display_mode,
+            opentrack,
             validation,
         }) => station(
             scene,
@@ -179,6 +184,7 @@ fn main() -> ExitCode {
                 window_px: size,
                 validation,
                 display_mode,
+                opentrack,
             },
         ),
         Some(Command::Render { scene, out, display_mode, size, validation }) => {

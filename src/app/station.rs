@@ -35,12 +35,16 @@ use crate::input::desk::{DeskInput, FrameInput};
 use crate::input::gamepad::{GamepadCalibration, GamepadMotion, Gamepads};
 use crate::input::motion::{ActionEvent, InputAction, MappingTable, Rates, Target};
 use crate::input::mouse::{MouseButton, MouseEvent, MouseMode, MouseNavigator, MouseSettings};
+use crate::input::opentrack::OpentrackHead;
 use crate::input::reader::{HidSource, Mailbox, ReaderConfig, ReaderHandle};
 use crate::math::{Mat4, Quat, Vec2, Vec3, Vec4};
 use crate::mesh::remesh_dirty;
 use crate::render::{Light, Presented, Renderer, RendererDesc, ToolGlyph, ValidationLog};
+use crate::scene::ScreenCalibration;
 use crate::scene::{line_column, FileError, Scene};
+use crate::stereo::comfort::AutoConvergence;
 use crate::stereo::display::{choose_mode, DisplayMode, Parity};
+use crate::stereo::{HeadTrackedRig, Placement};
 use crate::tool::{Action, Stroke, Tool, ToolShape};
 
 /// The time step of a scripted run, seconds.
@@ -71,6 +75,9 @@ pub struct StationOptions {
     pub validation: bool,
     /// The display mode (the scene's `[display] mode` when absent, else anaglyph).
     pub display_mode: Option<DisplayMode>,
+    /// Track the head with opentrack's UDP datagrams on this address (head-tracked views of the
+    /// scene's screen calibration, else the shipped `calibration/screen.toml`).
+    pub opentrack: Option<std::net::SocketAddr>,
 }
 
 /// How a station run ended.
@@ -290,6 +297,11 @@ pub struct Station<'s> {
     stroke: Option<Stroke>,
     convergence_factor: f32,
     lights_follow_viewer: bool,
+    /// Where the viewer's head is, for head-tracked views: opentrack, else the scene's
+    /// scripted head, else none (the scene's camera rig).
+    head: Option<OpentrackHead>,
+    /// Keeps the desk tool at zero parallax while on.
+    auto_convergence: Option<AutoConvergence>,
     /// How the window shows the stereo pair.
     display_mode: DisplayMode,
     /// Whether the window's surface can show quad-buffer stereo.
@@ -345,6 +357,8 @@ impl<'s> Station<'s> {
             stroke: None,
             convergence_factor: scene.rig.convergence_m / distance.max(1e-6),
             lights_follow_viewer: false,
+            head: None,
+            auto_convergence: None,
             display_mode: scene.display.mode.unwrap_or(DisplayMode::Anaglyph),
             quad_buffer: false,
             window_origin: (0, 0),
@@ -412,6 +426,17 @@ impl<'s> Station<'s> {
         let inverse = (eye.projection * eye.view).inverse();
         self.mouse.handle(event, &inverse, self.view.rig.forward());
         self.desk.poses.get_mut(Target::Tool).position_m = self.mouse.tool_position_m;
+    }
+
+    /// Tracks the viewer's head with `head` (opentrack): the views become head-tracked
+    /// through the screen calibration's screen.
+    pub fn attach_head(&mut self, head: OpentrackHead) {
+        self.head = Some(head);
+    }
+
+    /// The screen calibration head-tracked views use: the scene's, else the shipped one.
+    fn screen_calibration(&self) -> ScreenCalibration {
+        self.scene.head.as_ref().map_or_else(ScreenCalibration::shipped, |h| h.calibration.clone())
     }
 
     /// Reads SpaceMouse events and states from `mailbox` (filled by a reader thread).
@@ -523,6 +548,16 @@ impl<'s> Station<'s> {
                 }
             }
             StationAction::ToggleLights => self.lights_follow_viewer = !self.lights_follow_viewer,
+            StationAction::ToggleAutoConvergence => {
+                self.auto_convergence = match self.auto_convergence {
+                    Some(_) => None,
+                    None => Some(AutoConvergence::new(
+                        self.view.rig.convergence_m,
+                        AutoConvergence::DEFAULT_TIME_CONSTANT_S,
+                        (self.view.rig.near_m * 2.0, self.view.rig.far_m * 0.5),
+                    )),
+                };
+            }
             StationAction::ResetView => {
                 let distance = (self.scene.rig.eye_m - self.scene.rig.target_m).length();
                 self.mouse.scene_rotation = Quat::IDENTITY;
@@ -572,7 +607,16 @@ impl<'s> Station<'s> {
                 rig.convergence_m,
                 rig.interaxial_m * 1000.0
             ),
-            format!("{:.1} ms/frame, mouse {mouse}", self.frame_ms),
+            format!(
+                "{:.1} ms/frame, mouse {mouse}{}{}",
+                self.frame_ms,
+                if self.auto_convergence.is_some() { ", auto-convergence" } else { "" },
+                match &self.head {
+                    Some(h) if h.lost() => ", head lost",
+                    Some(_) => ", head tracked",
+                    None => "",
+                }
+            ),
         ]
     }
 
@@ -647,6 +691,12 @@ impl<'s> Station<'s> {
         rig.eye_m = base.target_m + rotation * offset;
         rig.up = rotation * base.up;
         rig.convergence_m = self.mouse.distance_m * self.convergence_factor;
+        if let Some(auto) = &mut self.auto_convergence {
+            // The desk tool's depth along the view, smoothly.
+            let depth = (self.mouse.tool_position_m - rig.eye_m).dot(rig.forward());
+            rig.convergence_m = auto.update(depth, dt_s);
+            self.convergence_factor = rig.convergence_m / self.mouse.distance_m.max(1e-6);
+        }
 
         let step = POINTER_SPEED_M_PER_S * dt_s;
         let (right, up, forward) = (rig.right(), rig.right().cross(rig.forward()), rig.forward());
@@ -708,6 +758,25 @@ impl<'s> Station<'s> {
                     Light::Point { position_m, .. } => *position_m = pivot + rotation * (*position_m - pivot),
                 }
             }
+        }
+        let head_pose = match (&mut self.head, &self.scene.head) {
+            (Some(tracker), _) => Some(tracker.pose()),
+            (None, Some(path)) => Some(path.pose_at(self.playback.time_s())),
+            (None, None) => None,
+        };
+        if let Some(head) = head_pose {
+            // Fish-tank views: the scene's convergence plane on the calibrated screen, seen from
+            // the tracked eyes.
+            let c = self.screen_calibration();
+            let rig = &self.view.rig;
+            let tracked = HeadTrackedRig {
+                screen: c.screen,
+                placement: Placement::from_rig(&c.screen, c.default_eye_m, rig),
+                interaxial_m: c.ipd_m,
+                near_m: rig.near_m,
+                far_m: rig.far_m,
+            };
+            frame.views = tracked.views(&head);
         }
         frame.hud = self.hud_lines();
         frame.tools.push(ToolGlyph {
@@ -831,6 +900,12 @@ impl WindowApp<'_, '_> {
             self.station.set_window_origin((p.x, p.y));
         }
         self.validation = Some(renderer.validation_log());
+        if let Some(addr) = self.options.opentrack {
+            let head = OpentrackHead::start(&self.station.screen_calibration(), Some(addr))
+                .with_context(|| format!("cannot listen for opentrack datagrams on {addr}"))?;
+            println!("head tracking: listening for opentrack on {addr}");
+            self.station.attach_head(head);
+        }
         // The 6-DoF devices, unless the run is scripted (its input is the script alone).
         if self.options.frames.is_none() {
             match ReaderHandle::spawn(HidSource::new, ReaderConfig::default()) {
@@ -1157,5 +1232,58 @@ mod tests {
         station.set_window_origin((0, 7));
         assert_eq!(station.display().1, even.flipped(), "a window on an odd row flips the rows' eyes");
         assert!(station.set_surface(DisplayMode::QuadBuffer, "a flat display", 2).unwrap().is_none());
+    }
+
+    #[test]
+    fn opentrack_datagrams_move_the_station_views_and_auto_convergence_follows_the_tool() {
+        use crate::input::opentrack::encode_packet;
+        let scene = Scene::default_scene();
+        let mut station =
+            Station::new(&scene, KeyBindings::shipped(), (160, 90), PathBuf::from("unused.argile"));
+        let untracked = station.step(SCRIPTED_STEP_S, |_| {}).views;
+        let mut calibration = station.screen_calibration();
+        calibration.tracker.hold_s = 59.0; // no dropout between two steps on a slow machine
+        let head = OpentrackHead::start(&calibration, Some("127.0.0.1:0".parse().unwrap())).unwrap();
+        let to = head.receiver().local_addr();
+        station.attach_head(head);
+        let sender = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+        // Nothing received yet: the default eye, seeing from the camera rig's centre (the eyes
+        // the viewer's own distance apart, the calibration's IPD).
+        let centred = station.step(SCRIPTED_STEP_S, |_| {}).views;
+        let middle = |v: &crate::render::StereoViews| (v.eyes[0].position_m + v.eyes[1].position_m) * 0.5;
+        assert!(
+            (middle(&centred) - middle(&untracked)).length() < 1e-4,
+            "{} vs {}",
+            middle(&centred),
+            middle(&untracked)
+        );
+        // The head 10 cm to the right: both eyes move right in the scene.
+        let moved = loop {
+            sender.send_to(&encode_packet([10.0, 0.0, 60.0], [0.0; 3]), to).unwrap();
+            std::thread::sleep(std::time::Duration::from_millis(20));
+            let views = station.step(SCRIPTED_STEP_S, |_| {}).views;
+            if (views.eyes[0].position_m - centred.eyes[0].position_m).length() > 1e-3 {
+                break views;
+            }
+        };
+        let right = station.view.rig.right();
+        for (m, c) in moved.eyes.iter().zip(&centred.eyes) {
+            assert!((m.position_m - c.position_m).dot(right) > 0.01, "the eye went right");
+        }
+        assert!(station.hud_lines()[2].contains("head tracked"));
+
+        // Auto-convergence: the tool 10 cm nearer than the target; the plane follows, smoothly.
+        station.mouse.tool_position_m = station.view.rig.target_m - station.view.rig.forward() * 0.1;
+        station.key(KeyCode::KeyC, true);
+        station.key(KeyCode::KeyC, false);
+        let before = station.view.rig.convergence_m;
+        station.step(SCRIPTED_STEP_S, |_| {});
+        let first = station.view.rig.convergence_m;
+        for _ in 0..120 {
+            station.step(SCRIPTED_STEP_S, |_| {});
+        }
+        let depth = (station.mouse.tool_position_m - station.view.rig.eye_m).dot(station.view.rig.forward());
+        assert!(first < before && first > depth, "one step moves part of the way: {before} → {first}");
+        assert!((station.view.rig.convergence_m - depth).abs() < 1e-3, "two seconds later it is there");
     }
 }

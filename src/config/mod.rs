@@ -55,6 +55,8 @@ pub enum StationAction {
     ToggleMouseMode,
     /// Switch the lights between following the sculpture and following the viewer.
     ToggleLights,
+    /// Keep the desk tool at zero parallax (smoothly), or stop.
+    ToggleAutoConvergence,
     /// Put the view and the tool back where the scene starts them.
     ResetView,
     /// Held: move the desk tool left (in the view).
@@ -89,6 +91,7 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("interaxial-narrower", StationAction::InteraxialNarrower),
     ("toggle-mouse-mode", StationAction::ToggleMouseMode),
     ("toggle-lights", StationAction::ToggleLights),
+    ("toggle-auto-convergence", StationAction::ToggleAutoConvergence),
     ("reset-view", StationAction::ResetView),
     ("pointer-left", StationAction::PointerLeft),
     ("pointer-right", StationAction::PointerRight),
