@@ -436,7 +436,7 @@ impl<'s> Station<'s> {
 
     /// The screen calibration head-tracked views use: the scene's, else the shipped one.
     fn screen_calibration(&self) -> ScreenCalibration {
-        self.scene.head.as_ref().map_or_else(ScreenCalibration::shipped, |h| h.calibration.clone())
+        self.scene.head.as_ref().map_or_else(ScreenCalibration::shipped, |h| h.calibration)
     }
 
     /// Reads SpaceMouse events and states from `mailbox` (filled by a reader thread).
