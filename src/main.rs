@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use argile::app::{self, bench, RenderOptions};
+use argile::io::autosave::AutosaveConfig;
 use argile::mesh::export::ExportFormat;
 use argile::scene::Scene;
 use argile::stereo::Preview;
@@ -41,6 +42,8 @@ enum Command {
         /// Turn the Vulkan validation layer on (fails on any validation message).
         #[arg(long)]
         validation: bool,
+        #[command(flatten)]
+        autosave: AutosaveArgs,
     },
     /// Plays a scene to the end of its timeline and saves its clay as a sculpt (`.argile`).
     Save {
@@ -52,7 +55,12 @@ enum Command {
         /// Replace the file if it exists.
         #[arg(long)]
         force: bool,
+        #[command(flatten)]
+        autosave: AutosaveArgs,
     },
+    /// Recovers the sculpts of sessions that did not close cleanly (a crash, a power cut) and
+    /// says where each is saved. The station does this at every start.
+    Recover,
     /// Writes the clay of a scene (as it is at the end of its timeline) or of a saved sculpt
     /// (`.argile`) as a mesh file.
     ///
@@ -87,6 +95,42 @@ enum Command {
     },
 }
 
+/// Autosave of a scripted session.
+#[derive(clap::Args)]
+struct AutosaveArgs {
+    /// Journal every finished stroke in the state folder, so that a crash loses at most the
+    /// stroke in progress; sessions that did not close are recovered first.
+    #[arg(long)]
+    autosave: bool,
+    /// Seconds of work between two autosave checkpoints.
+    #[arg(long, default_value_t = 60.0, value_parser = parse_seconds)]
+    checkpoint_s: f64,
+    /// Seconds a journaled stroke may wait for its sync to disk (at most 1).
+    #[arg(long, default_value_t = 1.0, value_parser = parse_seconds)]
+    sync_s: f64,
+}
+
+impl AutosaveArgs {
+    /// The autosave settings if autosave is on, after recovering unclosed sessions.
+    fn start(&self) -> Option<AutosaveConfig> {
+        self.autosave.then(|| {
+            app::recover_and_report();
+            AutosaveConfig {
+                checkpoint_interval: std::time::Duration::from_secs_f64(self.checkpoint_s),
+                sync_interval: std::time::Duration::from_secs_f64(self.sync_s.min(1.0)),
+                ..AutosaveConfig::default()
+            }
+        })
+    }
+}
+
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if (0.01..=86_400.0).contains(&v) => Ok(v),
+        _ => Err(format!("`{s}` is not a number of seconds from 0.01 to 86400")),
+    }
+}
+
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) =
         s.split_once('x').ok_or_else(|| format!("`{s}` is not WIDTHxHEIGHT (for example 512x512)"))?;
@@ -110,8 +154,8 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         None => station(),
-        Some(Command::Render { scene, out, preview, size, validation }) => {
-            render(&scene, out, preview, size, validation)
+        Some(Command::Render { scene, out, preview, size, validation, autosave }) => {
+            render(&scene, out, preview, size, validation, &autosave)
         }
         Some(Command::Export { input, format, out, force }) => app::export(&input, format, &out, force, true)
             .map(|s| {
@@ -123,8 +167,16 @@ fn main() -> ExitCode {
                     s.bytes
                 )
             }),
-        Some(Command::Save { scene, out, force }) => app::save_scene_sculpt(&scene, &out, force)
-            .map(|s| println!("wrote {} ({} bricks, {} bytes)", s.path.display(), s.bricks, s.bytes)),
+        Some(Command::Save { scene, out, force, autosave }) => {
+            app::save_scene_sculpt(&scene, &out, force, autosave.start())
+                .map(|s| println!("wrote {} ({} bricks, {} bytes)", s.path.display(), s.bricks, s.bytes))
+        }
+        Some(Command::Recover) => {
+            if app::recover_and_report() == 0 {
+                println!("No session is left to recover: every earlier session closed cleanly.");
+            }
+            Ok(())
+        }
         Some(Command::Info) => info(),
         Some(Command::Bench { json, quick, workloads }) => run_bench(json, quick, &workloads),
     };
@@ -153,6 +205,7 @@ fn station() -> Result<()> {
     } else {
         println!("No display found: rendering the default scene headless.");
     }
+    app::recover_and_report();
     let scene = Scene::default_scene();
     let options = RenderOptions {
         out_dir: PathBuf::from("argile-out"),
@@ -161,7 +214,8 @@ fn station() -> Result<()> {
         validation: false,
         size_px: None,
     };
-    let written = app::render_scene(&scene, &options)?;
+    let toml = argile::scene::DEFAULT_SCENE_TOML;
+    let written = app::render_scene_autosaved(&scene, &options, Some(AutosaveConfig::default()), Some(toml))?;
     print_written(&written);
     Ok(())
 }
@@ -172,10 +226,13 @@ fn render(
     preview: Option<Preview>,
     size: Option<(u32, u32)>,
     validation: bool,
+    autosave: &AutosaveArgs,
 ) -> Result<()> {
-    let scene = Scene::load(scene)?;
+    let text = std::fs::read_to_string(scene)
+        .with_context(|| format!("cannot read scene file {}", scene.display()))?;
+    let scene = Scene::parse(&text, &scene.display().to_string(), scene.parent())?;
     let options = RenderOptions { out_dir: out, preview, progress: true, validation, size_px: size };
-    let written = app::render_scene(&scene, &options)?;
+    let written = app::render_scene_autosaved(&scene, &options, autosave.start(), Some(&text))?;
     print_written(&written);
     Ok(())
 }

@@ -2,19 +2,24 @@
 //!
 //! The only module that knows every other; the CLI in `main.rs` is a thin shell over it.
 
+mod autosave;
 pub mod bench;
 mod capture;
 mod environment;
 mod export;
-mod files;
 mod frame;
 mod playback;
 mod sculpt;
 
-pub use capture::{render_scene, renderer_for, save_png_atomically, RenderOptions, WrittenCapture};
+pub use crate::io::write_atomically;
+pub use autosave::{
+    autosave_root, recover_and_report, recover_sessions, recovered_dir, start_autosave, RecoveredSculpt,
+};
+pub use capture::{
+    render_scene, render_scene_autosaved, renderer_for, save_png_atomically, RenderOptions, WrittenCapture,
+};
 pub use environment::{load_environment, EnvironmentError};
 pub use export::{export, final_field, final_mesh, welded_surface, ExportSummary};
-pub use files::write_atomically;
 pub use frame::{build_frame, world_lights};
 pub use playback::Playback;
 pub use sculpt::{is_sculpt, load_sculpt, save_scene_sculpt, SavedSculpt, SCULPT_EXTENSION};

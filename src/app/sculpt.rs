@@ -5,8 +5,11 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 
-use super::export::final_field;
-use super::files::write_atomically;
+use super::autosave::start_autosave;
+use super::export::end_s;
+use super::playback::Playback;
+use crate::io::autosave::AutosaveConfig;
+use crate::io::write_atomically;
 use crate::io::{decode, encode, Sculpt};
 use crate::scene::Scene;
 
@@ -30,8 +33,15 @@ pub struct SavedSculpt {
 }
 
 /// Plays the scene file `scene_path` to the end of its timeline and saves its clay, with the
-/// scene's text, to `out` (atomically; an existing file only when `overwrite`).
-pub fn save_scene_sculpt(scene_path: &Path, out: &Path, overwrite: bool) -> Result<SavedSculpt> {
+/// scene's text, to `out` (atomically; an existing file only when `overwrite`). With
+/// `autosave`, the strokes are journaled as they are played, and the session is closed once
+/// `out` is written.
+pub fn save_scene_sculpt(
+    scene_path: &Path,
+    out: &Path,
+    overwrite: bool,
+    autosave: Option<AutosaveConfig>,
+) -> Result<SavedSculpt> {
     // Checked here too (`write_atomically` checks again) so a refused save costs no playback.
     if !overwrite && out.exists() {
         bail!("{} already exists; pass --force to replace it", out.display());
@@ -40,11 +50,20 @@ pub fn save_scene_sculpt(scene_path: &Path, out: &Path, overwrite: bool) -> Resu
     let text = std::fs::read_to_string(scene_path)
         .with_context(|| format!("cannot read scene file {}", scene_path.display()))?;
     let scene = Scene::parse(&text, &scene_path.display().to_string(), scene_path.parent())?;
-    let field = final_field(&scene);
+    let source = scene_path.display().to_string();
+    let mut playback = Playback::new_autosaved(&scene, |field| {
+        autosave.and_then(|config| start_autosave(field, Some(&text), &source, config))
+    });
+    playback.advance_to(end_s(&scene), |_| {});
+    let session = playback.finish_autosave();
+    let field = playback.into_field();
     let bytes = encode(&field, Some(&text), &mut |_| {});
     write_atomically(out, overwrite, |w| {
         w.write_all(&bytes).with_context(|| format!("cannot write {}", out.display()))
     })?;
+    if let Some(session) = session {
+        session.close()?;
+    }
     Ok(SavedSculpt { path: out.to_path_buf(), bricks: field.brick_count(), bytes: bytes.len() })
 }
 

@@ -24,10 +24,39 @@
 //!   bad checksum, a future version, an unknown or repeated chunk, sizes or counts past the
 //!   limits, a brick key twice, densities outside [0, 1] or non-finite samples. It never
 //!   allocates what a header claims before checking the claim against the file's size.
-//! - Files are written atomically by the caller (`app::write_atomically`).
+//! - Files are written atomically ([`write_atomically`]).
 //!
 //! Later versions (resolution levels, undo history, freeform tools) add chunk tags; a reader
 //! keeps reading every version it has shipped.
+//!
+//! ## Autosave: journal and snapshots
+//!
+//! While a session sculpts, [`autosave`] keeps, in a session folder of the user's state
+//! directory (`autosave/<session>/`):
+//!
+//! ```text
+//!  session.json        who owns the session: process id and start token, start time, source
+//!  snapshot-N.argile   the sculpt after its first N strokes, in the format above
+//!  journal-B.argj      the strokes after stroke B, appended as they finish:
+//!     header  "ARGJ" · version u32 (1) · base stroke B u64 · CRC-32 of these 16 bytes u32
+//!     records chunks as above, tag STRK, one per finished stroke (or undo, redo):
+//!             stroke number u64 (B + 1, B + 2, …) · brick count u32 · per brick: present
+//!             u8 (0: the brick is now empty) · key (3 × i32) · if present, its 512
+//!             densities and 512 RGBA colours (f32), as in BRKS
+//!  closed              written (atomically) when the session ends cleanly
+//! ```
+//!
+//! - A record holds every brick its stroke changed, as it is after the stroke: replaying the
+//!   records in order on a snapshot gives the sculpt after each stroke, bit for bit.
+//! - Records are written by a background thread and synced to disk in batches (at most one
+//!   second after they are written): the sculpting thread only hands over shared bricks.
+//! - A checkpoint writes `snapshot-N` atomically (temporary file, sync, rename, sync folder),
+//!   then starts a new journal; only then are older snapshots and the journals they cover
+//!   removed. Nothing already on disk is ever overwritten in place.
+//! - Recovery loads the newest snapshot that reads whole, then applies the records numbered
+//!   after it, from the journals in order of their base, while they follow one another
+//!   (N + 1, N + 2, …). The first record that is cut short, fails its checksum or breaks the
+//!   numbering ends the journal: a torn tail is discarded, never applied.
 
 use std::collections::HashSet;
 
@@ -35,6 +64,12 @@ use serde::{Deserialize, Serialize};
 
 use crate::field::{Brick, BrickKey, Field, BRICK_SIZE, BRICK_VOLUME};
 use crate::math::IVec3;
+
+mod atomic;
+pub mod autosave;
+mod journal;
+
+pub use atomic::write_atomically;
 
 /// The format version this build writes.
 pub const VERSION: u32 = 1;
@@ -46,6 +81,7 @@ pub const MAX_CHUNKS: u32 = 1 << 20;
 pub const BRICKS_PER_CHUNK: usize = 512;
 
 const MAGIC: &[u8; 4] = b"ARGL";
+/// Bytes of one stored brick: its key, densities and colours.
 const BRICK_RECORD: usize = 12 + BRICK_VOLUME * 4 + BRICK_VOLUME * 16;
 const CHUNK_HEADER: usize = 16;
 
@@ -80,79 +116,168 @@ struct Meta {
 
 /// Encodes a sculpt; `progress` gets the fraction of bricks written.
 pub fn encode(field: &Field, scene_toml: Option<&str>, progress: &mut dyn FnMut(f32)) -> Vec<u8> {
-    let mut keys: Vec<BrickKey> = field.brick_keys().collect();
-    keys.sort_unstable_by_key(|k| k.to_array());
+    let bricks: Vec<(BrickKey, &Brick)> = field.shared_bricks().map(|(k, b)| (k, &**b)).collect();
+    encode_bricks(field.transform().voxel_size_m, field.iso(), bricks, scene_toml, progress)
+}
+
+/// Encodes a sculpt given as its settings and bricks (in any order).
+pub(crate) fn encode_bricks(
+    voxel_size_m: f32,
+    iso: f32,
+    mut bricks: Vec<(BrickKey, &Brick)>,
+    scene_toml: Option<&str>,
+    progress: &mut dyn FnMut(f32),
+) -> Vec<u8> {
+    bricks.sort_unstable_by_key(|(k, _)| k.to_array());
     let meta = Meta {
         format: "argile sculpt".into(),
-        voxel_size_m: field.transform().voxel_size_m,
-        iso: field.iso(),
+        voxel_size_m,
+        iso,
         brick_size: BRICK_SIZE,
-        bricks: keys.len() as u64,
+        bricks: bricks.len() as u64,
     };
-    let mut chunks: Vec<([u8; 4], Vec<u8>)> =
-        vec![(*b"META", serde_json::to_vec(&meta).expect("plain values serialise"))];
-    if let Some(text) = scene_toml {
-        chunks.push((*b"SCNE", text.as_bytes().to_vec()));
-    }
-    let groups = keys.chunks(BRICKS_PER_CHUNK);
-    let group_count = groups.len().max(1);
-    for (i, group) in groups.enumerate() {
-        let mut raw = Vec::with_capacity(group.len() * BRICK_RECORD);
-        for key in group {
-            let brick = field.brick(*key).expect("listed keys are stored");
-            for c in key.to_array() {
-                raw.extend_from_slice(&c.to_le_bytes());
-            }
-            for d in brick.density.iter() {
-                raw.extend_from_slice(&d.to_le_bytes());
-            }
-            for c in brick.colour.iter().flatten() {
-                raw.extend_from_slice(&c.to_le_bytes());
-            }
-        }
-        chunks.push((*b"BRKS", raw));
-        progress((i + 1) as f32 / group_count as f32);
-    }
+    let groups = bricks.chunks(BRICKS_PER_CHUNK);
+    let chunk_count = 1 + u32::from(scene_toml.is_some()) + groups.len() as u32;
     let mut out = Vec::new();
     out.extend_from_slice(MAGIC);
     out.extend_from_slice(&VERSION.to_le_bytes());
-    out.extend_from_slice(&(chunks.len() as u32).to_le_bytes());
-    for (tag, raw) in chunks {
-        let stored = lz4_flex::block::compress(&raw);
-        out.extend_from_slice(&tag);
-        out.extend_from_slice(&(raw.len() as u32).to_le_bytes());
-        out.extend_from_slice(&(stored.len() as u32).to_le_bytes());
-        out.extend_from_slice(&crc32fast::hash(&stored).to_le_bytes());
-        out.extend_from_slice(&stored);
+    out.extend_from_slice(&chunk_count.to_le_bytes());
+    put_chunk(&mut out, *b"META", &serde_json::to_vec(&meta).expect("plain values serialise"));
+    if let Some(text) = scene_toml {
+        put_chunk(&mut out, *b"SCNE", text.as_bytes());
+    }
+    let group_count = groups.len().max(1);
+    let mut raw = Vec::new();
+    for (i, group) in groups.enumerate() {
+        raw.clear();
+        raw.reserve(group.len() * BRICK_RECORD);
+        for (key, brick) in group {
+            put_brick(&mut raw, *key, brick);
+        }
+        put_chunk(&mut out, *b"BRKS", &raw);
+        progress((i + 1) as f32 / group_count as f32);
     }
     out
 }
 
-fn u32_at(bytes: &[u8], at: usize) -> u32 {
+/// Appends a chunk: tag, raw and stored lengths, CRC-32 of the stored bytes, stored bytes.
+pub(crate) fn put_chunk(out: &mut Vec<u8>, tag: [u8; 4], raw: &[u8]) {
+    let stored = lz4_flex::block::compress(raw);
+    out.extend_from_slice(&tag);
+    out.extend_from_slice(&(raw.len() as u32).to_le_bytes());
+    out.extend_from_slice(&(stored.len() as u32).to_le_bytes());
+    out.extend_from_slice(&crc32fast::hash(&stored).to_le_bytes());
+    out.extend_from_slice(&stored);
+}
+
+/// Appends a brick's key, densities and colours.
+pub(crate) fn put_brick(out: &mut Vec<u8>, key: BrickKey, brick: &Brick) {
+    for c in key.to_array() {
+        out.extend_from_slice(&c.to_le_bytes());
+    }
+    for d in brick.density.iter() {
+        out.extend_from_slice(&d.to_le_bytes());
+    }
+    for c in brick.colour.iter().flatten() {
+        out.extend_from_slice(&c.to_le_bytes());
+    }
+}
+
+pub(crate) fn u32_at(bytes: &[u8], at: usize) -> u32 {
     u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"))
+}
+
+/// Reads the brick record at the start of `record` (at least [`BRICK_RECORD`] bytes),
+/// refusing densities outside [0, 1] and colours that are not numbers.
+pub(crate) fn read_brick(record: &[u8]) -> Result<(BrickKey, Brick), String> {
+    let key = IVec3::new(u32_at(record, 0) as i32, u32_at(record, 4) as i32, u32_at(record, 8) as i32);
+    let mut brick = Brick::default();
+    let f = |i: usize| f32::from_le_bytes(record[i..i + 4].try_into().expect("4 bytes"));
+    for i in 0..BRICK_VOLUME {
+        let d = f(12 + 4 * i);
+        if !(0.0..=1.0).contains(&d) {
+            return Err(format!("brick {key} holds density {d}, outside [0, 1]"));
+        }
+        brick.density[i] = d;
+        let c = std::array::from_fn(|j| f(12 + 4 * BRICK_VOLUME + 16 * i + 4 * j));
+        if c.iter().any(|v: &f32| !v.is_finite()) {
+            return Err(format!("brick {key} holds a colour that is not a number"));
+        }
+        brick.colour[i] = c;
+    }
+    Ok((key, brick))
+}
+
+/// One chunk read whole and checked.
+pub(crate) struct Chunk {
+    pub(crate) tag: [u8; 4],
+    /// The tag as text, for messages.
+    pub(crate) name: String,
+}
+
+/// Reads chunk number `index` at `*at` into `raw`, checking its size limit, checksum and
+/// decompressed length; on success `*at` moves past it.
+pub(crate) fn read_chunk(
+    bytes: &[u8],
+    at: &mut usize,
+    index: u32,
+    raw: &mut Vec<u8>,
+) -> Result<Chunk, String> {
+    if bytes.len() - *at < CHUNK_HEADER {
+        return Err(format!("it ends inside the header of chunk {index} (truncated)"));
+    }
+    let tag: [u8; 4] = bytes[*at..*at + 4].try_into().expect("4 bytes");
+    let raw_len = u32_at(bytes, *at + 4) as usize;
+    let stored_len = u32_at(bytes, *at + 8) as usize;
+    let crc = u32_at(bytes, *at + 12);
+    let name = String::from_utf8_lossy(&tag).into_owned();
+    let start = *at + CHUNK_HEADER;
+    if raw_len > MAX_CHUNK_BYTES {
+        return Err(format!(
+            "chunk {index} ({name}) claims {raw_len} bytes, over the {MAX_CHUNK_BYTES} limit"
+        ));
+    }
+    if stored_len > bytes.len() - start {
+        return Err(format!("it ends inside chunk {index} ({name}) (truncated)"));
+    }
+    let stored = &bytes[start..start + stored_len];
+    if crc32fast::hash(stored) != crc {
+        return Err(format!("chunk {index} ({name}) fails its checksum: the file is damaged"));
+    }
+    raw.clear();
+    raw.resize(raw_len, 0);
+    match lz4_flex::block::decompress_into(stored, raw) {
+        Ok(n) if n == raw_len => {}
+        _ => return Err(format!("chunk {index} ({name}) does not decompress to its stated size")),
+    }
+    *at = start + stored_len;
+    Ok(Chunk { tag, name })
 }
 
 /// Decodes a sculpt, refusing anything not written whole by [`encode`] (see the module docs);
 /// `file` names the file in errors, `progress` gets the fraction of the file read.
 pub fn decode(bytes: &[u8], file: &str, progress: &mut dyn FnMut(f32)) -> Result<Sculpt, SculptError> {
-    let fail = |reason: String| SculptError { file: file.to_owned(), reason };
+    decode_inner(bytes, progress).map_err(|reason| SculptError { file: file.to_owned(), reason })
+}
+
+fn decode_inner(bytes: &[u8], progress: &mut dyn FnMut(f32)) -> Result<Sculpt, String> {
     if bytes.len() < 12 || &bytes[..4] != MAGIC {
-        return Err(fail("it is not an Argile sculpt (no ARGL header)".into()));
+        return Err("it is not an Argile sculpt (no ARGL header)".into());
     }
     let version = u32_at(bytes, 4);
     if version == 0 || version > VERSION {
-        return Err(fail(format!(
+        return Err(format!(
             "it is format version {version}; this Argile reads versions 1 to {VERSION} (a newer Argile wrote it)"
-        )));
+        ));
     }
     let chunk_count = u32_at(bytes, 8);
     // Every chunk takes at least its header: a count the file cannot hold is refused before
     // anything is allocated for it.
     if chunk_count > MAX_CHUNKS || chunk_count as usize > (bytes.len() - 12) / CHUNK_HEADER {
-        return Err(fail(format!(
+        return Err(format!(
             "it declares {chunk_count} chunks, more than its {} bytes can hold",
             bytes.len()
-        )));
+        ));
     }
     let mut at = 12;
     let mut meta: Option<Meta> = None;
@@ -161,103 +286,58 @@ pub fn decode(bytes: &[u8], file: &str, progress: &mut dyn FnMut(f32)) -> Result
     let mut keys: HashSet<BrickKey> = HashSet::new();
     let mut raw = Vec::new();
     for index in 0..chunk_count {
-        if bytes.len() - at < CHUNK_HEADER {
-            return Err(fail(format!("it ends inside the header of chunk {index} (truncated)")));
-        }
-        let tag: [u8; 4] = bytes[at..at + 4].try_into().expect("4 bytes");
-        let raw_len = u32_at(bytes, at + 4) as usize;
-        let stored_len = u32_at(bytes, at + 8) as usize;
-        let crc = u32_at(bytes, at + 12);
-        let name = String::from_utf8_lossy(&tag).into_owned();
-        at += CHUNK_HEADER;
-        if raw_len > MAX_CHUNK_BYTES {
-            return Err(fail(format!(
-                "chunk {index} ({name}) claims {raw_len} bytes, over the {MAX_CHUNK_BYTES} limit"
-            )));
-        }
-        if stored_len > bytes.len() - at {
-            return Err(fail(format!("it ends inside chunk {index} ({name}) (truncated)")));
-        }
-        let stored = &bytes[at..at + stored_len];
-        at += stored_len;
-        if crc32fast::hash(stored) != crc {
-            return Err(fail(format!("chunk {index} ({name}) fails its checksum: the file is damaged")));
-        }
-        raw.clear();
-        raw.resize(raw_len, 0);
-        match lz4_flex::block::decompress_into(stored, &mut raw) {
-            Ok(n) if n == raw_len => {}
-            _ => return Err(fail(format!("chunk {index} ({name}) does not decompress to its stated size"))),
-        }
+        let Chunk { tag, name } = read_chunk(bytes, &mut at, index, &mut raw)?;
         match (&tag, &meta) {
             (b"META", None) if index == 0 => {
-                let m: Meta = serde_json::from_slice(&raw)
-                    .map_err(|e| fail(format!("its META chunk is not valid: {e}")))?;
+                let m: Meta =
+                    serde_json::from_slice(&raw).map_err(|e| format!("its META chunk is not valid: {e}"))?;
                 if m.format != "argile sculpt" || m.brick_size != BRICK_SIZE {
-                    return Err(fail(format!(
+                    return Err(format!(
                         "its META chunk describes `{}` with bricks of {}",
                         m.format, m.brick_size
-                    )));
+                    ));
                 }
                 if !(m.voxel_size_m.is_finite() && m.voxel_size_m > 0.0 && m.voxel_size_m < 1.0) {
-                    return Err(fail(format!("its voxel size {} m is not a usable size", m.voxel_size_m)));
+                    return Err(format!("its voxel size {} m is not a usable size", m.voxel_size_m));
                 }
                 if !(m.iso > 0.0 && m.iso < 1.0) {
-                    return Err(fail(format!("its iso-level {} is outside (0, 1)", m.iso)));
+                    return Err(format!("its iso-level {} is outside (0, 1)", m.iso));
                 }
                 field = Some(Field::new(m.voxel_size_m, m.iso));
                 meta = Some(m);
             }
-            (b"META", _) => return Err(fail(format!("chunk {index} is a second or late META chunk"))),
-            (_, None) => return Err(fail("its first chunk is not META".into())),
+            (b"META", _) => return Err(format!("chunk {index} is a second or late META chunk")),
+            (_, None) => return Err("its first chunk is not META".into()),
             (b"SCNE", Some(_)) if scene_toml.is_none() => {
                 let text =
-                    String::from_utf8(raw.clone()).map_err(|_| fail("its scene text is not UTF-8".into()))?;
+                    String::from_utf8(raw.clone()).map_err(|_| "its scene text is not UTF-8".to_owned())?;
                 scene_toml = Some(text);
             }
             (b"BRKS", Some(_)) => {
                 if raw.len() % BRICK_RECORD != 0 {
-                    return Err(fail(format!("chunk {index} (BRKS) holds a partial brick")));
+                    return Err(format!("chunk {index} (BRKS) holds a partial brick"));
                 }
                 let field = field.as_mut().expect("META came first");
                 for record in raw.chunks_exact(BRICK_RECORD) {
-                    let key = IVec3::new(
-                        u32_at(record, 0) as i32,
-                        u32_at(record, 4) as i32,
-                        u32_at(record, 8) as i32,
-                    );
+                    let (key, brick) = read_brick(record)?;
                     if !keys.insert(key) {
-                        return Err(fail(format!("brick {key} is stored twice")));
-                    }
-                    let mut brick = Brick::default();
-                    let f = |i: usize| f32::from_le_bytes(record[i..i + 4].try_into().expect("4 bytes"));
-                    for i in 0..BRICK_VOLUME {
-                        let d = f(12 + 4 * i);
-                        if !(0.0..=1.0).contains(&d) {
-                            return Err(fail(format!("brick {key} holds density {d}, outside [0, 1]")));
-                        }
-                        brick.density[i] = d;
-                        let c = std::array::from_fn(|j| f(12 + 4 * BRICK_VOLUME + 16 * i + 4 * j));
-                        if c.iter().any(|v: &f32| !v.is_finite()) {
-                            return Err(fail(format!("brick {key} holds a colour that is not a number")));
-                        }
-                        brick.colour[i] = c;
+                        return Err(format!("brick {key} is stored twice"));
                     }
                     field.insert_brick(key, brick);
                 }
             }
-            _ => return Err(fail(format!("chunk {index} has an unknown or repeated tag `{name}`"))),
+            _ => return Err(format!("chunk {index} has an unknown or repeated tag `{name}`")),
         }
         progress(at as f32 / bytes.len() as f32);
     }
     if at != bytes.len() {
-        return Err(fail(format!("{} bytes follow its last chunk", bytes.len() - at)));
+        return Err(format!("{} bytes follow its last chunk", bytes.len() - at));
     }
     let (Some(meta), Some(mut field)) = (meta, field) else {
-        return Err(fail("it holds no META chunk".into()));
+        return Err("it holds no META chunk".into());
     };
     if keys.len() as u64 != meta.bricks {
-        return Err(fail(format!("it holds {} bricks, its META chunk says {}", keys.len(), meta.bricks)));
+        return Err(format!("it holds {} bricks, its META chunk says {}", keys.len(), meta.bricks));
     }
     field.take_dirty();
     Ok(Sculpt { field, scene_toml })
