@@ -35,17 +35,27 @@ pub enum Workload {
     /// The per-frame cost of desk input (mailbox drain, calibration, smoothing, integration,
     /// gamepad mapping, trackball) with 1, 2 and 4 SpaceMice and as many gamepads.
     InputFrame,
+    /// The autosave journal's cost on the sculpting thread per finished stroke (strokes of
+    /// radius 8 and 16 voxels carving a sphere), and the strokes' own cost with and without it.
+    JournalStroke,
+    /// Saving a sculpt of over 10 million samples: MB/s, size on disk against memory.
+    SaveLarge,
+    /// Loading that sculpt back: MB/s.
+    LoadLarge,
 }
 
 impl Workload {
     /// Every workload, in the order `argile bench` runs them.
-    pub const ALL: [Workload; 6] = [
+    pub const ALL: [Workload; 9] = [
         Workload::Stamp,
         Workload::StampCarve,
         Workload::MeshFull,
         Workload::RemeshStamp,
         Workload::RenderStereo,
         Workload::InputFrame,
+        Workload::JournalStroke,
+        Workload::SaveLarge,
+        Workload::LoadLarge,
     ];
 }
 
@@ -66,6 +76,8 @@ pub struct BenchSize {
     pub sphere_radius_voxels: f32,
     /// Timed input frames per device set.
     pub input_frames: usize,
+    /// Radius of the solid sphere the save and load workloads store, voxels.
+    pub large_sphere_radius_voxels: f32,
 }
 
 impl BenchSize {
@@ -78,6 +90,7 @@ impl BenchSize {
         big_mesh_triangles: 1_000_000,
         sphere_radius_voxels: 100.0,
         input_frames: 20_000,
+        large_sphere_radius_voxels: 130.0,
     };
     /// A small run that checks the workloads work (not for figures).
     pub const QUICK: BenchSize = BenchSize {
@@ -88,10 +101,11 @@ impl BenchSize {
         big_mesh_triangles: 100_000,
         sphere_radius_voxels: 24.0,
         input_frames: 200,
+        large_sphere_radius_voxels: 24.0,
     };
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
+pub(super) fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     let n = v.len();
     if n == 0 {
@@ -113,6 +127,9 @@ pub fn run(workloads: &[Workload], size: BenchSize, mut emit: impl FnMut(Value))
             Workload::RemeshStamp => bench_remesh_stamp(size, &mut emit),
             Workload::RenderStereo => bench_render(size, &mut emit)?,
             Workload::InputFrame => bench_input(size, &mut emit),
+            Workload::JournalStroke => super::bench_io::journal_stroke(size, &mut emit)?,
+            Workload::SaveLarge => super::bench_io::save_large(size, &mut emit)?,
+            Workload::LoadLarge => super::bench_io::load_large(size, &mut emit)?,
         }
     }
     Ok(())
@@ -211,7 +228,7 @@ fn bench_stamp_carve(size: BenchSize, emit: &mut impl FnMut(Value)) {
 }
 
 /// A field holding a solid sphere of `radius` voxels (1 mm voxels), centred off the lattice.
-fn sphere_field(radius: f32) -> Field {
+pub(super) fn sphere_field(radius: f32) -> Field {
     let mut field = Field::new(0.001, 0.5);
     stamp_sphere(
         &mut field,

@@ -4,6 +4,7 @@
 
 mod autosave;
 pub mod bench;
+mod bench_io;
 mod capture;
 mod environment;
 mod export;
@@ -22,7 +23,9 @@ pub use environment::{load_environment, EnvironmentError};
 pub use export::{export, final_field, final_mesh, welded_surface, ExportSummary};
 pub use frame::{build_frame, world_lights};
 pub use playback::Playback;
-pub use sculpt::{is_sculpt, load_sculpt, save_scene_sculpt, SavedSculpt, SCULPT_EXTENSION};
+pub use sculpt::{
+    is_sculpt, load_sculpt, load_sculpt_with_progress, save_scene_sculpt, SavedSculpt, SCULPT_EXTENSION,
+};
 
 use crate::field::HistoryConfig;
 

@@ -70,6 +70,15 @@ pub fn save_scene_sculpt(
 /// Loads a sculpt file, refusing damaged, truncated, future-version or hostile files with a
 /// sentence that names the file.
 pub fn load_sculpt(path: &Path) -> Result<Sculpt> {
+    load_sculpt_with_progress(path, false)
+}
+
+/// [`load_sculpt`], with a progress bar on the terminal when `progress`.
+pub fn load_sculpt_with_progress(path: &Path, progress: bool) -> Result<Sculpt> {
     let bytes = std::fs::read(path).with_context(|| format!("cannot read sculpt file {}", path.display()))?;
-    Ok(decode(&bytes, &path.display().to_string(), &mut |_| {})?)
+    let bar = if progress { indicatif::ProgressBar::new(1000) } else { indicatif::ProgressBar::hidden() };
+    bar.set_message(format!("loading {}", path.display()));
+    let sculpt = decode(&bytes, &path.display().to_string(), &mut |f| bar.set_position((f * 1000.0) as u64));
+    bar.finish_and_clear();
+    Ok(sculpt?)
 }
