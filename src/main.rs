@@ -58,6 +58,23 @@ enum Command {
         #[command(flatten)]
         autosave: AutosaveArgs,
     },
+    /// Rewrites a sculpt file (`.argile`, any version this Argile reads) in another format
+    /// version, or stores a scene's clay (at the end of its timeline) as a sculpt.
+    Convert {
+        /// The sculpt file (`.argile`) or scene file (TOML) to read.
+        input: PathBuf,
+        /// The sculpt file to write (`.argile`).
+        out: PathBuf,
+        /// The format version to write (1 holds no undo history).
+        #[arg(long, default_value_t = argile::io::VERSION)]
+        format_version: u32,
+        /// Leave the undo history out.
+        #[arg(long)]
+        no_history: bool,
+        /// Replace the file if it exists.
+        #[arg(long)]
+        force: bool,
+    },
     /// Recovers the sculpts of sessions that did not close cleanly (a crash, a power cut) and
     /// says where each is saved. The station does this at every start.
     Recover,
@@ -170,6 +187,17 @@ fn main() -> ExitCode {
         Some(Command::Save { scene, out, force, autosave }) => {
             app::save_scene_sculpt(&scene, &out, force, autosave.start())
                 .map(|s| println!("wrote {} ({} bricks, {} bytes)", s.path.display(), s.bricks, s.bytes))
+        }
+        Some(Command::Convert { input, out, format_version, no_history, force }) => {
+            let options = argile::io::EncodeOptions { version: format_version, history: !no_history };
+            app::convert_sculpt(&input, &out, options, force).map(|s| {
+                println!(
+                    "wrote {} (format version {format_version}, {} bricks, {} bytes)",
+                    s.path.display(),
+                    s.bricks,
+                    s.bytes
+                )
+            })
         }
         Some(Command::Recover) => {
             if app::recover_and_report() == 0 {

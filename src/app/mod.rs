@@ -24,7 +24,8 @@ pub use export::{export, final_field, final_mesh, welded_surface, ExportSummary}
 pub use frame::{build_frame, world_lights};
 pub use playback::Playback;
 pub use sculpt::{
-    is_sculpt, load_sculpt, load_sculpt_with_progress, save_scene_sculpt, SavedSculpt, SCULPT_EXTENSION,
+    convert_sculpt, is_sculpt, load_sculpt, load_sculpt_with_progress, save_scene_sculpt, SavedSculpt,
+    SCULPT_EXTENSION,
 };
 
 use crate::field::HistoryConfig;

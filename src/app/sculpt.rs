@@ -10,7 +10,7 @@ use super::export::end_s;
 use super::playback::Playback;
 use crate::io::autosave::AutosaveConfig;
 use crate::io::write_atomically;
-use crate::io::{decode, encode, Sculpt};
+use crate::io::{decode, encode, encode_with, EncodeOptions, Sculpt, VERSION};
 use crate::scene::Scene;
 
 /// The extension of sculpt files.
@@ -81,4 +81,39 @@ pub fn load_sculpt_with_progress(path: &Path, progress: bool) -> Result<Sculpt> 
     let sculpt = decode(&bytes, &path.display().to_string(), &mut |f| bar.set_position((f * 1000.0) as u64));
     bar.finish_and_clear();
     Ok(sculpt?)
+}
+
+/// Rewrites the sculpt file `input` (any version this build reads) as `options` say, to `out`
+/// (atomically; an existing file only when `overwrite`). `input` may also be a scene file,
+/// whose clay at the end of its timeline is stored, with the scene's text.
+pub fn convert_sculpt(
+    input: &Path,
+    out: &Path,
+    options: EncodeOptions,
+    overwrite: bool,
+) -> Result<SavedSculpt> {
+    if !(1..=VERSION).contains(&options.version) {
+        bail!(
+            "format version {} cannot be written; this Argile writes versions 1 to {VERSION}",
+            options.version
+        );
+    }
+    if !overwrite && out.exists() {
+        bail!("{} already exists; pass --force to replace it", out.display());
+    }
+    let sculpt = if is_sculpt(input) {
+        load_sculpt_with_progress(input, true)?
+    } else {
+        let text = std::fs::read_to_string(input)
+            .with_context(|| format!("cannot read scene file {}", input.display()))?;
+        let scene = Scene::parse(&text, &input.display().to_string(), input.parent())?;
+        let mut playback = Playback::new(&scene);
+        playback.advance_to(end_s(&scene), |_| {});
+        Sculpt { field: playback.into_field(), scene_toml: Some(text) }
+    };
+    let bytes = encode_with(&sculpt.field, sculpt.scene_toml.as_deref(), options, &mut |_| {});
+    write_atomically(out, overwrite, |w| {
+        w.write_all(&bytes).with_context(|| format!("cannot write {}", out.display()))
+    })?;
+    Ok(SavedSculpt { path: out.to_path_buf(), bricks: sculpt.field.brick_count(), bytes: bytes.len() })
 }

@@ -146,6 +146,39 @@ impl History {
         }
     }
 
+    /// The undo steps held in memory (oldest first; spilled ones are left out) and the redo
+    /// steps (the next redo last), sharing their bricks.
+    pub(crate) fn in_memory(&self) -> (Vec<&Step>, Vec<&Step>) {
+        let undo = self
+            .undo
+            .iter()
+            .filter_map(|s| match s {
+                Stored::Memory(step) => Some(step),
+                Stored::Disk { .. } => None,
+            })
+            .collect();
+        (undo, self.redo.iter().collect())
+    }
+
+    /// Replaces every step (an open stroke is closed first) with `undo` (oldest first) and
+    /// `redo` (the next redo last), within the memory budget.
+    pub(crate) fn restore(&mut self, undo: Vec<Step>, redo: Vec<Step>) {
+        self.end();
+        for stored in std::mem::take(&mut self.undo) {
+            self.forget(stored);
+        }
+        for step in std::mem::take(&mut self.redo) {
+            self.memory_bytes -= step.bytes();
+        }
+        self.redo = redo;
+        self.memory_bytes += self.redo.iter().map(Step::bytes).sum::<usize>();
+        for step in undo {
+            self.memory_bytes += step.bytes();
+            self.undo.push_back(Stored::Memory(step));
+        }
+        self.enforce_budget();
+    }
+
     /// Whether a stroke is open.
     pub(crate) fn recording(&self) -> bool {
         self.open.is_some()

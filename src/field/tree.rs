@@ -27,6 +27,9 @@ pub fn bricks_reading(lo: IVec3, hi: IVec3) -> (BrickKey, BrickKey) {
     (first, last)
 }
 
+/// One step of the undo history: the bricks it puts back, each key once (`None`: absent).
+pub type HistoryStep = Vec<(BrickKey, Option<Arc<Brick>>)>;
+
 /// A sparse density + colour field on a regular lattice.
 ///
 /// Invariants: densities are in [0, 1] (1 is full clay; the surface is the iso-level, default
@@ -124,6 +127,22 @@ impl Field {
     /// The undo history's counts.
     pub fn history_stats(&self) -> HistoryStats {
         self.history.stats()
+    }
+
+    /// The undo steps held in memory (oldest first; steps spilled to disk are left out) and
+    /// the redo steps (the next redo last). Each step lists the bricks it puts back (`None`:
+    /// absent), shared, not copied.
+    pub fn history_in_memory(&self) -> (Vec<HistoryStep>, Vec<HistoryStep>) {
+        let (undo, redo) = self.history.in_memory();
+        let plain = |steps: Vec<&Step>| steps.into_iter().map(|s| s.bricks.clone()).collect();
+        (plain(undo), plain(redo))
+    }
+
+    /// Replaces the undo history with `undo` (oldest first) and `redo` (the next redo last),
+    /// as [`Field::history_in_memory`] gives them, within the history's memory budget.
+    pub fn set_history(&mut self, undo: Vec<HistoryStep>, redo: Vec<HistoryStep>) {
+        let steps = |v: Vec<HistoryStep>| v.into_iter().map(|bricks| Step { bricks }).collect();
+        self.history.restore(steps(undo), steps(redo));
     }
 
     /// Puts the step's bricks in place and returns the ones they replaced.

@@ -580,13 +580,18 @@ impl Writer {
             self.sync();
             let intact = self.journal.is_some();
             self.open_journal();
-            if !intact && self.written > n {
-                // Strokes n + 1 ..= written are in no journal: fold them at once.
-                self.gap = true;
+            // The new journal starts after `written`: strokes n + 1 ..= written are in the
+            // old journal if it was intact, else in none, and then are folded at once.
+            self.gap = !intact && self.written > n;
+            if self.gap {
                 self.retry_at = Some(Instant::now());
             }
         }
-        if self.journal.is_some() && !self.gap {
+        if let Some(journal) = self.journal.as_ref().filter(|_| !self.gap) {
+            // Strokes synced before the first snapshot existed count from now.
+            if !journal.unsynced {
+                self.shared.durable.fetch_max(journal.last, Ordering::AcqRel);
+            }
             self.clear_problem();
         }
         self.remove_covered(n);

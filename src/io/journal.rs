@@ -1,9 +1,10 @@
 //! The autosave journal's bytes: its header and one record per finished stroke (layout in the
 //! module docs of `io`).
 
+use std::collections::HashSet;
 use std::sync::Arc;
 
-use super::{put_brick, put_chunk, read_brick, read_chunk, u32_at, BRICK_RECORD};
+use super::{put_chunk, put_entries, read_chunk, read_entries, u32_at, BRICKS_PER_CHUNK};
 use crate::field::{Brick, BrickKey};
 
 const MAGIC: &[u8; 4] = b"ARGJ";
@@ -23,28 +24,20 @@ pub(crate) fn header(base: u64) -> [u8; HEADER] {
     out
 }
 
-/// The bytes of one record: stroke number `stroke`, the bricks it changed as they are now.
+/// The bytes of one record: stroke number `stroke`, the bricks it changed as they are now,
+/// in parts of at most [`BRICKS_PER_CHUNK`] bricks (each part a chunk, the last one flagged).
 pub(crate) fn record(stroke: u64, bricks: &[(BrickKey, Option<Arc<Brick>>)]) -> Vec<u8> {
-    let present = bricks.iter().filter(|(_, b)| b.is_some()).count();
-    let mut raw = Vec::with_capacity(12 + bricks.len() + present * BRICK_RECORD);
-    raw.extend_from_slice(&stroke.to_le_bytes());
-    raw.extend_from_slice(&(bricks.len() as u32).to_le_bytes());
-    for (key, brick) in bricks {
-        match brick {
-            Some(b) => {
-                raw.push(1);
-                put_brick(&mut raw, *key, b);
-            }
-            None => {
-                raw.push(0);
-                for c in key.to_array() {
-                    raw.extend_from_slice(&c.to_le_bytes());
-                }
-            }
-        }
+    let mut out = Vec::new();
+    let mut raw = Vec::new();
+    let parts = bricks.len().div_ceil(BRICKS_PER_CHUNK).max(1);
+    for (i, part) in bricks.chunks(BRICKS_PER_CHUNK).chain(bricks.is_empty().then_some(&[][..])).enumerate() {
+        raw.clear();
+        raw.extend_from_slice(&stroke.to_le_bytes());
+        raw.push(u8::from(i + 1 == parts));
+        raw.extend_from_slice(&(part.len() as u32).to_le_bytes());
+        put_entries(&mut raw, part);
+        put_chunk(&mut out, RECORD_TAG, &raw);
     }
-    let mut out = Vec::with_capacity(raw.len() / 2);
-    put_chunk(&mut out, RECORD_TAG, &raw);
     out
 }
 
@@ -90,58 +83,47 @@ impl<'b> Reader<'b> {
         self.next - 1 - u64::from(self.index)
     }
 
+    /// Reads the next record, all its parts.
     fn read(&mut self) -> Result<Record, String> {
-        let chunk = read_chunk(self.bytes, &mut self.at, self.index, &mut self.raw)?;
-        if chunk.tag != RECORD_TAG {
-            return Err(format!("record {} has the tag `{}`", self.index, chunk.name));
-        }
-        let raw = &self.raw;
-        if raw.len() < 12 {
-            return Err(format!("record {} is too short", self.index));
-        }
-        let stroke = u64::from_le_bytes(raw[..8].try_into().expect("8 bytes"));
-        if stroke != self.next {
-            return Err(format!(
-                "record {} is stroke {stroke}, stroke {} was expected",
-                self.index, self.next
-            ));
-        }
-        let count = u32_at(raw, 8) as usize;
-        // An entry takes at least 13 bytes: refuse counts the record cannot hold.
-        if count > (raw.len() - 12) / 13 {
-            return Err(format!("record {} claims {count} bricks, more than it holds", self.index));
-        }
-        let mut bricks = Vec::with_capacity(count);
-        let mut at = 12;
-        for _ in 0..count {
-            let short = || format!("record {} ends inside a brick", self.index);
-            let flag = *raw.get(at).ok_or_else(short)?;
-            at += 1;
-            match flag {
-                0 if raw.len() - at >= 12 => {
-                    let key = BrickKey::new(
-                        u32_at(raw, at) as i32,
-                        u32_at(raw, at + 4) as i32,
-                        u32_at(raw, at + 8) as i32,
-                    );
-                    bricks.push((key, None));
-                    at += 12;
-                }
-                1 if raw.len() - at >= BRICK_RECORD => {
-                    let (key, brick) = read_brick(&raw[at..])?;
-                    bricks.push((key, Some(brick)));
-                    at += BRICK_RECORD;
-                }
-                0 | 1 => return Err(short()),
-                other => return Err(format!("record {} has a brick flag {other}", self.index)),
+        let mut bricks = Vec::new();
+        let mut seen = HashSet::new();
+        loop {
+            let chunk = read_chunk(self.bytes, &mut self.at, self.index, &mut self.raw)?;
+            if chunk.tag != RECORD_TAG {
+                return Err(format!("record {} has the tag `{}`", self.index, chunk.name));
             }
-        }
-        if at != raw.len() {
-            return Err(format!("record {} has {} bytes after its last brick", self.index, raw.len() - at));
+            let raw = &self.raw;
+            if raw.len() < 13 {
+                return Err(format!("record {} is too short", self.index));
+            }
+            let stroke = u64::from_le_bytes(raw[..8].try_into().expect("8 bytes"));
+            if stroke != self.next {
+                return Err(format!(
+                    "record {} is stroke {stroke}, stroke {} was expected",
+                    self.index, self.next
+                ));
+            }
+            let (last, count) = (raw[8], u32_at(raw, 9) as usize);
+            let mut at = 13;
+            let part = read_entries(raw, &mut at, count, &mut seen)
+                .map_err(|e| format!("record {}: {e}", self.index))?;
+            if at != raw.len() {
+                return Err(format!(
+                    "record {} has {} bytes after its last brick",
+                    self.index,
+                    raw.len() - at
+                ));
+            }
+            bricks.extend(part);
+            match last {
+                0 => continue,
+                1 => break,
+                other => return Err(format!("record {} has a last-part flag {other}", self.index)),
+            }
         }
         self.index += 1;
         self.next += 1;
-        Ok(Record { stroke, bricks })
+        Ok(Record { stroke: self.next - 1, bricks })
     }
 }
 

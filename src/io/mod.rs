@@ -2,7 +2,7 @@
 //!
 //! Knows the field (it stores bricks) and nothing of Vulkan or devices.
 //!
-//! ## Layout, version 1
+//! ## Layout, version 2
 //!
 //! ```text
 //!  header  "ARGL" · version u32 · chunk count u32                      (little-endian)
@@ -13,7 +13,16 @@
 //!          SCNE  (at most once) the scene file's TOML text the sculpt was made in
 //!          BRKS  (any number)   up to 512 bricks: per brick its key (3 × i32), then
 //!                               512 densities (f32) and 512 linear RGBA colours (4 × f32)
+//!          HIST  (any number)   the undo history held in memory (optional): kind u8 (0 undo,
+//!                               1 redo) · step index u32 · entry count u32 (≤ 512) · entries:
+//!                               per brick, present u8 (0: absent) · key (3 × i32) · if present
+//!                               its densities and colours as in BRKS. Undo steps oldest first,
+//!                               then redo steps (the next redo last), each index from 0; a step
+//!                               of more than 512 bricks continues in chunks of the same index.
 //! ```
+//!
+//! Version 1 is version 2 without HIST chunks; this build reads both and writes either
+//! (`argile convert`).
 //!
 //! - Every chunk's bytes are LZ4-compressed (`lz4_flex` block format) and carry the CRC-32 of
 //!   the stored bytes; a reader checks the CRC before decompressing and the decompressed
@@ -22,12 +31,13 @@
 //!   most [`MAX_CHUNK_BYTES`] raw, so a large sculpt loads chunk by chunk, with progress.
 //! - A reader refuses, with a sentence naming the file and the problem: a truncated file, a
 //!   bad checksum, a future version, an unknown or repeated chunk, sizes or counts past the
-//!   limits, a brick key twice, densities outside [0, 1] or non-finite samples. It never
-//!   allocates what a header claims before checking the claim against the file's size.
+//!   limits, a brick key twice, densities outside [0, 1] or non-finite samples, history steps
+//!   out of order. It never allocates what a header claims before checking the claim against
+//!   the file's size.
 //! - Files are written atomically ([`write_atomically`]).
 //!
-//! Later versions (resolution levels, undo history, freeform tools) add chunk tags; a reader
-//! keeps reading every version it has shipped.
+//! Later versions (resolution levels, freeform tools) add chunk tags; a reader keeps reading
+//! every version it has shipped (`tests/fixtures/sculpt-v1.argile` is checked).
 //!
 //! ## Autosave: journal and snapshots
 //!
@@ -39,10 +49,10 @@
 //!  snapshot-N.argile   the sculpt after its first N strokes, in the format above
 //!  journal-B.argj      the strokes after stroke B, appended as they finish:
 //!     header  "ARGJ" · version u32 (1) · base stroke B u64 · CRC-32 of these 16 bytes u32
-//!     records chunks as above, tag STRK, one per finished stroke (or undo, redo):
-//!             stroke number u64 (B + 1, B + 2, …) · brick count u32 · per brick: present
-//!             u8 (0: the brick is now empty) · key (3 × i32) · if present, its 512
-//!             densities and 512 RGBA colours (f32), as in BRKS
+//!     records chunks as above, tag STRK, one record per finished stroke (or undo, redo),
+//!             in one or more chunks: stroke number u64 (B + 1, B + 2, …) · last part u8
+//!             (1 on the record's last chunk) · entry count u32 (≤ 512) · entries as in
+//!             HIST, each brick as the stroke left it (absent: the brick is now empty)
 //!  closed              written (atomically) when the session ends cleanly
 //! ```
 //!
@@ -55,14 +65,16 @@
 //!   removed. Nothing already on disk is ever overwritten in place.
 //! - Recovery loads the newest snapshot that reads whole, then applies the records numbered
 //!   after it, from the journals in order of their base, while they follow one another
-//!   (N + 1, N + 2, …). The first record that is cut short, fails its checksum or breaks the
-//!   numbering ends the journal: a torn tail is discarded, never applied.
+//!   (N + 1, N + 2, …). The first record that is cut short (a part missing included), fails
+//!   its checksum or breaks the numbering ends the journal: a torn tail is discarded, never
+//!   applied.
 
 use std::collections::HashSet;
+use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use crate::field::{Brick, BrickKey, Field, BRICK_SIZE, BRICK_VOLUME};
+use crate::field::{Brick, BrickKey, Field, HistoryStep, BRICK_SIZE, BRICK_VOLUME};
 use crate::math::IVec3;
 
 mod atomic;
@@ -72,18 +84,20 @@ mod journal;
 pub use atomic::write_atomically;
 
 /// The format version this build writes.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 /// The largest raw chunk a reader accepts.
 pub const MAX_CHUNK_BYTES: usize = 64 << 20;
 /// The most chunks a file may declare.
 pub const MAX_CHUNKS: u32 = 1 << 20;
-/// Bricks per `BRKS` chunk written.
+/// Bricks per `BRKS` chunk written, and per `HIST` or journal chunk.
 pub const BRICKS_PER_CHUNK: usize = 512;
 
 const MAGIC: &[u8; 4] = b"ARGL";
 /// Bytes of one stored brick: its key, densities and colours.
 const BRICK_RECORD: usize = 12 + BRICK_VOLUME * 4 + BRICK_VOLUME * 16;
 const CHUNK_HEADER: usize = 16;
+/// The fewest bytes an entry (see [`put_entries`]) takes: an absent brick.
+const MIN_ENTRY: usize = 13;
 
 /// A sculpt as stored: the clay and the scene text it was made in.
 #[derive(Debug)]
@@ -114,18 +128,62 @@ struct Meta {
     bricks: u64,
 }
 
-/// Encodes a sculpt; `progress` gets the fraction of bricks written.
-pub fn encode(field: &Field, scene_toml: Option<&str>, progress: &mut dyn FnMut(f32)) -> Vec<u8> {
-    let bricks: Vec<(BrickKey, &Brick)> = field.shared_bricks().map(|(k, b)| (k, &**b)).collect();
-    encode_bricks(field.transform().voxel_size_m, field.iso(), bricks, scene_toml, progress)
+/// What [`encode_with`] writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EncodeOptions {
+    /// The format version to write (1 or 2; version 1 holds no history).
+    pub version: u32,
+    /// Whether to store the undo history held in memory.
+    pub history: bool,
 }
 
-/// Encodes a sculpt given as its settings and bricks (in any order).
+impl Default for EncodeOptions {
+    /// The current version, with the history.
+    fn default() -> Self {
+        Self { version: VERSION, history: true }
+    }
+}
+
+/// Encodes a sculpt in the current version, with its undo history; `progress` gets the
+/// fraction of bricks written.
+pub fn encode(field: &Field, scene_toml: Option<&str>, progress: &mut dyn FnMut(f32)) -> Vec<u8> {
+    encode_with(field, scene_toml, EncodeOptions::default(), progress)
+}
+
+/// Encodes a sculpt as `options` say (`options.version` must be one this build writes: 1 to
+/// [`VERSION`]).
+pub fn encode_with(
+    field: &Field,
+    scene_toml: Option<&str>,
+    options: EncodeOptions,
+    progress: &mut dyn FnMut(f32),
+) -> Vec<u8> {
+    assert!((1..=VERSION).contains(&options.version), "format version {} is not written", options.version);
+    let bricks: Vec<(BrickKey, &Brick)> = field.shared_bricks().map(|(k, b)| (k, &**b)).collect();
+    let history = (options.history && options.version >= 2).then(|| field.history_in_memory());
+    let settings = (field.transform().voxel_size_m, field.iso());
+    encode_parts(options.version, settings, bricks, scene_toml, history.as_ref(), progress)
+}
+
+/// Encodes a sculpt given as its settings and bricks (in any order), without history.
 pub(crate) fn encode_bricks(
     voxel_size_m: f32,
     iso: f32,
+    bricks: Vec<(BrickKey, &Brick)>,
+    scene_toml: Option<&str>,
+    progress: &mut dyn FnMut(f32),
+) -> Vec<u8> {
+    encode_parts(VERSION, (voxel_size_m, iso), bricks, scene_toml, None, progress)
+}
+
+type History = (Vec<HistoryStep>, Vec<HistoryStep>);
+
+fn encode_parts(
+    version: u32,
+    (voxel_size_m, iso): (f32, f32),
     mut bricks: Vec<(BrickKey, &Brick)>,
     scene_toml: Option<&str>,
+    history: Option<&History>,
     progress: &mut dyn FnMut(f32),
 ) -> Vec<u8> {
     bricks.sort_unstable_by_key(|(k, _)| k.to_array());
@@ -137,10 +195,15 @@ pub(crate) fn encode_bricks(
         bricks: bricks.len() as u64,
     };
     let groups = bricks.chunks(BRICKS_PER_CHUNK);
-    let chunk_count = 1 + u32::from(scene_toml.is_some()) + groups.len() as u32;
+    let steps: Vec<(u8, u32, &HistoryStep)> = history.map_or_else(Vec::new, |(undo, redo)| {
+        let undo = undo.iter().enumerate().map(|(i, s)| (0, i as u32, s));
+        undo.chain(redo.iter().enumerate().map(|(i, s)| (1, i as u32, s))).collect()
+    });
+    let step_chunks: usize = steps.iter().map(|(_, _, s)| s.len().div_ceil(BRICKS_PER_CHUNK).max(1)).sum();
+    let chunk_count = 1 + u32::from(scene_toml.is_some()) + groups.len() as u32 + step_chunks as u32;
     let mut out = Vec::new();
     out.extend_from_slice(MAGIC);
-    out.extend_from_slice(&VERSION.to_le_bytes());
+    out.extend_from_slice(&version.to_le_bytes());
     out.extend_from_slice(&chunk_count.to_le_bytes());
     put_chunk(&mut out, *b"META", &serde_json::to_vec(&meta).expect("plain values serialise"));
     if let Some(text) = scene_toml {
@@ -157,7 +220,77 @@ pub(crate) fn encode_bricks(
         put_chunk(&mut out, *b"BRKS", &raw);
         progress((i + 1) as f32 / group_count as f32);
     }
+    for (kind, index, step) in steps {
+        for part in step.chunks(BRICKS_PER_CHUNK).chain(step.is_empty().then_some(&[][..])) {
+            raw.clear();
+            raw.push(kind);
+            raw.extend_from_slice(&index.to_le_bytes());
+            raw.extend_from_slice(&(part.len() as u32).to_le_bytes());
+            put_entries(&mut raw, part);
+            put_chunk(&mut out, *b"HIST", &raw);
+        }
+    }
     out
+}
+
+/// Appends brick entries: per brick, present u8 (0: absent) · key (3 × i32) · if present,
+/// its densities and colours (as [`put_brick`]).
+pub(crate) fn put_entries(raw: &mut Vec<u8>, bricks: &[(BrickKey, Option<Arc<Brick>>)]) {
+    for (key, brick) in bricks {
+        match brick {
+            Some(b) => {
+                raw.push(1);
+                put_brick(raw, *key, b);
+            }
+            None => {
+                raw.push(0);
+                for c in key.to_array() {
+                    raw.extend_from_slice(&c.to_le_bytes());
+                }
+            }
+        }
+    }
+}
+
+/// Reads `count` entries written by [`put_entries`] from `raw` at `*at`, refusing a key twice.
+pub(crate) fn read_entries(
+    raw: &[u8],
+    at: &mut usize,
+    count: usize,
+    seen: &mut HashSet<BrickKey>,
+) -> Result<Vec<(BrickKey, Option<Brick>)>, String> {
+    // Refuse counts the bytes cannot hold before allocating for them.
+    if count > (raw.len() - *at) / MIN_ENTRY {
+        return Err(format!("it claims {count} bricks, more than its {} bytes hold", raw.len() - *at));
+    }
+    let mut entries = Vec::with_capacity(count);
+    for _ in 0..count {
+        let flag = raw.get(*at).copied();
+        *at += 1;
+        let entry = match flag {
+            Some(0) if raw.len() >= *at + 12 => {
+                let key = IVec3::new(
+                    u32_at(raw, *at) as i32,
+                    u32_at(raw, *at + 4) as i32,
+                    u32_at(raw, *at + 8) as i32,
+                );
+                *at += 12;
+                (key, None)
+            }
+            Some(1) if raw.len() >= *at + BRICK_RECORD => {
+                let (key, brick) = read_brick(&raw[*at..])?;
+                *at += BRICK_RECORD;
+                (key, Some(brick))
+            }
+            Some(0 | 1) | None => return Err("it ends inside a brick".into()),
+            Some(other) => return Err(format!("a brick has the presence flag {other}")),
+        };
+        if !seen.insert(entry.0) {
+            return Err(format!("brick {} appears twice", entry.0));
+        }
+        entries.push(entry);
+    }
+    Ok(entries)
 }
 
 /// Appends a chunk: tag, raw and stored lengths, CRC-32 of the stored bytes, stored bytes.
@@ -285,6 +418,10 @@ fn decode_inner(bytes: &[u8], progress: &mut dyn FnMut(f32)) -> Result<Sculpt, S
     let mut scene_toml = None;
     let mut keys: HashSet<BrickKey> = HashSet::new();
     let mut raw = Vec::new();
+    let (mut undo, mut redo): (Vec<HistoryStep>, Vec<HistoryStep>) = (Vec::new(), Vec::new());
+    // The (kind, index) of the step the last HIST chunk added to, and its keys.
+    let mut step_at: Option<(u8, u32)> = None;
+    let mut step_keys = HashSet::new();
     for index in 0..chunk_count {
         let Chunk { tag, name } = read_chunk(bytes, &mut at, index, &mut raw)?;
         match (&tag, &meta) {
@@ -326,6 +463,38 @@ fn decode_inner(bytes: &[u8], progress: &mut dyn FnMut(f32)) -> Result<Sculpt, S
                     field.insert_brick(key, brick);
                 }
             }
+            (b"HIST", Some(_)) if version >= 2 => {
+                if raw.len() < 9 {
+                    return Err(format!("chunk {index} (HIST) is too short"));
+                }
+                let (kind, step) = (raw[0], u32_at(&raw, 1));
+                let follows = match step_at {
+                    _ if kind > 1 => false,
+                    None => step == 0,
+                    Some((k, s)) if k == kind => step == s || step == s + 1,
+                    Some((k, _)) => k < kind && step == 0,
+                };
+                if !follows {
+                    return Err(format!("chunk {index} (HIST) is history step {kind}/{step}, out of order"));
+                }
+                let stack = if kind == 0 { &mut undo } else { &mut redo };
+                if step_at != Some((kind, step)) {
+                    stack.push(Vec::new());
+                    step_keys.clear();
+                }
+                step_at = Some((kind, step));
+                let mut at = 9;
+                let entries = read_entries(&raw, &mut at, u32_at(&raw, 5) as usize, &mut step_keys)
+                    .map_err(|e| format!("chunk {index} (HIST): {e}"))?;
+                if at != raw.len() {
+                    return Err(format!(
+                        "chunk {index} (HIST) has {} bytes after its last brick",
+                        raw.len() - at
+                    ));
+                }
+                let step = stack.last_mut().expect("pushed above");
+                step.extend(entries.into_iter().map(|(k, b)| (k, b.map(Arc::new))));
+            }
             _ => return Err(format!("chunk {index} has an unknown or repeated tag `{name}`")),
         }
         progress(at as f32 / bytes.len() as f32);
@@ -340,6 +509,7 @@ fn decode_inner(bytes: &[u8], progress: &mut dyn FnMut(f32)) -> Result<Sculpt, S
         return Err(format!("it holds {} bricks, its META chunk says {}", keys.len(), meta.bricks));
     }
     field.take_dirty();
+    field.set_history(undo, redo);
     Ok(Sculpt { field, scene_toml })
 }
 
