@@ -286,6 +286,16 @@ fn every_truncation_is_refused_as_truncated() {
         };
         assert!(e.contains(expected), "cut at {n}: {e}");
     }
+    // Read from a file chunk by chunk, the same cuts give the same sentences.
+    let dir = temp_dir("cuts");
+    let path = dir.join("cut.argile");
+    for n in (0..bytes.len()).step_by(97) {
+        std::fs::write(&path, &bytes[..n]).unwrap();
+        let from_file = argile::io::read_file(&path, &mut |_| {}).unwrap_err().reason;
+        let from_memory = decode(&bytes[..n], "m", &mut |_| {}).unwrap_err().reason;
+        assert_eq!(from_file, from_memory, "cut at {n}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

@@ -10,7 +10,7 @@ use super::export::end_s;
 use super::playback::Playback;
 use crate::io::autosave::AutosaveConfig;
 use crate::io::write_atomically;
-use crate::io::{decode, encode, encode_with, EncodeOptions, Sculpt, VERSION};
+use crate::io::{encode, encode_with, read_file, EncodeOptions, Sculpt, VERSION};
 use crate::scene::Scene;
 
 /// The extension of sculpt files.
@@ -75,10 +75,14 @@ pub fn load_sculpt(path: &Path) -> Result<Sculpt> {
 
 /// [`load_sculpt`], with a progress bar on the terminal when `progress`.
 pub fn load_sculpt_with_progress(path: &Path, progress: bool) -> Result<Sculpt> {
-    let bytes = std::fs::read(path).with_context(|| format!("cannot read sculpt file {}", path.display()))?;
     let bar = if progress { indicatif::ProgressBar::new(1000) } else { indicatif::ProgressBar::hidden() };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {percent}%")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
     bar.set_message(format!("loading {}", path.display()));
-    let sculpt = decode(&bytes, &path.display().to_string(), &mut |f| bar.set_position((f * 1000.0) as u64));
+    // Read chunk by chunk: a large sculpt is never in memory twice.
+    let sculpt = read_file(path, &mut |f| bar.set_position((f * 1000.0) as u64));
     bar.finish_and_clear();
     Ok(sculpt?)
 }

@@ -348,32 +348,103 @@ pub(crate) struct Chunk {
     pub(crate) name: String,
 }
 
-/// Reads chunk number `index` at `*at` into `raw`, checking its size limit, checksum and
-/// decompressed length; on success `*at` moves past it.
+/// Where a reader takes a sculpt's bytes from: memory, or a file read chunk by chunk, so that
+/// a large sculpt is never in memory twice.
+trait Source {
+    /// Bytes in all.
+    fn len(&self) -> u64;
+    /// Bytes taken so far.
+    fn position(&self) -> u64;
+    /// The next `n` bytes (the caller checked that they exist), read into `buf` where they must
+    /// be copied.
+    fn take<'a>(&'a mut self, n: usize, buf: &'a mut Vec<u8>) -> Result<&'a [u8], String>;
+}
+
+struct Slice<'b> {
+    bytes: &'b [u8],
+    at: usize,
+}
+
+impl Source for Slice<'_> {
+    fn len(&self) -> u64 {
+        self.bytes.len() as u64
+    }
+
+    fn position(&self) -> u64 {
+        self.at as u64
+    }
+
+    fn take<'a>(&'a mut self, n: usize, _: &'a mut Vec<u8>) -> Result<&'a [u8], String> {
+        let taken = &self.bytes[self.at..self.at + n];
+        self.at += n;
+        Ok(taken)
+    }
+}
+
+struct FileSource {
+    reader: std::io::BufReader<std::fs::File>,
+    len: u64,
+    at: u64,
+}
+
+impl Source for FileSource {
+    fn len(&self) -> u64 {
+        self.len
+    }
+
+    fn position(&self) -> u64 {
+        self.at
+    }
+
+    fn take<'a>(&'a mut self, n: usize, buf: &'a mut Vec<u8>) -> Result<&'a [u8], String> {
+        buf.clear();
+        buf.resize(n, 0);
+        std::io::Read::read_exact(&mut self.reader, buf).map_err(|e| format!("cannot read it: {e}"))?;
+        self.at += n as u64;
+        Ok(buf)
+    }
+}
+
+/// Reads chunk number `index` at `*at` of `bytes` into `raw` (see [`read_chunk_from`]); on
+/// success `*at` moves past it, on failure it stays.
 pub(crate) fn read_chunk(
     bytes: &[u8],
     at: &mut usize,
     index: u32,
     raw: &mut Vec<u8>,
 ) -> Result<Chunk, String> {
-    if bytes.len() - *at < CHUNK_HEADER {
+    let mut source = Slice { bytes, at: *at };
+    let chunk = read_chunk_from(&mut source, index, raw, &mut Vec::new())?;
+    *at = source.at;
+    Ok(chunk)
+}
+
+/// Reads chunk number `index` into `raw`, checking its size limit, checksum and decompressed
+/// length; `buf` holds its stored bytes where they must be copied.
+fn read_chunk_from(
+    source: &mut dyn Source,
+    index: u32,
+    raw: &mut Vec<u8>,
+    buf: &mut Vec<u8>,
+) -> Result<Chunk, String> {
+    if source.len() - source.position() < CHUNK_HEADER as u64 {
         return Err(format!("it ends inside the header of chunk {index} (truncated)"));
     }
-    let tag: [u8; 4] = bytes[*at..*at + 4].try_into().expect("4 bytes");
-    let raw_len = u32_at(bytes, *at + 4) as usize;
-    let stored_len = u32_at(bytes, *at + 8) as usize;
-    let crc = u32_at(bytes, *at + 12);
+    let header = source.take(CHUNK_HEADER, buf)?;
+    let tag: [u8; 4] = header[..4].try_into().expect("4 bytes");
+    let raw_len = u32_at(header, 4) as usize;
+    let stored_len = u32_at(header, 8) as usize;
+    let crc = u32_at(header, 12);
     let name = String::from_utf8_lossy(&tag).into_owned();
-    let start = *at + CHUNK_HEADER;
     if raw_len > MAX_CHUNK_BYTES {
         return Err(format!(
             "chunk {index} ({name}) claims {raw_len} bytes, over the {MAX_CHUNK_BYTES} limit"
         ));
     }
-    if stored_len > bytes.len() - start {
+    if stored_len as u64 > source.len() - source.position() {
         return Err(format!("it ends inside chunk {index} ({name}) (truncated)"));
     }
-    let stored = &bytes[start..start + stored_len];
+    let stored = source.take(stored_len, buf)?;
     if crc32fast::hash(stored) != crc {
         return Err(format!("chunk {index} ({name}) fails its checksum: the file is damaged"));
     }
@@ -383,36 +454,50 @@ pub(crate) fn read_chunk(
         Ok(n) if n == raw_len => {}
         _ => return Err(format!("chunk {index} ({name}) does not decompress to its stated size")),
     }
-    *at = start + stored_len;
     Ok(Chunk { tag, name })
 }
 
 /// Decodes a sculpt, refusing anything not written whole by [`encode`] (see the module docs);
-/// `file` names the file in errors, `progress` gets the fraction of the file read.
+/// `file` names the file in errors, `progress` gets the fraction of the bytes read.
 pub fn decode(bytes: &[u8], file: &str, progress: &mut dyn FnMut(f32)) -> Result<Sculpt, SculptError> {
-    decode_inner(bytes, progress).map_err(|reason| SculptError { file: file.to_owned(), reason })
+    decode_from(&mut Slice { bytes, at: 0 }, progress)
+        .map_err(|reason| SculptError { file: file.to_owned(), reason })
 }
 
-fn decode_inner(bytes: &[u8], progress: &mut dyn FnMut(f32)) -> Result<Sculpt, String> {
-    if bytes.len() < 12 || &bytes[..4] != MAGIC {
+/// Reads the sculpt file `path` chunk by chunk (a chunk at a time in memory besides the
+/// sculpt), as [`decode`] checks it; `progress` gets the fraction of the file read.
+pub fn read_file(path: &std::path::Path, progress: &mut dyn FnMut(f32)) -> Result<Sculpt, SculptError> {
+    let fail = |reason: String| SculptError { file: path.display().to_string(), reason };
+    let file = std::fs::File::open(path).map_err(|e| fail(format!("cannot open it: {e}")))?;
+    let len = file.metadata().map_err(|e| fail(format!("cannot read it: {e}")))?.len();
+    let mut source = FileSource { reader: std::io::BufReader::with_capacity(1 << 20, file), len, at: 0 };
+    decode_from(&mut source, progress).map_err(fail)
+}
+
+fn decode_from(source: &mut dyn Source, progress: &mut dyn FnMut(f32)) -> Result<Sculpt, String> {
+    let mut buf = Vec::new();
+    if source.len() < 12 {
         return Err("it is not an Argile sculpt (no ARGL header)".into());
     }
-    let version = u32_at(bytes, 4);
+    let header: [u8; 12] = source.take(12, &mut buf)?.try_into().expect("12 bytes");
+    if &header[..4] != MAGIC {
+        return Err("it is not an Argile sculpt (no ARGL header)".into());
+    }
+    let version = u32_at(&header, 4);
     if version == 0 || version > VERSION {
         return Err(format!(
             "it is format version {version}; this Argile reads versions 1 to {VERSION} (a newer Argile wrote it)"
         ));
     }
-    let chunk_count = u32_at(bytes, 8);
+    let chunk_count = u32_at(&header, 8);
     // Every chunk takes at least its header: a count the file cannot hold is refused before
     // anything is allocated for it.
-    if chunk_count > MAX_CHUNKS || chunk_count as usize > (bytes.len() - 12) / CHUNK_HEADER {
+    if chunk_count > MAX_CHUNKS || u64::from(chunk_count) > (source.len() - 12) / CHUNK_HEADER as u64 {
         return Err(format!(
             "it declares {chunk_count} chunks, more than its {} bytes can hold",
-            bytes.len()
+            source.len()
         ));
     }
-    let mut at = 12;
     let mut meta: Option<Meta> = None;
     let mut field: Option<Field> = None;
     let mut scene_toml = None;
@@ -423,7 +508,7 @@ fn decode_inner(bytes: &[u8], progress: &mut dyn FnMut(f32)) -> Result<Sculpt, S
     let mut step_at: Option<(u8, u32)> = None;
     let mut step_keys = HashSet::new();
     for index in 0..chunk_count {
-        let Chunk { tag, name } = read_chunk(bytes, &mut at, index, &mut raw)?;
+        let Chunk { tag, name } = read_chunk_from(source, index, &mut raw, &mut buf)?;
         match (&tag, &meta) {
             (b"META", None) if index == 0 => {
                 let m: Meta =
@@ -497,10 +582,10 @@ fn decode_inner(bytes: &[u8], progress: &mut dyn FnMut(f32)) -> Result<Sculpt, S
             }
             _ => return Err(format!("chunk {index} has an unknown or repeated tag `{name}`")),
         }
-        progress(at as f32 / bytes.len() as f32);
+        progress(source.position() as f32 / source.len() as f32);
     }
-    if at != bytes.len() {
-        return Err(format!("{} bytes follow its last chunk", bytes.len() - at));
+    if source.position() != source.len() {
+        return Err(format!("{} bytes follow its last chunk", source.len() - source.position()));
     }
     let (Some(meta), Some(mut field)) = (meta, field) else {
         return Err("it holds no META chunk".into());
