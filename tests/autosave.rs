@@ -311,3 +311,86 @@ fn autosave_that_cannot_start_says_which_folder() {
     assert_eq!(std::fs::read_to_string(&blocked).unwrap(), "a file, not a folder", "nothing is damaged");
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+/// The local disk with switches: snapshots held back until released, journal files failing
+/// to be created or appended to (ENOSPC).
+#[derive(Debug, Default)]
+struct SwitchedDisk {
+    hold_snapshots: Arc<std::sync::atomic::AtomicBool>,
+    full: Arc<std::sync::atomic::AtomicBool>,
+}
+
+struct SwitchedFile {
+    inner: Box<dyn AppendFile>,
+    full: Arc<std::sync::atomic::AtomicBool>,
+    path: PathBuf,
+}
+
+impl AppendFile for SwitchedFile {
+    fn append(&mut self, bytes: &[u8]) -> Result<()> {
+        injected(if self.full.load(Ordering::SeqCst) { 1 } else { 0 }, &self.path, "write")?;
+        self.inner.append(bytes)
+    }
+
+    fn sync(&mut self) -> Result<()> {
+        self.inner.sync()
+    }
+}
+
+impl Disk for SwitchedDisk {
+    fn create_dir(&self, path: &Path) -> Result<()> {
+        LocalDisk.create_dir(path)
+    }
+
+    fn write_whole(&self, path: &Path, bytes: &[u8]) -> Result<()> {
+        while self.hold_snapshots.load(Ordering::SeqCst) && path.to_string_lossy().contains("snapshot-") {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        LocalDisk.write_whole(path, bytes)
+    }
+
+    fn create_append(&self, path: &Path) -> Result<Box<dyn AppendFile>> {
+        injected(if self.full.load(Ordering::SeqCst) { 1 } else { 0 }, path, "create")?;
+        let inner = LocalDisk.create_append(path)?;
+        Ok(Box::new(SwitchedFile { inner, full: Arc::clone(&self.full), path: path.to_path_buf() }))
+    }
+
+    fn remove(&self, path: &Path) -> Result<()> {
+        LocalDisk.remove(path)
+    }
+}
+
+#[test]
+fn strokes_lost_with_a_failed_journal_are_folded_before_the_journal_counts_again() {
+    let root = temp_dir("gap");
+    let disk = SwitchedDisk::default();
+    let (hold, full) = (Arc::clone(&disk.hold_snapshots), Arc::clone(&disk.full));
+    hold.store(true, Ordering::SeqCst);
+    let mut field = Field::new(0.001, 0.5);
+    let config = AutosaveConfig { checkpoint_interval: Duration::from_secs(3600), ..fast() };
+    let mut autosave = Autosave::start(&root, &mut field, None, "test", config, Arc::new(disk)).unwrap();
+    let dir = autosave.dir().to_path_buf();
+    for i in 0..2 {
+        stroke(&mut field, i);
+        autosave.record(&mut field);
+    }
+    // The journal fails while the first snapshot is still being written: stroke 3 is in no
+    // journal, and the next journal cannot even be created at first.
+    full.store(true, Ordering::SeqCst);
+    stroke(&mut field, 2);
+    autosave.record(&mut field);
+    wait_for("the failure to be reported", || autosave.problem().is_some());
+    hold.store(false, Ordering::SeqCst);
+    std::thread::sleep(Duration::from_millis(80));
+    assert!(autosave.problem().is_some());
+    full.store(false, Ordering::SeqCst);
+    wait_for("autosave to resume", || autosave.problem().is_none() && autosave.durable_strokes() >= 3);
+    stroke(&mut field, 3);
+    autosave.record(&mut field);
+    wait_for("stroke 4 on disk", || autosave.durable_strokes() == 4);
+    drop(autosave);
+    let r = recover(&dir).unwrap();
+    assert_eq!(r.strokes, 4);
+    assert!(r.sculpt.field.same_samples(&field));
+    std::fs::remove_dir_all(&root).unwrap();
+}

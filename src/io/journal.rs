@@ -136,9 +136,12 @@ impl Iterator for Reader<'_> {
         if self.torn.is_some() || self.at == self.bytes.len() {
             return None;
         }
+        let start = self.at;
         match self.read() {
             Ok(r) => Some(r),
             Err(e) => {
+                // From the record's first part: a record is applied whole or not at all.
+                self.at = start;
                 self.torn = Some(format!(
                     "{e} ({} bytes from byte {} discarded)",
                     self.bytes.len() - self.at,
@@ -217,6 +220,25 @@ mod tests {
             assert_eq!(n, damaged, "flip at {flip}: the records before it stay, none after");
             assert!(reader.torn.is_some());
         }
+    }
+
+    #[test]
+    fn a_record_of_many_parts_is_applied_whole_or_not_at_all() {
+        let bricks: Vec<_> =
+            (0..BRICKS_PER_CHUNK as i32 * 2 + 5).map(|i| (IVec3::new(i, 0, 0), None)).collect();
+        let mut bytes = header(0).to_vec();
+        bytes.extend_from_slice(&record(1, &bricks[..3]));
+        let first = bytes.len();
+        bytes.extend_from_slice(&record(2, &bricks));
+        let mut reader = Reader::new(&bytes).unwrap();
+        let records: Vec<Record> = reader.by_ref().collect();
+        assert_eq!(records.len(), 2);
+        assert_eq!(records[1].bricks.len(), bricks.len());
+        // Cut inside its last part: none of its parts is applied.
+        let mut reader = Reader::new(&bytes[..bytes.len() - 10]).unwrap();
+        assert_eq!(reader.by_ref().count(), 1);
+        let torn = reader.torn.unwrap();
+        assert!(torn.contains(&format!("from byte {first} discarded")), "{torn}");
     }
 
     #[test]
