@@ -172,12 +172,17 @@ impl SessionInfo {
     }
 }
 
-/// The start time field of `/proc/PID/stat` (after the command name, which may hold spaces).
+/// The start time field of `/proc/PID/stat` (after the command name, which may hold spaces)
+/// of a live process.
 fn start_token(pid: u32) -> Option<String> {
     let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
-    let after_name = &stat[stat.rfind(')')? + 1..];
-    // Fields after the name start at field 3 (state); the start time is field 22.
-    after_name.split_whitespace().nth(19).map(str::to_owned)
+    let mut fields = stat[stat.rfind(')')? + 1..].split_whitespace();
+    // Fields after the name start at field 3, the state: a dead process (a zombie not yet
+    // reaped) owns nothing. The start time is field 22.
+    if matches!(fields.next(), Some("Z" | "X" | "x")) {
+        return None;
+    }
+    fields.nth(18).map(str::to_owned)
 }
 
 const SESSION_FILE: &str = "session.json";
@@ -469,7 +474,11 @@ impl Writer {
                     Some(Journal { file, base, last: base, unsynced: false, bytes: journal::HEADER as u64 });
                 self.journals.push((base, path));
             }
-            Err(e) => self.fail(format!("{e:#}")),
+            Err(e) => {
+                // Leave no journal without a whole header behind, where the disk allows.
+                let _ = self.disk.remove(&path);
+                self.fail(format!("{e:#}"));
+            }
         }
     }
 
@@ -705,7 +714,8 @@ pub struct Recovered {
     pub strokes: u64,
     /// Strokes in the snapshot recovery started from.
     pub snapshot_strokes: u64,
-    /// Why the journal's end was discarded, if it was (a stroke cut short by the crash).
+    /// Why the journal's end was discarded, if it was (a stroke cut short by the crash): the
+    /// first reason found.
     pub discarded: Option<String>,
 }
 
@@ -751,17 +761,21 @@ pub fn recover(dir: &Path) -> Result<Recovered, RecoveryError> {
     let mut discarded = None;
     for (_, path) in numbered(dir, "journal-", ".argj") {
         let bytes = std::fs::read(&path).map_err(|e| fail(format!("cannot read {}: {e}", path.display())))?;
+        // A journal that cannot be read is skipped: the next one tells, by its base, whether
+        // strokes are missing.
         let mut reader = match Reader::new(&bytes) {
             Ok(r) => r,
             Err(e) => {
-                discarded = Some(format!("{}: {e}", path.display()));
-                break;
+                discarded.get_or_insert(format!("{}: {e}", path.display()));
+                continue;
             }
         };
         if reader.base() > strokes {
-            discarded = Some(format!(
-                "{} starts after stroke {}, strokes are missing before it",
+            discarded.get_or_insert(format!(
+                "{} starts after stroke {}: strokes {} to {} are missing",
                 path.display(),
+                reader.base(),
+                strokes + 1,
                 reader.base()
             ));
             break;
@@ -776,8 +790,7 @@ pub fn recover(dir: &Path) -> Result<Recovered, RecoveryError> {
             strokes = record.stroke;
         }
         if let Some(why) = reader.torn {
-            discarded = Some(format!("{}: {why}", path.display()));
-            break;
+            discarded.get_or_insert(format!("{}: {why}", path.display()));
         }
     }
     sculpt.field.take_dirty();

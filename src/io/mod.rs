@@ -66,8 +66,8 @@
 //! - Recovery loads the newest snapshot that reads whole, then applies the records numbered
 //!   after it, from the journals in order of their base, while they follow one another
 //!   (N + 1, N + 2, …). The first record that is cut short (a part missing included), fails
-//!   its checksum or breaks the numbering ends the journal: a torn tail is discarded, never
-//!   applied.
+//!   its checksum or breaks the numbering ends its journal: a torn tail is discarded, never
+//!   applied. The next journal continues only if its base shows no stroke is missing.
 
 use std::collections::HashSet;
 use std::sync::Arc;
