@@ -95,6 +95,7 @@ pub(super) fn journal_stroke(size: BenchSize, emit: &mut impl FnMut(Value)) -> R
             .sum();
         autosave.close()?;
         let record_max = record.iter().copied().fold(0.0, f64::max);
+        let record_p90 = percentile(&mut record.clone(), 0.9);
         emit(json!({
             "workload": "journal-stroke",
             "radius_voxels": r,
@@ -102,6 +103,7 @@ pub(super) fn journal_stroke(size: BenchSize, emit: &mut impl FnMut(Value)) -> R
             "stamps_per_stroke": stamps,
             "bricks_per_stroke_median": median(bricks),
             "record_us_median": median(record),
+            "record_us_p90": record_p90,
             "record_us_max": record_max,
             "stroke_us_median_without_autosave": median(plain),
             "stroke_us_median_with_autosave": median(journaled),
@@ -109,6 +111,12 @@ pub(super) fn journal_stroke(size: BenchSize, emit: &mut impl FnMut(Value)) -> R
         }));
     }
     Ok(())
+}
+
+/// The `q` quantile of `v` (nearest rank).
+fn percentile(v: &mut [f64], q: f64) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(((v.len() as f64 * q).ceil() as usize).saturating_sub(1)).copied().unwrap_or(f64::NAN)
 }
 
 /// A solid sphere of `radius` voxels painted in bands, as a large sculpt.

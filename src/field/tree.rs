@@ -203,12 +203,11 @@ impl Field {
     }
 
     /// The bricks that closed strokes, undo and redo changed since the last call, as they are
-    /// now: shared, not copied (`None`: the brick is gone, its samples are empty). Edits
-    /// outside strokes are not included. For the autosave journal; cost: one map lookup per
+    /// now, in no particular order: shared, not copied (`None`: the brick is gone, its samples
+    /// are empty). Edits outside strokes are not included. For the autosave journal; cost: one map lookup per
     /// changed brick.
     pub fn take_changed_bricks(&mut self) -> Vec<(BrickKey, Option<Arc<Brick>>)> {
-        let mut keys = self.history.take_changed();
-        keys.sort_unstable_by_key(|k| k.to_array());
+        let keys = self.history.take_changed();
         keys.into_iter().map(|k| (k, self.bricks.get(&k).cloned())).collect()
     }
 

@@ -482,7 +482,9 @@ impl Writer {
         }
     }
 
-    fn stroke(&mut self, n: u64, changes: Changes) {
+    fn stroke(&mut self, n: u64, mut changes: Changes) {
+        // Sorted here, not on the sculpting thread: the same strokes give the same bytes.
+        changes.sort_unstable_by_key(|(k, _)| k.to_array());
         let bytes = (self.journal.is_some()).then(|| journal::record(n, &changes));
         for (key, brick) in changes {
             match brick {
