@@ -396,3 +396,27 @@ fn strokes_lost_with_a_failed_journal_are_folded_before_the_journal_counts_again
     assert!(r.sculpt.field.same_samples(&field));
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+#[test]
+fn a_session_whose_state_folder_cannot_be_written_warns_by_path_and_still_saves() {
+    let root = temp_dir("cli-blocked");
+    let state = root.join("state");
+    std::fs::write(&state, "a file where the state folder should be").unwrap();
+    let out = root.join("paste.argile");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/tests/toothpaste.toml");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_argile"))
+        .env("XDG_STATE_HOME", &state)
+        .args(["save", scene, "--autosave", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("autosave cannot start") && stderr.contains(&state.display().to_string()),
+        "{stderr}"
+    );
+    assert!(stderr.contains("the sculpt stays in memory"), "{stderr}");
+    assert!(argile::app::load_sculpt(&out).is_ok(), "the sculpt is saved where asked");
+    std::fs::remove_dir_all(&root).unwrap();
+}
