@@ -661,6 +661,38 @@ mod tests {
     }
 
     #[test]
+    fn version_1_and_no_history_leave_the_history_out() {
+        let mut f = sample_field();
+        f.begin_stroke();
+        f.edit_box(IVec3::ZERO, IVec3::splat(3), true, |_, d, _| *d = 1.0);
+        f.end_stroke();
+        let with = encode(&f, None, &mut |_| {});
+        assert!(decode(&with, "h.argile", &mut |_| {}).unwrap().field.undo().unwrap());
+        for options in
+            [EncodeOptions { version: 1, history: true }, EncodeOptions { version: 2, history: false }]
+        {
+            let bytes = encode_with(&f, None, options, &mut |_| {});
+            assert_eq!(u32_at(&bytes, 4), options.version);
+            assert!(bytes.len() < with.len(), "{options:?}");
+            let mut back = decode(&bytes, "n.argile", &mut |_| {}).unwrap();
+            assert!(back.field.same_samples(&f));
+            assert!(!back.field.undo().unwrap(), "{options:?} stores no history");
+        }
+    }
+
+    #[test]
+    fn a_version_1_file_with_history_chunks_is_refused() {
+        let mut f = sample_field();
+        f.begin_stroke();
+        f.edit_box(IVec3::ZERO, IVec3::splat(3), true, |_, d, _| *d = 1.0);
+        f.end_stroke();
+        let mut bytes = encode(&f, None, &mut |_| {});
+        bytes[4..8].copy_from_slice(&1u32.to_le_bytes());
+        let e = decode(&bytes, "v1.argile", &mut |_| {}).unwrap_err().to_string();
+        assert!(e.contains("unknown or repeated tag `HIST`"), "{e}");
+    }
+
+    #[test]
     fn an_empty_field_round_trips() {
         let f = Field::new(0.001, 0.5);
         let back = decode(&encode(&f, None, &mut |_| {}), "e.argile", &mut |_| {}).unwrap();
