@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use argile::app::{self, bench, RenderOptions};
+use argile::io::autosave::AutosaveConfig;
 use argile::mesh::export::ExportFormat;
 use argile::scene::Scene;
 use argile::stereo::display::DisplayMode;
@@ -79,6 +80,8 @@ enum Command {
         /// Turn the Vulkan validation layer on (fails on any validation message).
         #[arg(long)]
         validation: bool,
+        #[command(flatten)]
+        autosave: AutosaveArgs,
     },
     /// Plays a scene to the end of its timeline and saves its clay as a sculpt (`.argile`).
     Save {
@@ -90,7 +93,29 @@ enum Command {
         /// Replace the file if it exists.
         #[arg(long)]
         force: bool,
+        #[command(flatten)]
+        autosave: AutosaveArgs,
     },
+    /// Rewrites a sculpt file (`.argile`, any version this Argile reads) in another format
+    /// version, or stores a scene's clay (at the end of its timeline) as a sculpt.
+    Convert {
+        /// The sculpt file (`.argile`) or scene file (TOML) to read.
+        input: PathBuf,
+        /// The sculpt file to write (`.argile`).
+        out: PathBuf,
+        /// The format version to write (1 holds no undo history).
+        #[arg(long, default_value_t = argile::io::VERSION)]
+        format_version: u32,
+        /// Leave the undo history out.
+        #[arg(long)]
+        no_history: bool,
+        /// Replace the file if it exists.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Recovers the sculpts of sessions that did not close cleanly (a crash, a power cut) and
+    /// says where each is saved. The station does this at every start.
+    Recover,
     /// Writes the clay of a scene (as it is at the end of its timeline) or of a saved sculpt
     /// (`.argile`) as a mesh file.
     ///
@@ -139,6 +164,42 @@ enum Command {
     },
 }
 
+/// Autosave of a scripted session.
+#[derive(clap::Args)]
+struct AutosaveArgs {
+    /// Journal every finished stroke in the state folder, so that a crash loses at most the
+    /// stroke in progress; sessions that did not close are recovered first.
+    #[arg(long)]
+    autosave: bool,
+    /// Seconds of work between two autosave checkpoints.
+    #[arg(long, default_value_t = 60.0, value_parser = parse_seconds)]
+    checkpoint_s: f64,
+    /// Seconds a journaled stroke may wait for its sync to disk (at most 1).
+    #[arg(long, default_value_t = 1.0, value_parser = parse_seconds)]
+    sync_s: f64,
+}
+
+impl AutosaveArgs {
+    /// The autosave settings if autosave is on, after recovering unclosed sessions.
+    fn start(&self) -> Option<AutosaveConfig> {
+        self.autosave.then(|| {
+            app::recover_and_report();
+            AutosaveConfig {
+                checkpoint_interval: std::time::Duration::from_secs_f64(self.checkpoint_s),
+                sync_interval: std::time::Duration::from_secs_f64(self.sync_s.min(1.0)),
+                ..AutosaveConfig::default()
+            }
+        })
+    }
+}
+
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if (0.01..=86_400.0).contains(&v) => Ok(v),
+        _ => Err(format!("`{s}` is not a number of seconds from 0.01 to 86400")),
+    }
+}
+
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) =
         s.split_once('x').ok_or_else(|| format!("`{s}` is not WIDTHxHEIGHT (for example 512x512)"))?;
@@ -185,10 +246,12 @@ fn main() -> ExitCode {
                 validation,
                 display_mode,
                 opentrack,
+                autosave: None,
+                scene_toml: None,
             },
         ),
-        Some(Command::Render { scene, out, display_mode, size, validation }) => {
-            render(&scene, out, display_mode, size, validation)
+        Some(Command::Render { scene, out, display_mode, size, validation, autosave }) => {
+            render(&scene, out, display_mode, size, validation, &autosave)
         }
         Some(Command::Export { input, format, out, force }) => app::export(&input, format, &out, force, true)
             .map(|s| {
@@ -200,8 +263,27 @@ fn main() -> ExitCode {
                     s.bytes
                 )
             }),
-        Some(Command::Save { scene, out, force }) => app::save_scene_sculpt(&scene, &out, force)
-            .map(|s| println!("wrote {} ({} bricks, {} bytes)", s.path.display(), s.bricks, s.bytes)),
+        Some(Command::Save { scene, out, force, autosave }) => {
+            app::save_scene_sculpt(&scene, &out, force, autosave.start())
+                .map(|s| println!("wrote {} ({} bricks, {} bytes)", s.path.display(), s.bricks, s.bytes))
+        }
+        Some(Command::Convert { input, out, format_version, no_history, force }) => {
+            let options = argile::io::EncodeOptions { version: format_version, history: !no_history };
+            app::convert_sculpt(&input, &out, options, force).map(|s| {
+                println!(
+                    "wrote {} (format version {format_version}, {} bricks, {} bytes)",
+                    s.path.display(),
+                    s.bricks,
+                    s.bytes
+                )
+            })
+        }
+        Some(Command::Recover) => {
+            if app::recover_and_report() == 0 {
+                println!("No session is left to recover: every earlier session closed cleanly.");
+            }
+            Ok(())
+        }
         Some(Command::Info) => info(),
         Some(Command::Bench { json, quick, workloads }) => run_bench(json, quick, &workloads),
         Some(Command::Calibrate { calibration, out, width }) => {
@@ -232,14 +314,19 @@ fn print_written(written: &[app::WrittenCapture]) {
 }
 
 fn station(scene_path: Option<PathBuf>, options: app::StationOptions) -> Result<()> {
-    let scene = match &scene_path {
-        Some(p) => Scene::load(p)?,
-        None => Scene::default_scene(),
+    let (scene, scene_text) = match &scene_path {
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .with_context(|| format!("cannot read scene file {}", p.display()))?;
+            (Scene::parse(&text, &p.display().to_string(), p.parent())?, Some(text))
+        }
+        None => (Scene::default_scene(), Some(argile::scene::DEFAULT_SCENE_TOML.to_owned())),
     };
     let name = scene_path
         .as_deref()
         .and_then(|p| p.file_stem())
         .map_or("default".to_owned(), |s| s.to_string_lossy().into_owned());
+    app::recover_and_report();
     if let Some(reason) = app::no_display_reason() {
         println!("No window can open here ({reason}): rendering the {name} scene headless.");
         let options = RenderOptions {
@@ -249,10 +336,17 @@ fn station(scene_path: Option<PathBuf>, options: app::StationOptions) -> Result<
             validation: options.validation,
             size_px: None,
         };
-        let written = app::render_scene(&scene, &options)?;
+        let written = app::render_scene_autosaved(
+            &scene,
+            &options,
+            Some(AutosaveConfig::default()),
+            scene_text.as_deref(),
+        )?;
         print_written(&written);
         return Ok(());
     }
+    let options =
+        app::StationOptions { autosave: Some(AutosaveConfig::default()), scene_toml: scene_text, ..options };
     let report = app::run_station(&scene, &name, &options)?;
     println!("station closed after {} frames", report.frames);
     if let Some(p) = &report.screenshot {
@@ -270,10 +364,13 @@ fn render(
     display_modes: Vec<DisplayMode>,
     size: Option<(u32, u32)>,
     validation: bool,
+    autosave: &AutosaveArgs,
 ) -> Result<()> {
-    let scene = Scene::load(scene)?;
+    let text = std::fs::read_to_string(scene)
+        .with_context(|| format!("cannot read scene file {}", scene.display()))?;
+    let scene = Scene::parse(&text, &scene.display().to_string(), scene.parent())?;
     let options = RenderOptions { out_dir: out, display_modes, progress: true, validation, size_px: size };
-    let written = app::render_scene(&scene, &options)?;
+    let written = app::render_scene_autosaved(&scene, &options, autosave.start(), Some(&text))?;
     print_written(&written);
     Ok(())
 }

@@ -101,3 +101,227 @@ fn a_damaged_sculpt_is_refused_with_its_name() {
     assert!(!dir.join("x.obj").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The field of `tests/fixtures/sculpt-v1.argile`: exact in `f32` (small integer ratios), so
+/// the comparison holds on any machine.
+fn fixture_field() -> Field {
+    let mut f = Field::new(0.002, 0.5);
+    f.edit_box(
+        argile::math::IVec3::new(-12, -5, -9),
+        argile::math::IVec3::new(10, 13, 6),
+        true,
+        |p, d, c| {
+            *d = ((p.x * 7 + p.y * 3 + p.z * 5).rem_euclid(17) as f32 / 16.0).min(1.0);
+            *c = [p.x.rem_euclid(4) as f32 / 4.0, p.y.rem_euclid(8) as f32 / 8.0, 0.5, 1.0];
+        },
+    );
+    f
+}
+
+const FIXTURE_V1: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/sculpt-v1.argile");
+
+#[test]
+fn a_version_1_file_still_loads() {
+    let bytes = std::fs::read(FIXTURE_V1).unwrap();
+    assert_eq!(&bytes[4..8], &1u32.to_le_bytes(), "the fixture is format version 1");
+    let mut sculpt = load_sculpt(std::path::Path::new(FIXTURE_V1)).unwrap();
+    assert!(sculpt.field.same_samples(&fixture_field()));
+    assert_eq!(sculpt.field.transform().voxel_size_m, 0.002);
+    assert_eq!(sculpt.scene_toml.as_deref(), Some("# the analytic field of tests/sculpt_file.rs\n"));
+    assert!(!sculpt.field.undo().unwrap(), "version 1 holds no history");
+}
+
+#[test]
+fn convert_moves_sculpts_between_versions() {
+    let dir = temp_dir("convert");
+    let (v2, v1) = (dir.join("v2.argile"), dir.join("back-to-v1.argile"));
+    let out = argile(&["convert", FIXTURE_V1, v2.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("format version 2"));
+    assert_eq!(&std::fs::read(&v2).unwrap()[4..8], &2u32.to_le_bytes());
+    assert!(load_sculpt(&v2).unwrap().field.same_samples(&fixture_field()));
+    let out = argile(&["convert", v2.to_str().unwrap(), v1.to_str().unwrap(), "--format-version", "1"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        std::fs::read(&v1).unwrap(),
+        std::fs::read(FIXTURE_V1).unwrap(),
+        "the same bytes as version 1 wrote"
+    );
+
+    let out =
+        argile(&["convert", FIXTURE_V1, dir.join("v9.argile").to_str().unwrap(), "--format-version", "9"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("format version 9 cannot be written"));
+    let out = argile(&["convert", FIXTURE_V1, v2.to_str().unwrap()]);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("pass --force"));
+
+    // A scene converts to its clay at the end of its timeline, as `argile save` stores it.
+    let (converted, saved) = (dir.join("scene.argile"), dir.join("saved.argile"));
+    assert!(argile(&["convert", SCENE, converted.to_str().unwrap()]).status.success());
+    assert!(argile(&["save", SCENE, "--out", saved.to_str().unwrap()]).status.success());
+    assert!(load_sculpt(&converted).unwrap().field.same_samples(&load_sculpt(&saved).unwrap().field));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Undoes every step of both fields, then redoes them all, checking they agree bit for bit
+/// at each step.
+fn assert_same_history(a: &mut Field, b: &mut Field) -> Result<(), TestCaseError> {
+    prop_assert_eq!(a.history_stats(), b.history_stats());
+    loop {
+        let (ua, ub) = (a.undo().unwrap(), b.undo().unwrap());
+        prop_assert_eq!(ua, ub);
+        prop_assert!(a.same_samples(b));
+        if !ua {
+            break;
+        }
+    }
+    loop {
+        let (ra, rb) = (a.redo(), b.redo());
+        prop_assert_eq!(ra, rb);
+        prop_assert!(a.same_samples(b));
+        if !ra {
+            break;
+        }
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 16,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(9),
+        ..ProptestConfig::default()
+    })]
+
+    /// Random strokes, some undone: the sculpt, its history (undo and redo) and its settings
+    /// read back bit for bit.
+    #[test]
+    fn sculpts_with_history_round_trip_bit_for_bit(
+        strokes in proptest::collection::vec(
+            proptest::collection::vec(
+                (-0.03f32..0.03, -0.03f32..0.03, -0.03f32..0.03, 0.001f32..0.008, any::<bool>(), 0.0f32..1.0),
+                1..4,
+            ),
+            1..7,
+        ),
+        undone in 0usize..4,
+        voxel in 0.0005f32..0.004,
+        iso in 0.2f32..0.8,
+        scene in proptest::option::of("[a-z =\n\"0-9.\\[\\]]{0,40}"),
+    ) {
+        let mut f = Field::new(voxel, iso);
+        for stroke in &strokes {
+            f.begin_stroke();
+            for &(x, y, z, r, remove, hue) in stroke {
+                let action = if remove { Action::Remove } else { Action::Add };
+                stamp_sphere(&mut f, Vec3::new(x, y, z), r, action, [hue, 1.0 - hue, 0.5, 1.0]);
+            }
+            f.end_stroke();
+        }
+        for _ in 0..undone {
+            f.undo().unwrap();
+        }
+        let bytes = encode(&f, scene.as_deref(), &mut |_| {});
+        let mut back = decode(&bytes, "p.argile", &mut |_| {}).unwrap();
+        prop_assert!(back.field.same_samples(&f));
+        prop_assert_eq!(back.field.transform(), f.transform());
+        prop_assert_eq!(back.field.iso().to_bits(), f.iso().to_bits());
+        prop_assert_eq!(back.scene_toml, scene);
+        assert_same_history(&mut back.field, &mut f)?;
+    }
+}
+
+/// Where each part of a sculpt file lies: (start, end, what) for the header fields and each
+/// chunk's tag, lengths, checksum and stored bytes.
+fn layout(bytes: &[u8]) -> Vec<(usize, usize, &'static str)> {
+    let mut parts = vec![(0, 4, "magic"), (4, 8, "version"), (8, 12, "count")];
+    let mut at = 12;
+    while at < bytes.len() {
+        let stored = u32::from_le_bytes(bytes[at + 8..at + 12].try_into().unwrap()) as usize;
+        parts.extend([
+            (at, at + 4, "tag"),
+            (at + 4, at + 8, "raw length"),
+            (at + 8, at + 12, "stored length"),
+            (at + 12, at + 16, "checksum"),
+            (at + 16, at + 16 + stored, "stored"),
+        ]);
+        at += 16 + stored;
+    }
+    parts
+}
+
+/// A sculpt with every kind of chunk: scene text, bricks, undo and redo steps.
+fn full_sculpt() -> Vec<u8> {
+    let mut f = fixture_field();
+    for i in 0..3 {
+        f.begin_stroke();
+        stamp_sphere(
+            &mut f,
+            Vec3::new(0.004 * i as f32, 0.0, 0.0),
+            0.006,
+            Action::Remove,
+            [1.0, 0.0, 0.0, 1.0],
+        );
+        f.end_stroke();
+    }
+    f.undo().unwrap();
+    encode(&f, Some("[field]\nvoxel_size_m = 0.002\n"), &mut |_| {})
+}
+
+#[test]
+fn every_truncation_is_refused_as_truncated() {
+    let bytes = full_sculpt();
+    let parts = layout(&bytes);
+    assert!(parts.iter().filter(|p| p.2 == "tag").count() >= 4);
+    for n in 0..bytes.len() {
+        let e = decode(&bytes[..n], "cut.argile", &mut |_| {}).unwrap_err().to_string();
+        assert!(e.starts_with("sculpt file cut.argile: "), "{e}");
+        let count = u32::from_le_bytes(bytes[8..12].try_into().unwrap()) as usize;
+        let expected = if n < 12 {
+            "no ARGL header"
+        } else if count > (n - 12) / 16 {
+            "more than its"
+        } else {
+            "(truncated)"
+        };
+        assert!(e.contains(expected), "cut at {n}: {e}");
+    }
+    // Read from a file chunk by chunk, the same cuts give the same sentences.
+    let dir = temp_dir("cuts");
+    let path = dir.join("cut.argile");
+    for n in (0..bytes.len()).step_by(97) {
+        std::fs::write(&path, &bytes[..n]).unwrap();
+        let from_file = argile::io::read_file(&path, &mut |_| {}).unwrap_err().reason;
+        let from_memory = decode(&bytes[..n], "m", &mut |_| {}).unwrap_err().reason;
+        assert_eq!(from_file, from_memory, "cut at {n}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn random_byte_flips_are_refused_with_the_message_for_the_part_hit() {
+    let bytes = full_sculpt();
+    let parts = layout(&bytes);
+    let mut x: u64 = 0x2545_F491_4F6C_DD1D;
+    for _ in 0..3000 {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        let at = (x % bytes.len() as u64) as usize;
+        let mask = 1u8 << ((x >> 32) % 8);
+        let mut bad = bytes.clone();
+        bad[at] ^= mask;
+        let e = decode(&bad, "flip.argile", &mut |_| {}).unwrap_err().to_string();
+        let part = parts.iter().find(|p| p.0 <= at && at < p.1).unwrap().2;
+        let expected: &[&str] = match part {
+            "magic" => &["not an Argile sculpt"],
+            "version" => &["format version"],
+            "count" => &["chunks, more than", "follow its last chunk", "(truncated)", "holds no META"],
+            "tag" => &["unknown or repeated tag", "first chunk is not META", "late META"],
+            "raw length" => &["does not decompress to its stated size", "over the"],
+            "stored length" => &["checksum", "(truncated)"],
+            _ => &["checksum"],
+        };
+        assert!(expected.iter().any(|m| e.contains(m)), "{part} flipped at byte {at}: {e}");
+    }
+}

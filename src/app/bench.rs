@@ -42,11 +42,18 @@ pub enum Workload {
     /// The station's frame on the default scene while the desk tool sculpts, split into input,
     /// tools, mesh, render and composition, in every display mode (offscreen: no present).
     FrameDesktop,
+    /// The autosave journal's cost on the sculpting thread per finished stroke (strokes of
+    /// radius 8 and 16 voxels carving a sphere), and the strokes' own cost with and without it.
+    JournalStroke,
+    /// Saving a sculpt of over 10 million samples: MB/s, size on disk against memory.
+    SaveLarge,
+    /// Loading that sculpt back: MB/s.
+    LoadLarge,
 }
 
 impl Workload {
     /// Every workload, in the order `argile bench` runs them.
-    pub const ALL: [Workload; 8] = [
+    pub const ALL: [Workload; 11] = [
         Workload::Stamp,
         Workload::StampCarve,
         Workload::MeshFull,
@@ -55,6 +62,9 @@ impl Workload {
         Workload::InputFrame,
         Workload::Compose,
         Workload::FrameDesktop,
+        Workload::JournalStroke,
+        Workload::SaveLarge,
+        Workload::LoadLarge,
     ];
 }
 
@@ -75,6 +85,8 @@ pub struct BenchSize {
     pub sphere_radius_voxels: f32,
     /// Timed input frames per device set.
     pub input_frames: usize,
+    /// Radius of the solid sphere the save and load workloads store, voxels.
+    pub large_sphere_radius_voxels: f32,
 }
 
 impl BenchSize {
@@ -87,6 +99,7 @@ impl BenchSize {
         big_mesh_triangles: 1_000_000,
         sphere_radius_voxels: 100.0,
         input_frames: 20_000,
+        large_sphere_radius_voxels: 130.0,
     };
     /// A small run that checks the workloads work (not for figures).
     pub const QUICK: BenchSize = BenchSize {
@@ -97,10 +110,11 @@ impl BenchSize {
         big_mesh_triangles: 100_000,
         sphere_radius_voxels: 24.0,
         input_frames: 200,
+        large_sphere_radius_voxels: 24.0,
     };
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
+pub(super) fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     let n = v.len();
     if n == 0 {
@@ -124,6 +138,9 @@ pub fn run(workloads: &[Workload], size: BenchSize, mut emit: impl FnMut(Value))
             Workload::InputFrame => bench_input(size, &mut emit),
             Workload::Compose => bench_compose(size, &mut emit)?,
             Workload::FrameDesktop => bench_frame_desktop(size, &mut emit)?,
+            Workload::JournalStroke => super::bench_io::journal_stroke(size, &mut emit)?,
+            Workload::SaveLarge => super::bench_io::save_large(size, &mut emit)?,
+            Workload::LoadLarge => super::bench_io::load_large(size, &mut emit)?,
         }
     }
     Ok(())
@@ -222,7 +239,7 @@ fn bench_stamp_carve(size: BenchSize, emit: &mut impl FnMut(Value)) {
 }
 
 /// A field holding a solid sphere of `radius` voxels (1 mm voxels), centred off the lattice.
-fn sphere_field(radius: f32) -> Field {
+pub(super) fn sphere_field(radius: f32) -> Field {
     let mut field = Field::new(0.001, 0.5);
     stamp_sphere(
         &mut field,

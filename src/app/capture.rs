@@ -5,10 +5,12 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
+use super::autosave::start_autosave;
 use super::environment::load_environment;
-use super::files::write_atomically;
 use super::frame::build_frame;
 use super::playback::Playback;
+use crate::io::autosave::AutosaveConfig;
+use crate::io::write_atomically;
 use crate::mesh::{mesh_all, remesh_dirty};
 use crate::render::{Renderer, RendererDesc, StereoImage, ViewPasses};
 use crate::scene::Scene;
@@ -69,6 +71,17 @@ pub fn renderer_for(
 
 /// Plays `scene` and renders every capture. Returns what was written, in capture order.
 pub fn render_scene(scene: &Scene, options: &RenderOptions) -> Result<Vec<WrittenCapture>> {
+    render_scene_autosaved(scene, options, None, None)
+}
+
+/// [`render_scene`], journaling the strokes with `autosave` (snapshots carry `scene_toml`);
+/// the autosave session is closed when every capture is written.
+pub fn render_scene_autosaved(
+    scene: &Scene,
+    options: &RenderOptions,
+    autosave: Option<AutosaveConfig>,
+    scene_toml: Option<&str>,
+) -> Result<Vec<WrittenCapture>> {
     std::fs::create_dir_all(&options.out_dir)
         .with_context(|| format!("cannot create the output folder {}", options.out_dir.display()))?;
     let mut scene = scene.clone();
@@ -94,7 +107,9 @@ pub fn render_scene(scene: &Scene, options: &RenderOptions) -> Result<Vec<Writte
     }
     let mut renderer = renderer_for(&scene, None, options.validation, None)?;
     tracing::info!("rendering {} on {}", scene.source, renderer.device_name());
-    let mut playback = Playback::new(&scene);
+    let mut playback = Playback::new_autosaved(&scene, |field| {
+        autosave.and_then(|config| start_autosave(field, scene_toml, &scene.source, config))
+    });
     let initial = mesh_all(playback.field());
     playback.field_mut().take_dirty();
     let clay = initial.upserted.iter().fold(crate::math::Aabb::EMPTY, |b, (_, c)| b.union(&c.bounds()));
@@ -141,6 +156,9 @@ pub fn render_scene(scene: &Scene, options: &RenderOptions) -> Result<Vec<Writte
         });
     }
     bar.finish_and_clear();
+    if let Some(session) = playback.finish_autosave() {
+        session.close()?;
+    }
     // Dropping the renderer first lets the layer report destruction problems (leaks) too.
     let log = renderer.validation_log();
     drop(renderer);

@@ -4,10 +4,10 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 
-use super::files::write_atomically;
 use super::playback::Playback;
 use super::sculpt::{is_sculpt, load_sculpt};
 use crate::field::Field;
+use crate::io::write_atomically;
 use crate::mesh::export::{write_mesh, ExportFormat};
 use crate::mesh::{mesh_all, weld, WeldedMesh};
 use crate::scene::Scene;
@@ -25,11 +25,15 @@ pub struct ExportSummary {
     pub bytes: u64,
 }
 
+/// The end of `scene`'s timeline: its last key or capture, seconds.
+pub(super) fn end_s(scene: &Scene) -> f32 {
+    scene.captures.iter().map(|c| c.time_s).fold(scene.timeline.duration_s(), f32::max)
+}
+
 /// `scene`'s clay at the end of its timeline (after its last key and capture).
 pub fn final_field(scene: &Scene) -> Field {
     let mut playback = Playback::new(scene);
-    let end = scene.captures.iter().map(|c| c.time_s).fold(scene.timeline.duration_s(), f32::max);
-    playback.advance_to(end, |_| {});
+    playback.advance_to(end_s(scene), |_| {});
     playback.into_field()
 }
 

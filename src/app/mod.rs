@@ -2,30 +2,39 @@
 //!
 //! The only module that knows every other; the CLI in `main.rs` is a thin shell over it.
 
+mod autosave;
 pub mod bench;
+mod bench_io;
 mod calibrate;
 mod capture;
 mod comfort;
 mod environment;
 mod export;
-mod files;
 mod frame;
 mod playback;
 mod sculpt;
 mod station;
 
+pub use crate::io::write_atomically;
+pub use autosave::{
+    autosave_root, recover_and_report, recover_sessions, recovered_dir, start_autosave, RecoveredSculpt,
+};
 pub use calibrate::{calibrate, describe, test_pattern, CalibrateOptions, Calibrated, Marker, TestPattern};
-pub use capture::{render_scene, renderer_for, save_png_atomically, RenderOptions, WrittenCapture};
+pub use capture::{
+    render_scene, render_scene_autosaved, renderer_for, save_png_atomically, RenderOptions, WrittenCapture,
+};
 pub use comfort::apply_parallax_budget;
 pub use environment::{load_environment, EnvironmentError};
 pub use export::{export, final_field, final_mesh, welded_surface, ExportSummary};
-pub use files::write_atomically;
 pub use frame::{build_frame, world_lights};
 pub use playback::Playback;
-pub use sculpt::{is_sculpt, load_sculpt, save_scene_sculpt, SavedSculpt, SCULPT_EXTENSION};
+pub use sculpt::{
+    convert_sculpt, is_sculpt, load_sculpt, load_sculpt_with_progress, save_scene_sculpt, SavedSculpt,
+    SCULPT_EXTENSION,
+};
 pub use station::{
     no_display_reason, run_station, InputScript, ScriptEvent, Station, StationOptions, StationReport,
-    SCRIPTED_STEP_S,
+    StepTimes, SCRIPTED_STEP_S,
 };
 
 use crate::field::HistoryConfig;

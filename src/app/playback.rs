@@ -2,6 +2,7 @@
 //! sculpting it, step by step at the scene's fixed step rate.
 
 use crate::field::Field;
+use crate::io::autosave::Autosave;
 use crate::math::Pose;
 use std::sync::Arc;
 
@@ -20,6 +21,8 @@ pub struct Playback<'s> {
     /// Whether the field's open stroke is the hands' (opened here).
     owns_stroke: bool,
     time_s: f32,
+    /// Journals every stroke that ends.
+    autosave: Option<Autosave>,
 }
 
 fn slot(hand: Hand) -> usize {
@@ -32,14 +35,21 @@ fn slot(hand: Hand) -> usize {
 impl<'s> Playback<'s> {
     /// The scene at time 0: its initial clay, rasterised into a new field.
     pub fn new(scene: &'s Scene) -> Self {
+        Self::new_autosaved(scene, |_| None)
+    }
+
+    /// The scene at time 0, with autosave started by `start` on the initial clay, before the
+    /// first stroke; every stroke that ends is then journaled.
+    pub fn new_autosaved(scene: &'s Scene, start: impl FnOnce(&mut Field) -> Option<Autosave>) -> Self {
         let mut field = Field::new(scene.voxel_size_m, scene.iso);
         field.set_history_config(super::history_config());
         for primitive in &scene.clay {
             rasterize_solid(&mut field, &primitive.solid, primitive.op, primitive.colour);
         }
         let tools = scene.tools.iter().map(|t| build_tool(t, &field)).collect();
+        let autosave = start(&mut field);
         let mut playback =
-            Self { scene, field, tools, strokes: [None, None], owns_stroke: false, time_s: 0.0 };
+            Self { scene, field, tools, strokes: [None, None], owns_stroke: false, time_s: 0.0, autosave };
         // Keys at time 0 with their action on stamp at once.
         playback.step_to(0.0);
         playback
@@ -68,17 +78,22 @@ impl<'s> Playback<'s> {
     /// Plays the timeline up to `t` in fixed steps; key times are always step boundaries, so
     /// strokes follow the keyed path exactly. Calls `progress(time)` after each step.
     pub fn advance_to(&mut self, t: f32, mut progress: impl FnMut(f32)) {
-        let step = self.scene.timeline.step_s();
         while self.time_s < t {
-            let mut next = (self.time_s + step).min(t);
-            for hand in Hand::BOTH {
-                if let Some(k) = self.scene.timeline.keys(hand).iter().find(|k| k.time_s > self.time_s) {
-                    next = next.min(k.time_s);
-                }
-            }
-            self.step_to(next);
-            progress(next);
+            progress(self.step_towards(t));
         }
+    }
+
+    /// Plays one fixed step towards `t` (shorter where a key or `t` comes first), as
+    /// [`Playback::advance_to`] does; returns the new time.
+    pub fn step_towards(&mut self, t: f32) -> f32 {
+        let mut next = (self.time_s + self.scene.timeline.step_s()).min(t);
+        for hand in Hand::BOTH {
+            if let Some(k) = self.scene.timeline.keys(hand).iter().find(|k| k.time_s > self.time_s) {
+                next = next.min(k.time_s);
+            }
+        }
+        self.step_to(next);
+        next
     }
 
     fn step_to(&mut self, t: f32) {
@@ -120,8 +135,36 @@ impl<'s> Playback<'s> {
         } else if !drawing && self.owns_stroke {
             self.field.end_stroke();
             self.owns_stroke = false;
+            if let Some(a) = &mut self.autosave {
+                a.record(&mut self.field);
+            }
         }
         self.time_s = t;
+    }
+
+    /// Journals the strokes finished on the field since the last record (a stroke drawn on
+    /// the field by someone else, an undo, a redo), if autosave runs.
+    pub fn journal(&mut self) {
+        if let Some(a) = &mut self.autosave {
+            a.record(&mut self.field);
+        }
+    }
+
+    /// The autosave session, if one runs.
+    pub fn autosave(&self) -> Option<&Autosave> {
+        self.autosave.as_ref()
+    }
+
+    /// Ends the stroke still open (journaling it) and hands the autosave session over, to be
+    /// closed once the sculpt is safe.
+    pub fn finish_autosave(&mut self) -> Option<Autosave> {
+        let mut autosave = self.autosave.take()?;
+        if self.field.in_stroke() {
+            self.field.end_stroke();
+            self.strokes = [None, None];
+        }
+        autosave.record(&mut self.field);
+        Some(autosave)
     }
 
     /// The tools as built for this playback, in the scene's order.

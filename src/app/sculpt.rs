@@ -5,9 +5,12 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 
-use super::export::final_field;
-use super::files::write_atomically;
-use crate::io::{decode, encode, Sculpt};
+use super::autosave::start_autosave;
+use super::export::end_s;
+use super::playback::Playback;
+use crate::io::autosave::AutosaveConfig;
+use crate::io::write_atomically;
+use crate::io::{encode, encode_with, read_file, EncodeOptions, Sculpt, VERSION};
 use crate::scene::Scene;
 
 /// The extension of sculpt files.
@@ -30,8 +33,15 @@ pub struct SavedSculpt {
 }
 
 /// Plays the scene file `scene_path` to the end of its timeline and saves its clay, with the
-/// scene's text, to `out` (atomically; an existing file only when `overwrite`).
-pub fn save_scene_sculpt(scene_path: &Path, out: &Path, overwrite: bool) -> Result<SavedSculpt> {
+/// scene's text, to `out` (atomically; an existing file only when `overwrite`). With
+/// `autosave`, the strokes are journaled as they are played, and the session is closed once
+/// `out` is written.
+pub fn save_scene_sculpt(
+    scene_path: &Path,
+    out: &Path,
+    overwrite: bool,
+    autosave: Option<AutosaveConfig>,
+) -> Result<SavedSculpt> {
     // Checked here too (`write_atomically` checks again) so a refused save costs no playback.
     if !overwrite && out.exists() {
         bail!("{} already exists; pass --force to replace it", out.display());
@@ -40,17 +50,74 @@ pub fn save_scene_sculpt(scene_path: &Path, out: &Path, overwrite: bool) -> Resu
     let text = std::fs::read_to_string(scene_path)
         .with_context(|| format!("cannot read scene file {}", scene_path.display()))?;
     let scene = Scene::parse(&text, &scene_path.display().to_string(), scene_path.parent())?;
-    let field = final_field(&scene);
+    let source = scene_path.display().to_string();
+    let mut playback = Playback::new_autosaved(&scene, |field| {
+        autosave.and_then(|config| start_autosave(field, Some(&text), &source, config))
+    });
+    playback.advance_to(end_s(&scene), |_| {});
+    let session = playback.finish_autosave();
+    let field = playback.into_field();
     let bytes = encode(&field, Some(&text), &mut |_| {});
     write_atomically(out, overwrite, |w| {
         w.write_all(&bytes).with_context(|| format!("cannot write {}", out.display()))
     })?;
+    if let Some(session) = session {
+        session.close()?;
+    }
     Ok(SavedSculpt { path: out.to_path_buf(), bricks: field.brick_count(), bytes: bytes.len() })
 }
 
 /// Loads a sculpt file, refusing damaged, truncated, future-version or hostile files with a
 /// sentence that names the file.
 pub fn load_sculpt(path: &Path) -> Result<Sculpt> {
-    let bytes = std::fs::read(path).with_context(|| format!("cannot read sculpt file {}", path.display()))?;
-    Ok(decode(&bytes, &path.display().to_string(), &mut |_| {})?)
+    load_sculpt_with_progress(path, false)
+}
+
+/// [`load_sculpt`], with a progress bar on the terminal when `progress`.
+pub fn load_sculpt_with_progress(path: &Path, progress: bool) -> Result<Sculpt> {
+    let bar = if progress { indicatif::ProgressBar::new(1000) } else { indicatif::ProgressBar::hidden() };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {percent}%")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar.set_message(format!("loading {}", path.display()));
+    // Read chunk by chunk: a large sculpt is never in memory twice.
+    let sculpt = read_file(path, &mut |f| bar.set_position((f * 1000.0) as u64));
+    bar.finish_and_clear();
+    Ok(sculpt?)
+}
+
+/// Rewrites the sculpt file `input` (any version this build reads) as `options` say, to `out`
+/// (atomically; an existing file only when `overwrite`). `input` may also be a scene file,
+/// whose clay at the end of its timeline is stored, with the scene's text.
+pub fn convert_sculpt(
+    input: &Path,
+    out: &Path,
+    options: EncodeOptions,
+    overwrite: bool,
+) -> Result<SavedSculpt> {
+    if !(1..=VERSION).contains(&options.version) {
+        bail!(
+            "format version {} cannot be written; this Argile writes versions 1 to {VERSION}",
+            options.version
+        );
+    }
+    if !overwrite && out.exists() {
+        bail!("{} already exists; pass --force to replace it", out.display());
+    }
+    let sculpt = if is_sculpt(input) {
+        load_sculpt_with_progress(input, true)?
+    } else {
+        let text = std::fs::read_to_string(input)
+            .with_context(|| format!("cannot read scene file {}", input.display()))?;
+        let scene = Scene::parse(&text, &input.display().to_string(), input.parent())?;
+        let mut playback = Playback::new(&scene);
+        playback.advance_to(end_s(&scene), |_| {});
+        Sculpt { field: playback.into_field(), scene_toml: Some(text) }
+    };
+    let bytes = encode_with(&sculpt.field, sculpt.scene_toml.as_deref(), options, &mut |_| {});
+    write_atomically(out, overwrite, |w| {
+        w.write_all(&bytes).with_context(|| format!("cannot write {}", out.display()))
+    })?;
+    Ok(SavedSculpt { path: out.to_path_buf(), bricks: sculpt.field.brick_count(), bytes: bytes.len() })
 }

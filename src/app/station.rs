@@ -37,6 +37,7 @@ use crate::input::motion::{ActionEvent, InputAction, MappingTable, Rates, Target
 use crate::input::mouse::{MouseButton, MouseEvent, MouseMode, MouseNavigator, MouseSettings};
 use crate::input::opentrack::OpentrackHead;
 use crate::input::reader::{HidSource, Mailbox, ReaderConfig, ReaderHandle};
+use crate::io::autosave::{Autosave, AutosaveConfig};
 use crate::math::{Mat4, Quat, Vec2, Vec3, Vec4};
 use crate::mesh::remesh_dirty;
 use crate::render::{Light, Presented, Renderer, RendererDesc, ToolGlyph, ValidationLog};
@@ -78,6 +79,10 @@ pub struct StationOptions {
     /// Track the head with opentrack's UDP datagrams on this address (head-tracked views of the
     /// scene's screen calibration, else the shipped `calibration/screen.toml`).
     pub opentrack: Option<std::net::SocketAddr>,
+    /// Journal every finished stroke (crash recovery), with these settings.
+    pub autosave: Option<AutosaveConfig>,
+    /// The scene's text, kept in the autosave snapshots.
+    pub scene_toml: Option<String>,
 }
 
 /// How a station run ended.
@@ -321,7 +326,19 @@ pub struct Station<'s> {
 impl<'s> Station<'s> {
     /// The station on `scene` at time 0, for a window of `window_px`.
     pub fn new(scene: &'s Scene, bindings: KeyBindings, window_px: (u32, u32), save_to: PathBuf) -> Self {
-        let playback = Playback::new(scene);
+        Self::new_autosaved(scene, bindings, window_px, save_to, |_| None)
+    }
+
+    /// As [`Station::new`], journaling every finished stroke with the autosave session `start`
+    /// opens on the initial clay.
+    pub fn new_autosaved(
+        scene: &'s Scene,
+        bindings: KeyBindings,
+        window_px: (u32, u32),
+        save_to: PathBuf,
+        start: impl FnOnce(&mut crate::field::Field) -> Option<Autosave>,
+    ) -> Self {
+        let playback = Playback::new_autosaved(scene, start);
         let rig = scene.rig;
         let distance = (rig.eye_m - rig.target_m).length();
         let mut mouse = MouseNavigator::new(
@@ -508,13 +525,15 @@ impl<'s> Station<'s> {
             StationAction::Undo => {
                 self.stroke = None;
                 match field.undo() {
-                    Ok(true) => {}
+                    Ok(true) => self.playback.journal(),
                     Ok(false) => self.messages.push("nothing to undo".into()),
                     Err(e) => self.messages.push(format!("undo failed: {e}")),
                 }
             }
             StationAction::Redo => {
-                if !field.redo() {
+                if field.redo() {
+                    self.playback.journal();
+                } else {
                     self.messages.push("nothing to redo".into());
                 }
             }
@@ -667,7 +686,7 @@ impl<'s> Station<'s> {
     pub fn save(&mut self) -> Result<PathBuf> {
         let bytes = crate::io::encode(self.playback.field(), None, &mut |_| {});
         let path = self.save_to.clone();
-        super::files::write_atomically(&path, true, |w| {
+        crate::io::write_atomically(&path, true, |w| {
             std::io::Write::write_all(w, &bytes).with_context(|| format!("cannot write {}", path.display()))
         })?;
         self.saved = Some(path.clone());
@@ -736,13 +755,14 @@ impl<'s> Station<'s> {
             }
         } else if self.stroke.take().is_some() {
             field.end_stroke();
+            self.playback.journal();
         }
 
         self.times.tools_ms = ms_since(tools_started);
 
         // Field → mesh → renderer.
         let mesh_started = Instant::now();
-        let diff = remesh_dirty(field);
+        let diff = remesh_dirty(self.playback.field_mut());
         if !diff.is_empty() {
             apply(&diff);
         }
@@ -799,8 +819,14 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
     event_loop.set_control_flow(ControlFlow::Poll);
     let window_px = options.window_px.unwrap_or((scene.output.width_px, scene.output.height_px));
     let save_to = options.save_to.clone().unwrap_or_else(|| PathBuf::from(format!("{scene_name}.argile")));
+    let source = scene.source.clone();
+    let start = |field: &mut crate::field::Field| {
+        options.autosave.clone().and_then(|config| {
+            super::autosave::start_autosave(field, options.scene_toml.as_deref(), &source, config)
+        })
+    };
     let mut app = WindowApp {
-        station: Station::new(scene, bindings, window_px, save_to),
+        station: Station::new_autosaved(scene, bindings, window_px, save_to, start),
         options,
         script: script.unwrap_or_default(),
         scene_name,
@@ -834,13 +860,14 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
         }
     }
     let mut saved = app.station.saved.clone();
-    if options.frames.is_none()
-        && app.station.playback.field().history_stats().undo_in_memory
-            + app.station.playback.field().history_stats().undo_on_disk
-            > 0
-        && saved.is_none()
-    {
+    let stats = app.station.playback.field().history_stats();
+    if options.frames.is_none() && stats.undo_in_memory + stats.undo_on_disk > 0 && saved.is_none() {
         saved = Some(app.station.save()?);
+    }
+    // The sculpt is safe (saved when it changed): the session closes cleanly, so nothing is
+    // recovered at the next start.
+    if let Some(session) = app.station.playback.finish_autosave() {
+        session.close()?;
     }
     Ok(StationReport { frames: app.frames, screenshot: app.screenshot, saved })
 }

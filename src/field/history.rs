@@ -24,6 +24,7 @@
 use std::collections::{HashMap, HashSet, VecDeque};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use super::brick::{Brick, BrickKey, BRICK_VOLUME};
 
@@ -78,7 +79,7 @@ pub struct HistoryStats {
 /// The bricks one step saved: each key once, with its content before the step.
 #[derive(Debug, Default)]
 pub(crate) struct Step {
-    pub(crate) bricks: Vec<(BrickKey, Option<Brick>)>,
+    pub(crate) bricks: Vec<(BrickKey, Option<Arc<Brick>>)>,
 }
 
 impl Step {
@@ -103,6 +104,8 @@ pub(crate) struct History {
     dropped: usize,
     session_dir: Option<PathBuf>,
     next_file: u64,
+    /// Bricks changed by closed strokes, undo and redo since the journal last took them.
+    changed: HashSet<BrickKey>,
 }
 
 impl std::fmt::Debug for History {
@@ -123,6 +126,7 @@ impl History {
             dropped: 0,
             session_dir: None,
             next_file: 0,
+            changed: HashSet::new(),
         }
     }
 
@@ -142,6 +146,39 @@ impl History {
         }
     }
 
+    /// The undo steps held in memory (oldest first; spilled ones are left out) and the redo
+    /// steps (the next redo last), sharing their bricks.
+    pub(crate) fn in_memory(&self) -> (Vec<&Step>, Vec<&Step>) {
+        let undo = self
+            .undo
+            .iter()
+            .filter_map(|s| match s {
+                Stored::Memory(step) => Some(step),
+                Stored::Disk { .. } => None,
+            })
+            .collect();
+        (undo, self.redo.iter().collect())
+    }
+
+    /// Replaces every step (an open stroke is closed first) with `undo` (oldest first) and
+    /// `redo` (the next redo last), within the memory budget.
+    pub(crate) fn restore(&mut self, undo: Vec<Step>, redo: Vec<Step>) {
+        self.end();
+        for stored in std::mem::take(&mut self.undo) {
+            self.forget(stored);
+        }
+        for step in std::mem::take(&mut self.redo) {
+            self.memory_bytes -= step.bytes();
+        }
+        self.redo = redo;
+        self.memory_bytes += self.redo.iter().map(Step::bytes).sum::<usize>();
+        for step in undo {
+            self.memory_bytes += step.bytes();
+            self.undo.push_back(Stored::Memory(step));
+        }
+        self.enforce_budget();
+    }
+
     /// Whether a stroke is open.
     pub(crate) fn recording(&self) -> bool {
         self.open.is_some()
@@ -156,8 +193,9 @@ impl History {
         self.open = Some((Step::default(), HashSet::new()));
     }
 
-    /// Saves `current` as the state of `key` before the open stroke, on its first touch.
-    pub(crate) fn touch(&mut self, key: BrickKey, current: Option<&Brick>) {
+    /// Saves `current` as the state of `key` before the open stroke, on its first touch (by
+    /// sharing it: the field copies it when it writes).
+    pub(crate) fn touch(&mut self, key: BrickKey, current: Option<&Arc<Brick>>) {
         if let Some((step, seen)) = &mut self.open {
             if seen.insert(key) {
                 let saved = current.cloned();
@@ -171,6 +209,7 @@ impl History {
     pub(crate) fn end(&mut self) {
         if let Some((step, _)) = self.open.take() {
             if !step.bricks.is_empty() {
+                self.changed.extend(step.bricks.iter().map(|(k, _)| *k));
                 self.undo.push_back(Stored::Memory(step));
                 self.enforce_budget();
             }
@@ -193,6 +232,16 @@ impl History {
                 step.map(Some)
             }
         }
+    }
+
+    /// Notes that undo or redo replaced the brick at `key`.
+    pub(crate) fn note_changed(&mut self, key: BrickKey) {
+        self.changed.insert(key);
+    }
+
+    /// The keys changed since the last call (see [`History::note_changed`]).
+    pub(crate) fn take_changed(&mut self) -> Vec<BrickKey> {
+        self.changed.drain().collect()
     }
 
     pub(crate) fn pop_redo(&mut self) -> Option<Step> {
@@ -399,7 +448,7 @@ fn decode_step(bytes: &[u8]) -> Result<Step, String> {
                     b.density[i] = f32_at(d, i);
                     b.colour[i] = std::array::from_fn(|j| f32_at(c, 4 * i + j));
                 }
-                Some(b)
+                Some(Arc::new(b))
             }
             flag => return Err(format!("brick {key} has an unknown presence flag {flag}")),
         };
@@ -420,7 +469,7 @@ mod tests {
         let mut b = Brick::default();
         b.density[3] = 0.25;
         b.colour[7] = [0.1, 0.2, 0.3, 1.0];
-        Step { bricks: vec![(IVec3::new(-1, 2, 3), Some(b)), (IVec3::new(4, -5, 6), None)] }
+        Step { bricks: vec![(IVec3::new(-1, 2, 3), Some(Arc::new(b))), (IVec3::new(4, -5, 6), None)] }
     }
 
     #[test]

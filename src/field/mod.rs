@@ -19,4 +19,4 @@ mod tree;
 pub use brick::{split_index, Brick, BrickKey, Colour, BRICK_SIZE, BRICK_VOLUME, DEFAULT_COLOUR};
 pub use history::{HistoryConfig, HistoryError, HistoryStats, BRICK_BYTES};
 pub use sample::FieldReader;
-pub use tree::{bricks_reading, DirtySet, Field};
+pub use tree::{bricks_reading, DirtySet, Field, HistoryStep};

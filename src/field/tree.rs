@@ -1,5 +1,7 @@
 //! The field's storage: bricks keyed by signed brick coordinates, plus the dirty set.
 
+use std::sync::Arc;
+
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 
 use super::brick::{split_index, Brick, BrickKey, Colour, BRICK_SIZE, DEFAULT_COLOUR};
@@ -25,6 +27,9 @@ pub fn bricks_reading(lo: IVec3, hi: IVec3) -> (BrickKey, BrickKey) {
     (first, last)
 }
 
+/// One step of the undo history: the bricks it puts back, each key once (`None`: absent).
+pub type HistoryStep = Vec<(BrickKey, Option<Arc<Brick>>)>;
+
 /// A sparse density + colour field on a regular lattice.
 ///
 /// Invariants: densities are in [0, 1] (1 is full clay; the surface is the iso-level, default
@@ -34,13 +39,17 @@ pub fn bricks_reading(lo: IVec3, hi: IVec3) -> (BrickKey, BrickKey) {
 /// Edits made between [`Field::begin_stroke`] and [`Field::end_stroke`] form one undo step
 /// (see the `history` module).
 ///
+/// Bricks are shared copy-on-write (`Arc`): the undo history and the autosave journal keep
+/// the bricks a stroke replaced or made by taking a reference, and the first edit of a shared
+/// brick copies it, so each stroke copies each brick it touches once, as before.
+///
 /// This first version has a single resolution level; its API (lattice points, bricks, dirty
 /// set, world sampling) is the one the multi-level field keeps.
 #[derive(Debug)]
 pub struct Field {
     transform: VoxelTransform,
     iso: f32,
-    bricks: HashMap<BrickKey, Brick>,
+    bricks: HashMap<BrickKey, Arc<Brick>>,
     /// Lowest and highest density of each stored brick, kept with every edit, so that whole
     /// bricks can be classified (inside, outside, crossing the surface) without reading them.
     ranges: HashMap<BrickKey, (f32, f32)>,
@@ -120,6 +129,22 @@ impl Field {
         self.history.stats()
     }
 
+    /// The undo steps held in memory (oldest first; steps spilled to disk are left out) and
+    /// the redo steps (the next redo last). Each step lists the bricks it puts back (`None`:
+    /// absent), shared, not copied.
+    pub fn history_in_memory(&self) -> (Vec<HistoryStep>, Vec<HistoryStep>) {
+        let (undo, redo) = self.history.in_memory();
+        let plain = |steps: Vec<&Step>| steps.into_iter().map(|s| s.bricks.clone()).collect();
+        (plain(undo), plain(redo))
+    }
+
+    /// Replaces the undo history with `undo` (oldest first) and `redo` (the next redo last),
+    /// as [`Field::history_in_memory`] gives them, within the history's memory budget.
+    pub fn set_history(&mut self, undo: Vec<HistoryStep>, redo: Vec<HistoryStep>) {
+        let steps = |v: Vec<HistoryStep>| v.into_iter().map(|bricks| Step { bricks }).collect();
+        self.history.restore(steps(undo), steps(redo));
+    }
+
     /// Puts the step's bricks in place and returns the ones they replaced.
     fn swap_in(&mut self, step: Step) -> Step {
         let mut replaced = Step { bricks: Vec::with_capacity(step.bricks.len()) };
@@ -135,6 +160,7 @@ impl Field {
                 }
             };
             replaced.bricks.push((key, old));
+            self.history.note_changed(key);
             let base = key * BRICK_SIZE;
             self.mark_dirty(base, base + IVec3::splat(BRICK_SIZE - 1));
         }
@@ -173,7 +199,21 @@ impl Field {
 
     /// The brick with this key, if stored.
     pub fn brick(&self, key: BrickKey) -> Option<&Brick> {
-        self.bricks.get(&key)
+        self.bricks.get(&key).map(Arc::as_ref)
+    }
+
+    /// The bricks that closed strokes, undo and redo changed since the last call, as they are
+    /// now, in no particular order: shared, not copied (`None`: the brick is gone, its samples
+    /// are empty). Edits outside strokes are not included. For the autosave journal; cost: one map lookup per
+    /// changed brick.
+    pub fn take_changed_bricks(&mut self) -> Vec<(BrickKey, Option<Arc<Brick>>)> {
+        let keys = self.history.take_changed();
+        keys.into_iter().map(|k| (k, self.bricks.get(&k).cloned())).collect()
+    }
+
+    /// Every stored brick, shared (not copied), in no particular order.
+    pub fn shared_bricks(&self) -> impl Iterator<Item = (BrickKey, &Arc<Brick>)> + '_ {
+        self.bricks.iter().map(|(k, b)| (*k, b))
     }
 
     /// Puts `brick` at `key`, replacing what was there (an all-empty brick removes it), and
@@ -184,7 +224,7 @@ impl Field {
             self.bricks.remove(&key);
             self.ranges.remove(&key);
         } else {
-            self.bricks.insert(key, brick);
+            self.bricks.insert(key, Arc::new(brick));
             self.ranges.insert(key, range);
         }
         let base = key * BRICK_SIZE;
@@ -217,7 +257,9 @@ impl Field {
     /// bookkeeping (map entries and density ranges), not counting the undo history.
     pub fn memory_bytes(&self) -> usize {
         let per_brick = super::history::BRICK_BYTES
-            + std::mem::size_of::<(BrickKey, Brick)>()
+            + std::mem::size_of::<(BrickKey, Arc<Brick>)>()
+            + std::mem::size_of::<Brick>()
+            + 2 * std::mem::size_of::<usize>()
             + std::mem::size_of::<(BrickKey, (f32, f32))>();
         self.bricks.len() * per_brick
     }
@@ -230,7 +272,7 @@ impl Field {
 
     /// Total matter in the field, in sample units (sum of densities).
     pub fn mass(&self) -> f64 {
-        self.bricks.values().map(Brick::mass).sum()
+        self.bricks.values().map(|b| b.mass()).sum()
     }
 
     /// Calls `edit` on every lattice point of the box `lo ..= hi`, brick by brick.
@@ -278,11 +320,12 @@ impl Field {
                     if create || self.bricks.contains_key(&key) {
                         self.history.touch(key, self.bricks.get(&key));
                     }
+                    // Copies the brick if the history or the journal shares it.
                     let brick = if create {
-                        self.bricks.entry(key).or_default()
+                        Arc::make_mut(self.bricks.entry(key).or_default())
                     } else {
                         match self.bricks.get_mut(&key) {
-                            Some(brick) => brick,
+                            Some(brick) => Arc::make_mut(brick),
                             None => continue,
                         }
                     };

@@ -2,7 +2,7 @@
 //!
 //! Knows the field (it stores bricks) and nothing of Vulkan or devices.
 //!
-//! ## Layout, version 1
+//! ## Layout, version 2
 //!
 //! ```text
 //!  header  "ARGL" · version u32 · chunk count u32                      (little-endian)
@@ -13,7 +13,16 @@
 //!          SCNE  (at most once) the scene file's TOML text the sculpt was made in
 //!          BRKS  (any number)   up to 512 bricks: per brick its key (3 × i32), then
 //!                               512 densities (f32) and 512 linear RGBA colours (4 × f32)
+//!          HIST  (any number)   the undo history held in memory (optional): kind u8 (0 undo,
+//!                               1 redo) · step index u32 · entry count u32 (≤ 512) · entries:
+//!                               per brick, present u8 (0: absent) · key (3 × i32) · if present
+//!                               its densities and colours as in BRKS. Undo steps oldest first,
+//!                               then redo steps (the next redo last), each index from 0; a step
+//!                               of more than 512 bricks continues in chunks of the same index.
 //! ```
+//!
+//! Version 1 is version 2 without HIST chunks; this build reads both and writes either
+//! (`argile convert`).
 //!
 //! - Every chunk's bytes are LZ4-compressed (`lz4_flex` block format) and carry the CRC-32 of
 //!   the stored bytes; a reader checks the CRC before decompressing and the decompressed
@@ -22,32 +31,73 @@
 //!   most [`MAX_CHUNK_BYTES`] raw, so a large sculpt loads chunk by chunk, with progress.
 //! - A reader refuses, with a sentence naming the file and the problem: a truncated file, a
 //!   bad checksum, a future version, an unknown or repeated chunk, sizes or counts past the
-//!   limits, a brick key twice, densities outside [0, 1] or non-finite samples. It never
-//!   allocates what a header claims before checking the claim against the file's size.
-//! - Files are written atomically by the caller (`app::write_atomically`).
+//!   limits, a brick key twice, densities outside [0, 1] or non-finite samples, history steps
+//!   out of order. It never allocates what a header claims before checking the claim against
+//!   the file's size.
+//! - Files are written atomically ([`write_atomically`]).
 //!
-//! Later versions (resolution levels, undo history, freeform tools) add chunk tags; a reader
-//! keeps reading every version it has shipped.
+//! Later versions (resolution levels, freeform tools) add chunk tags; a reader keeps reading
+//! every version it has shipped (`tests/fixtures/sculpt-v1.argile` is checked).
+//!
+//! ## Autosave: journal and snapshots
+//!
+//! While a session sculpts, [`autosave`] keeps, in a session folder of the user's state
+//! directory (`autosave/<session>/`):
+//!
+//! ```text
+//!  session.json        who owns the session: process id and start token, start time, source
+//!  snapshot-N.argile   the sculpt after its first N strokes, in the format above
+//!  journal-B.argj      the strokes after stroke B, appended as they finish:
+//!     header  "ARGJ" · version u32 (1) · base stroke B u64 · CRC-32 of these 16 bytes u32
+//!     records chunks as above, tag STRK, one record per finished stroke (or undo, redo),
+//!             in one or more chunks: stroke number u64 (B + 1, B + 2, …) · last part u8
+//!             (1 on the record's last chunk) · entry count u32 (≤ 512) · entries as in
+//!             HIST, each brick as the stroke left it (absent: the brick is now empty)
+//!  closed              written (atomically) when the session ends cleanly
+//! ```
+//!
+//! - A record holds every brick its stroke changed, as it is after the stroke: replaying the
+//!   records in order on a snapshot gives the sculpt after each stroke, bit for bit.
+//! - Records are written by a background thread and synced to disk in batches (at most one
+//!   second after they are written): the sculpting thread only hands over shared bricks.
+//! - A checkpoint writes `snapshot-N` atomically (temporary file, sync, rename, sync folder),
+//!   then starts a new journal; only then are older snapshots and the journals they cover
+//!   removed. Nothing already on disk is ever overwritten in place.
+//! - Recovery loads the newest snapshot that reads whole, then applies the records numbered
+//!   after it, from the journals in order of their base, while they follow one another
+//!   (N + 1, N + 2, …). The first record that is cut short (a part missing included), fails
+//!   its checksum or breaks the numbering ends its journal: a torn tail is discarded, never
+//!   applied. The next journal continues only if its base shows no stroke is missing.
 
 use std::collections::HashSet;
+use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use crate::field::{Brick, BrickKey, Field, BRICK_SIZE, BRICK_VOLUME};
+use crate::field::{Brick, BrickKey, Field, HistoryStep, BRICK_SIZE, BRICK_VOLUME};
 use crate::math::IVec3;
 
+mod atomic;
+pub mod autosave;
+mod journal;
+
+pub use atomic::write_atomically;
+
 /// The format version this build writes.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 /// The largest raw chunk a reader accepts.
 pub const MAX_CHUNK_BYTES: usize = 64 << 20;
 /// The most chunks a file may declare.
 pub const MAX_CHUNKS: u32 = 1 << 20;
-/// Bricks per `BRKS` chunk written.
+/// Bricks per `BRKS` chunk written, and per `HIST` or journal chunk.
 pub const BRICKS_PER_CHUNK: usize = 512;
 
 const MAGIC: &[u8; 4] = b"ARGL";
+/// Bytes of one stored brick: its key, densities and colours.
 const BRICK_RECORD: usize = 12 + BRICK_VOLUME * 4 + BRICK_VOLUME * 16;
 const CHUNK_HEADER: usize = 16;
+/// The fewest bytes an entry (see [`put_entries`]) takes: an absent brick.
+const MIN_ENTRY: usize = 13;
 
 /// A sculpt as stored: the clay and the scene text it was made in.
 #[derive(Debug)]
@@ -78,188 +128,473 @@ struct Meta {
     bricks: u64,
 }
 
-/// Encodes a sculpt; `progress` gets the fraction of bricks written.
+/// What [`encode_with`] writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EncodeOptions {
+    /// The format version to write (1 or 2; version 1 holds no history).
+    pub version: u32,
+    /// Whether to store the undo history held in memory.
+    pub history: bool,
+}
+
+impl Default for EncodeOptions {
+    /// The current version, with the history.
+    fn default() -> Self {
+        Self { version: VERSION, history: true }
+    }
+}
+
+/// Encodes a sculpt in the current version, with its undo history; `progress` gets the
+/// fraction of bricks written.
 pub fn encode(field: &Field, scene_toml: Option<&str>, progress: &mut dyn FnMut(f32)) -> Vec<u8> {
-    let mut keys: Vec<BrickKey> = field.brick_keys().collect();
-    keys.sort_unstable_by_key(|k| k.to_array());
+    encode_with(field, scene_toml, EncodeOptions::default(), progress)
+}
+
+/// Encodes a sculpt as `options` say (`options.version` must be one this build writes: 1 to
+/// [`VERSION`]).
+pub fn encode_with(
+    field: &Field,
+    scene_toml: Option<&str>,
+    options: EncodeOptions,
+    progress: &mut dyn FnMut(f32),
+) -> Vec<u8> {
+    assert!((1..=VERSION).contains(&options.version), "format version {} is not written", options.version);
+    let bricks: Vec<(BrickKey, &Brick)> = field.shared_bricks().map(|(k, b)| (k, &**b)).collect();
+    let history = (options.history && options.version >= 2).then(|| field.history_in_memory());
+    let settings = (field.transform().voxel_size_m, field.iso());
+    encode_parts(options.version, settings, bricks, scene_toml, history.as_ref(), progress)
+}
+
+/// Encodes a sculpt given as its settings and bricks (in any order), without history.
+pub(crate) fn encode_bricks(
+    voxel_size_m: f32,
+    iso: f32,
+    bricks: Vec<(BrickKey, &Brick)>,
+    scene_toml: Option<&str>,
+    progress: &mut dyn FnMut(f32),
+) -> Vec<u8> {
+    encode_parts(VERSION, (voxel_size_m, iso), bricks, scene_toml, None, progress)
+}
+
+type History = (Vec<HistoryStep>, Vec<HistoryStep>);
+
+fn encode_parts(
+    version: u32,
+    (voxel_size_m, iso): (f32, f32),
+    mut bricks: Vec<(BrickKey, &Brick)>,
+    scene_toml: Option<&str>,
+    history: Option<&History>,
+    progress: &mut dyn FnMut(f32),
+) -> Vec<u8> {
+    bricks.sort_unstable_by_key(|(k, _)| k.to_array());
     let meta = Meta {
         format: "argile sculpt".into(),
-        voxel_size_m: field.transform().voxel_size_m,
-        iso: field.iso(),
+        voxel_size_m,
+        iso,
         brick_size: BRICK_SIZE,
-        bricks: keys.len() as u64,
+        bricks: bricks.len() as u64,
     };
-    let mut chunks: Vec<([u8; 4], Vec<u8>)> =
-        vec![(*b"META", serde_json::to_vec(&meta).expect("plain values serialise"))];
-    if let Some(text) = scene_toml {
-        chunks.push((*b"SCNE", text.as_bytes().to_vec()));
-    }
-    let groups = keys.chunks(BRICKS_PER_CHUNK);
-    let group_count = groups.len().max(1);
-    for (i, group) in groups.enumerate() {
-        let mut raw = Vec::with_capacity(group.len() * BRICK_RECORD);
-        for key in group {
-            let brick = field.brick(*key).expect("listed keys are stored");
-            for c in key.to_array() {
-                raw.extend_from_slice(&c.to_le_bytes());
-            }
-            for d in brick.density.iter() {
-                raw.extend_from_slice(&d.to_le_bytes());
-            }
-            for c in brick.colour.iter().flatten() {
-                raw.extend_from_slice(&c.to_le_bytes());
-            }
-        }
-        chunks.push((*b"BRKS", raw));
-        progress((i + 1) as f32 / group_count as f32);
-    }
+    let groups = bricks.chunks(BRICKS_PER_CHUNK);
+    let steps: Vec<(u8, u32, &HistoryStep)> = history.map_or_else(Vec::new, |(undo, redo)| {
+        let undo = undo.iter().enumerate().map(|(i, s)| (0, i as u32, s));
+        undo.chain(redo.iter().enumerate().map(|(i, s)| (1, i as u32, s))).collect()
+    });
+    let step_chunks: usize = steps.iter().map(|(_, _, s)| s.len().div_ceil(BRICKS_PER_CHUNK).max(1)).sum();
+    let chunk_count = 1 + u32::from(scene_toml.is_some()) + groups.len() as u32 + step_chunks as u32;
     let mut out = Vec::new();
     out.extend_from_slice(MAGIC);
-    out.extend_from_slice(&VERSION.to_le_bytes());
-    out.extend_from_slice(&(chunks.len() as u32).to_le_bytes());
-    for (tag, raw) in chunks {
-        let stored = lz4_flex::block::compress(&raw);
-        out.extend_from_slice(&tag);
-        out.extend_from_slice(&(raw.len() as u32).to_le_bytes());
-        out.extend_from_slice(&(stored.len() as u32).to_le_bytes());
-        out.extend_from_slice(&crc32fast::hash(&stored).to_le_bytes());
-        out.extend_from_slice(&stored);
+    out.extend_from_slice(&version.to_le_bytes());
+    out.extend_from_slice(&chunk_count.to_le_bytes());
+    put_chunk(&mut out, *b"META", &serde_json::to_vec(&meta).expect("plain values serialise"));
+    if let Some(text) = scene_toml {
+        put_chunk(&mut out, *b"SCNE", text.as_bytes());
+    }
+    let group_count = groups.len().max(1);
+    let mut raw = Vec::new();
+    for (i, group) in groups.enumerate() {
+        raw.clear();
+        raw.reserve(group.len() * BRICK_RECORD);
+        for (key, brick) in group {
+            put_brick(&mut raw, *key, brick);
+        }
+        put_chunk(&mut out, *b"BRKS", &raw);
+        progress((i + 1) as f32 / group_count as f32);
+    }
+    for (kind, index, step) in steps {
+        for part in step.chunks(BRICKS_PER_CHUNK).chain(step.is_empty().then_some(&[][..])) {
+            raw.clear();
+            raw.push(kind);
+            raw.extend_from_slice(&index.to_le_bytes());
+            raw.extend_from_slice(&(part.len() as u32).to_le_bytes());
+            put_entries(&mut raw, part);
+            put_chunk(&mut out, *b"HIST", &raw);
+        }
     }
     out
 }
 
-fn u32_at(bytes: &[u8], at: usize) -> u32 {
+/// Appends brick entries: per brick, present u8 (0: absent) · key (3 × i32) · if present,
+/// its densities and colours (as [`put_brick`]).
+pub(crate) fn put_entries(raw: &mut Vec<u8>, bricks: &[(BrickKey, Option<Arc<Brick>>)]) {
+    for (key, brick) in bricks {
+        match brick {
+            Some(b) => {
+                raw.push(1);
+                put_brick(raw, *key, b);
+            }
+            None => {
+                raw.push(0);
+                for c in key.to_array() {
+                    raw.extend_from_slice(&c.to_le_bytes());
+                }
+            }
+        }
+    }
+}
+
+/// Reads `count` entries written by [`put_entries`] from `raw` at `*at`, refusing a key twice.
+pub(crate) fn read_entries(
+    raw: &[u8],
+    at: &mut usize,
+    count: usize,
+    seen: &mut HashSet<BrickKey>,
+) -> Result<Vec<(BrickKey, Option<Brick>)>, String> {
+    // Refuse counts the bytes cannot hold before allocating for them.
+    if count > (raw.len() - *at) / MIN_ENTRY {
+        return Err(format!("it claims {count} bricks, more than its {} bytes hold", raw.len() - *at));
+    }
+    let mut entries = Vec::with_capacity(count);
+    for _ in 0..count {
+        let flag = raw.get(*at).copied();
+        *at += 1;
+        let entry = match flag {
+            Some(0) if raw.len() >= *at + 12 => {
+                let key = IVec3::new(
+                    u32_at(raw, *at) as i32,
+                    u32_at(raw, *at + 4) as i32,
+                    u32_at(raw, *at + 8) as i32,
+                );
+                *at += 12;
+                (key, None)
+            }
+            Some(1) if raw.len() >= *at + BRICK_RECORD => {
+                let (key, brick) = read_brick(&raw[*at..])?;
+                *at += BRICK_RECORD;
+                (key, Some(brick))
+            }
+            Some(0 | 1) | None => return Err("it ends inside a brick".into()),
+            Some(other) => return Err(format!("a brick has the presence flag {other}")),
+        };
+        if !seen.insert(entry.0) {
+            return Err(format!("brick {} appears twice", entry.0));
+        }
+        entries.push(entry);
+    }
+    Ok(entries)
+}
+
+/// Appends a chunk: tag, raw and stored lengths, CRC-32 of the stored bytes, stored bytes.
+pub(crate) fn put_chunk(out: &mut Vec<u8>, tag: [u8; 4], raw: &[u8]) {
+    let stored = lz4_flex::block::compress(raw);
+    out.extend_from_slice(&tag);
+    out.extend_from_slice(&(raw.len() as u32).to_le_bytes());
+    out.extend_from_slice(&(stored.len() as u32).to_le_bytes());
+    out.extend_from_slice(&crc32fast::hash(&stored).to_le_bytes());
+    out.extend_from_slice(&stored);
+}
+
+/// Appends a brick's key, densities and colours.
+pub(crate) fn put_brick(out: &mut Vec<u8>, key: BrickKey, brick: &Brick) {
+    for c in key.to_array() {
+        out.extend_from_slice(&c.to_le_bytes());
+    }
+    for d in brick.density.iter() {
+        out.extend_from_slice(&d.to_le_bytes());
+    }
+    for c in brick.colour.iter().flatten() {
+        out.extend_from_slice(&c.to_le_bytes());
+    }
+}
+
+pub(crate) fn u32_at(bytes: &[u8], at: usize) -> u32 {
     u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"))
 }
 
+/// Reads the brick record at the start of `record` (at least [`BRICK_RECORD`] bytes),
+/// refusing densities outside [0, 1] and colours that are not numbers.
+pub(crate) fn read_brick(record: &[u8]) -> Result<(BrickKey, Brick), String> {
+    let key = IVec3::new(u32_at(record, 0) as i32, u32_at(record, 4) as i32, u32_at(record, 8) as i32);
+    let mut brick = Brick::default();
+    let f = |i: usize| f32::from_le_bytes(record[i..i + 4].try_into().expect("4 bytes"));
+    for i in 0..BRICK_VOLUME {
+        let d = f(12 + 4 * i);
+        if !(0.0..=1.0).contains(&d) {
+            return Err(format!("brick {key} holds density {d}, outside [0, 1]"));
+        }
+        brick.density[i] = d;
+        let c = std::array::from_fn(|j| f(12 + 4 * BRICK_VOLUME + 16 * i + 4 * j));
+        if c.iter().any(|v: &f32| !v.is_finite()) {
+            return Err(format!("brick {key} holds a colour that is not a number"));
+        }
+        brick.colour[i] = c;
+    }
+    Ok((key, brick))
+}
+
+/// One chunk read whole and checked.
+pub(crate) struct Chunk {
+    pub(crate) tag: [u8; 4],
+    /// The tag as text, for messages.
+    pub(crate) name: String,
+}
+
+/// Where a reader takes a sculpt's bytes from: memory, or a file read chunk by chunk, so that
+/// a large sculpt is never in memory twice.
+trait Source {
+    /// Bytes in all.
+    fn len(&self) -> u64;
+    /// Bytes taken so far.
+    fn position(&self) -> u64;
+    /// The next `n` bytes (the caller checked that they exist), read into `buf` where they must
+    /// be copied.
+    fn take<'a>(&'a mut self, n: usize, buf: &'a mut Vec<u8>) -> Result<&'a [u8], String>;
+}
+
+struct Slice<'b> {
+    bytes: &'b [u8],
+    at: usize,
+}
+
+impl Source for Slice<'_> {
+    fn len(&self) -> u64 {
+        self.bytes.len() as u64
+    }
+
+    fn position(&self) -> u64 {
+        self.at as u64
+    }
+
+    fn take<'a>(&'a mut self, n: usize, _: &'a mut Vec<u8>) -> Result<&'a [u8], String> {
+        let taken = &self.bytes[self.at..self.at + n];
+        self.at += n;
+        Ok(taken)
+    }
+}
+
+struct FileSource {
+    reader: std::io::BufReader<std::fs::File>,
+    len: u64,
+    at: u64,
+}
+
+impl Source for FileSource {
+    fn len(&self) -> u64 {
+        self.len
+    }
+
+    fn position(&self) -> u64 {
+        self.at
+    }
+
+    fn take<'a>(&'a mut self, n: usize, buf: &'a mut Vec<u8>) -> Result<&'a [u8], String> {
+        buf.clear();
+        buf.resize(n, 0);
+        std::io::Read::read_exact(&mut self.reader, buf).map_err(|e| format!("cannot read it: {e}"))?;
+        self.at += n as u64;
+        Ok(buf)
+    }
+}
+
+/// Reads chunk number `index` at `*at` of `bytes` into `raw` (see [`read_chunk_from`]); on
+/// success `*at` moves past it, on failure it stays.
+pub(crate) fn read_chunk(
+    bytes: &[u8],
+    at: &mut usize,
+    index: u32,
+    raw: &mut Vec<u8>,
+) -> Result<Chunk, String> {
+    let mut source = Slice { bytes, at: *at };
+    let chunk = read_chunk_from(&mut source, index, raw, &mut Vec::new())?;
+    *at = source.at;
+    Ok(chunk)
+}
+
+/// Reads chunk number `index` into `raw`, checking its size limit, checksum and decompressed
+/// length; `buf` holds its stored bytes where they must be copied.
+fn read_chunk_from(
+    source: &mut dyn Source,
+    index: u32,
+    raw: &mut Vec<u8>,
+    buf: &mut Vec<u8>,
+) -> Result<Chunk, String> {
+    if source.len() - source.position() < CHUNK_HEADER as u64 {
+        return Err(format!("it ends inside the header of chunk {index} (truncated)"));
+    }
+    let header = source.take(CHUNK_HEADER, buf)?;
+    let tag: [u8; 4] = header[..4].try_into().expect("4 bytes");
+    let raw_len = u32_at(header, 4) as usize;
+    let stored_len = u32_at(header, 8) as usize;
+    let crc = u32_at(header, 12);
+    let name = String::from_utf8_lossy(&tag).into_owned();
+    if raw_len > MAX_CHUNK_BYTES {
+        return Err(format!(
+            "chunk {index} ({name}) claims {raw_len} bytes, over the {MAX_CHUNK_BYTES} limit"
+        ));
+    }
+    if stored_len as u64 > source.len() - source.position() {
+        return Err(format!("it ends inside chunk {index} ({name}) (truncated)"));
+    }
+    let stored = source.take(stored_len, buf)?;
+    if crc32fast::hash(stored) != crc {
+        return Err(format!("chunk {index} ({name}) fails its checksum: the file is damaged"));
+    }
+    raw.clear();
+    raw.resize(raw_len, 0);
+    match lz4_flex::block::decompress_into(stored, raw) {
+        Ok(n) if n == raw_len => {}
+        _ => return Err(format!("chunk {index} ({name}) does not decompress to its stated size")),
+    }
+    Ok(Chunk { tag, name })
+}
+
 /// Decodes a sculpt, refusing anything not written whole by [`encode`] (see the module docs);
-/// `file` names the file in errors, `progress` gets the fraction of the file read.
+/// `file` names the file in errors, `progress` gets the fraction of the bytes read.
 pub fn decode(bytes: &[u8], file: &str, progress: &mut dyn FnMut(f32)) -> Result<Sculpt, SculptError> {
-    let fail = |reason: String| SculptError { file: file.to_owned(), reason };
-    if bytes.len() < 12 || &bytes[..4] != MAGIC {
-        return Err(fail("it is not an Argile sculpt (no ARGL header)".into()));
+    decode_from(&mut Slice { bytes, at: 0 }, progress)
+        .map_err(|reason| SculptError { file: file.to_owned(), reason })
+}
+
+/// Reads the sculpt file `path` chunk by chunk (a chunk at a time in memory besides the
+/// sculpt), as [`decode`] checks it; `progress` gets the fraction of the file read.
+pub fn read_file(path: &std::path::Path, progress: &mut dyn FnMut(f32)) -> Result<Sculpt, SculptError> {
+    let fail = |reason: String| SculptError { file: path.display().to_string(), reason };
+    let file = std::fs::File::open(path).map_err(|e| fail(format!("cannot open it: {e}")))?;
+    let len = file.metadata().map_err(|e| fail(format!("cannot read it: {e}")))?.len();
+    let mut source = FileSource { reader: std::io::BufReader::with_capacity(1 << 20, file), len, at: 0 };
+    decode_from(&mut source, progress).map_err(fail)
+}
+
+fn decode_from(source: &mut dyn Source, progress: &mut dyn FnMut(f32)) -> Result<Sculpt, String> {
+    let mut buf = Vec::new();
+    if source.len() < 12 {
+        return Err("it is not an Argile sculpt (no ARGL header)".into());
     }
-    let version = u32_at(bytes, 4);
+    let header: [u8; 12] = source.take(12, &mut buf)?.try_into().expect("12 bytes");
+    if &header[..4] != MAGIC {
+        return Err("it is not an Argile sculpt (no ARGL header)".into());
+    }
+    let version = u32_at(&header, 4);
     if version == 0 || version > VERSION {
-        return Err(fail(format!(
+        return Err(format!(
             "it is format version {version}; this Argile reads versions 1 to {VERSION} (a newer Argile wrote it)"
-        )));
+        ));
     }
-    let chunk_count = u32_at(bytes, 8);
+    let chunk_count = u32_at(&header, 8);
     // Every chunk takes at least its header: a count the file cannot hold is refused before
     // anything is allocated for it.
-    if chunk_count > MAX_CHUNKS || chunk_count as usize > (bytes.len() - 12) / CHUNK_HEADER {
-        return Err(fail(format!(
+    if chunk_count > MAX_CHUNKS || u64::from(chunk_count) > (source.len() - 12) / CHUNK_HEADER as u64 {
+        return Err(format!(
             "it declares {chunk_count} chunks, more than its {} bytes can hold",
-            bytes.len()
-        )));
+            source.len()
+        ));
     }
-    let mut at = 12;
     let mut meta: Option<Meta> = None;
     let mut field: Option<Field> = None;
     let mut scene_toml = None;
     let mut keys: HashSet<BrickKey> = HashSet::new();
     let mut raw = Vec::new();
+    let (mut undo, mut redo): (Vec<HistoryStep>, Vec<HistoryStep>) = (Vec::new(), Vec::new());
+    // The (kind, index) of the step the last HIST chunk added to, and its keys.
+    let mut step_at: Option<(u8, u32)> = None;
+    let mut step_keys = HashSet::new();
     for index in 0..chunk_count {
-        if bytes.len() - at < CHUNK_HEADER {
-            return Err(fail(format!("it ends inside the header of chunk {index} (truncated)")));
-        }
-        let tag: [u8; 4] = bytes[at..at + 4].try_into().expect("4 bytes");
-        let raw_len = u32_at(bytes, at + 4) as usize;
-        let stored_len = u32_at(bytes, at + 8) as usize;
-        let crc = u32_at(bytes, at + 12);
-        let name = String::from_utf8_lossy(&tag).into_owned();
-        at += CHUNK_HEADER;
-        if raw_len > MAX_CHUNK_BYTES {
-            return Err(fail(format!(
-                "chunk {index} ({name}) claims {raw_len} bytes, over the {MAX_CHUNK_BYTES} limit"
-            )));
-        }
-        if stored_len > bytes.len() - at {
-            return Err(fail(format!("it ends inside chunk {index} ({name}) (truncated)")));
-        }
-        let stored = &bytes[at..at + stored_len];
-        at += stored_len;
-        if crc32fast::hash(stored) != crc {
-            return Err(fail(format!("chunk {index} ({name}) fails its checksum: the file is damaged")));
-        }
-        raw.clear();
-        raw.resize(raw_len, 0);
-        match lz4_flex::block::decompress_into(stored, &mut raw) {
-            Ok(n) if n == raw_len => {}
-            _ => return Err(fail(format!("chunk {index} ({name}) does not decompress to its stated size"))),
-        }
+        let Chunk { tag, name } = read_chunk_from(source, index, &mut raw, &mut buf)?;
         match (&tag, &meta) {
             (b"META", None) if index == 0 => {
-                let m: Meta = serde_json::from_slice(&raw)
-                    .map_err(|e| fail(format!("its META chunk is not valid: {e}")))?;
+                let m: Meta =
+                    serde_json::from_slice(&raw).map_err(|e| format!("its META chunk is not valid: {e}"))?;
                 if m.format != "argile sculpt" || m.brick_size != BRICK_SIZE {
-                    return Err(fail(format!(
+                    return Err(format!(
                         "its META chunk describes `{}` with bricks of {}",
                         m.format, m.brick_size
-                    )));
+                    ));
                 }
                 if !(m.voxel_size_m.is_finite() && m.voxel_size_m > 0.0 && m.voxel_size_m < 1.0) {
-                    return Err(fail(format!("its voxel size {} m is not a usable size", m.voxel_size_m)));
+                    return Err(format!("its voxel size {} m is not a usable size", m.voxel_size_m));
                 }
                 if !(m.iso > 0.0 && m.iso < 1.0) {
-                    return Err(fail(format!("its iso-level {} is outside (0, 1)", m.iso)));
+                    return Err(format!("its iso-level {} is outside (0, 1)", m.iso));
                 }
                 field = Some(Field::new(m.voxel_size_m, m.iso));
                 meta = Some(m);
             }
-            (b"META", _) => return Err(fail(format!("chunk {index} is a second or late META chunk"))),
-            (_, None) => return Err(fail("its first chunk is not META".into())),
+            (b"META", _) => return Err(format!("chunk {index} is a second or late META chunk")),
+            (_, None) => return Err("its first chunk is not META".into()),
             (b"SCNE", Some(_)) if scene_toml.is_none() => {
                 let text =
-                    String::from_utf8(raw.clone()).map_err(|_| fail("its scene text is not UTF-8".into()))?;
+                    String::from_utf8(raw.clone()).map_err(|_| "its scene text is not UTF-8".to_owned())?;
                 scene_toml = Some(text);
             }
             (b"BRKS", Some(_)) => {
                 if raw.len() % BRICK_RECORD != 0 {
-                    return Err(fail(format!("chunk {index} (BRKS) holds a partial brick")));
+                    return Err(format!("chunk {index} (BRKS) holds a partial brick"));
                 }
                 let field = field.as_mut().expect("META came first");
                 for record in raw.chunks_exact(BRICK_RECORD) {
-                    let key = IVec3::new(
-                        u32_at(record, 0) as i32,
-                        u32_at(record, 4) as i32,
-                        u32_at(record, 8) as i32,
-                    );
+                    let (key, brick) = read_brick(record)?;
                     if !keys.insert(key) {
-                        return Err(fail(format!("brick {key} is stored twice")));
-                    }
-                    let mut brick = Brick::default();
-                    let f = |i: usize| f32::from_le_bytes(record[i..i + 4].try_into().expect("4 bytes"));
-                    for i in 0..BRICK_VOLUME {
-                        let d = f(12 + 4 * i);
-                        if !(0.0..=1.0).contains(&d) {
-                            return Err(fail(format!("brick {key} holds density {d}, outside [0, 1]")));
-                        }
-                        brick.density[i] = d;
-                        let c = std::array::from_fn(|j| f(12 + 4 * BRICK_VOLUME + 16 * i + 4 * j));
-                        if c.iter().any(|v: &f32| !v.is_finite()) {
-                            return Err(fail(format!("brick {key} holds a colour that is not a number")));
-                        }
-                        brick.colour[i] = c;
+                        return Err(format!("brick {key} is stored twice"));
                     }
                     field.insert_brick(key, brick);
                 }
             }
-            _ => return Err(fail(format!("chunk {index} has an unknown or repeated tag `{name}`"))),
+            (b"HIST", Some(_)) if version >= 2 => {
+                if raw.len() < 9 {
+                    return Err(format!("chunk {index} (HIST) is too short"));
+                }
+                let (kind, step) = (raw[0], u32_at(&raw, 1));
+                let follows = match step_at {
+                    _ if kind > 1 => false,
+                    None => step == 0,
+                    Some((k, s)) if k == kind => step == s || step == s + 1,
+                    Some((k, _)) => k < kind && step == 0,
+                };
+                if !follows {
+                    return Err(format!("chunk {index} (HIST) is history step {kind}/{step}, out of order"));
+                }
+                let stack = if kind == 0 { &mut undo } else { &mut redo };
+                if step_at != Some((kind, step)) {
+                    stack.push(Vec::new());
+                    step_keys.clear();
+                }
+                step_at = Some((kind, step));
+                let mut at = 9;
+                let entries = read_entries(&raw, &mut at, u32_at(&raw, 5) as usize, &mut step_keys)
+                    .map_err(|e| format!("chunk {index} (HIST): {e}"))?;
+                if at != raw.len() {
+                    return Err(format!(
+                        "chunk {index} (HIST) has {} bytes after its last brick",
+                        raw.len() - at
+                    ));
+                }
+                let step = stack.last_mut().expect("pushed above");
+                step.extend(entries.into_iter().map(|(k, b)| (k, b.map(Arc::new))));
+            }
+            _ => return Err(format!("chunk {index} has an unknown or repeated tag `{name}`")),
         }
-        progress(at as f32 / bytes.len() as f32);
+        progress(source.position() as f32 / source.len() as f32);
     }
-    if at != bytes.len() {
-        return Err(fail(format!("{} bytes follow its last chunk", bytes.len() - at)));
+    if source.position() != source.len() {
+        return Err(format!("{} bytes follow its last chunk", source.len() - source.position()));
     }
     let (Some(meta), Some(mut field)) = (meta, field) else {
-        return Err(fail("it holds no META chunk".into()));
+        return Err("it holds no META chunk".into());
     };
     if keys.len() as u64 != meta.bricks {
-        return Err(fail(format!("it holds {} bricks, its META chunk says {}", keys.len(), meta.bricks)));
+        return Err(format!("it holds {} bricks, its META chunk says {}", keys.len(), meta.bricks));
     }
     field.take_dirty();
+    field.set_history(undo, redo);
     Ok(Sculpt { field, scene_toml })
 }
 
@@ -323,6 +658,38 @@ mod tests {
         assert!(e.contains("over the"), "{e}");
         let e = decode(b"PK\x03\x04 not a sculpt", "z.argile", &mut |_| {}).unwrap_err().to_string();
         assert!(e.contains("not an Argile sculpt"), "{e}");
+    }
+
+    #[test]
+    fn version_1_and_no_history_leave_the_history_out() {
+        let mut f = sample_field();
+        f.begin_stroke();
+        f.edit_box(IVec3::ZERO, IVec3::splat(3), true, |_, d, _| *d = 1.0);
+        f.end_stroke();
+        let with = encode(&f, None, &mut |_| {});
+        assert!(decode(&with, "h.argile", &mut |_| {}).unwrap().field.undo().unwrap());
+        for options in
+            [EncodeOptions { version: 1, history: true }, EncodeOptions { version: 2, history: false }]
+        {
+            let bytes = encode_with(&f, None, options, &mut |_| {});
+            assert_eq!(u32_at(&bytes, 4), options.version);
+            assert!(bytes.len() < with.len(), "{options:?}");
+            let mut back = decode(&bytes, "n.argile", &mut |_| {}).unwrap();
+            assert!(back.field.same_samples(&f));
+            assert!(!back.field.undo().unwrap(), "{options:?} stores no history");
+        }
+    }
+
+    #[test]
+    fn a_version_1_file_with_history_chunks_is_refused() {
+        let mut f = sample_field();
+        f.begin_stroke();
+        f.edit_box(IVec3::ZERO, IVec3::splat(3), true, |_, d, _| *d = 1.0);
+        f.end_stroke();
+        let mut bytes = encode(&f, None, &mut |_| {});
+        bytes[4..8].copy_from_slice(&1u32.to_le_bytes());
+        let e = decode(&bytes, "v1.argile", &mut |_| {}).unwrap_err().to_string();
+        assert!(e.contains("unknown or repeated tag `HIST`"), "{e}");
     }
 
     #[test]

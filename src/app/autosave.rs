@@ -1,0 +1,131 @@
+//! Autosave in the station's state folder, and recovery at start of the sessions that did not
+//! close (see [`crate::io::autosave`]).
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use anyhow::{Context, Result};
+
+use super::state_dir;
+use crate::field::Field;
+use crate::io::autosave::{recover, remove_session, unclosed_sessions, Autosave, AutosaveConfig, LocalDisk};
+use crate::io::{encode, write_atomically};
+
+/// The folder autosave sessions live in: `autosave/` in the state folder.
+pub fn autosave_root() -> Option<PathBuf> {
+    state_dir().map(|d| d.join("autosave"))
+}
+
+/// The folder recovered sculpts are saved to: `recovered/` in the state folder.
+pub fn recovered_dir() -> Option<PathBuf> {
+    state_dir().map(|d| d.join("recovered"))
+}
+
+/// Starts autosave of `field` (between strokes) in the state folder. When it cannot start,
+/// warns with the reason (naming the folder) and returns `None`: the sculpt stays in memory.
+pub fn start_autosave(
+    field: &mut Field,
+    scene_toml: Option<&str>,
+    source: &str,
+    config: AutosaveConfig,
+) -> Option<Autosave> {
+    let Some(root) = autosave_root() else {
+        tracing::warn!("autosave is off: this system names no state folder (set XDG_STATE_HOME)");
+        return None;
+    };
+    match Autosave::start(&root, field, scene_toml, source, config, Arc::new(LocalDisk)) {
+        Ok(a) => {
+            tracing::debug!("autosave: session folder {}", a.dir().display());
+            Some(a)
+        }
+        Err(e) => {
+            tracing::warn!("{e}; the sculpt stays in memory but is not protected against a crash");
+            None
+        }
+    }
+}
+
+/// A sculpt recovered from a session that did not close.
+#[derive(Clone, Debug)]
+pub struct RecoveredSculpt {
+    /// Where the recovered sculpt was saved.
+    pub path: PathBuf,
+    /// The session's stroke count at the recovered point (its last complete stroke).
+    pub strokes: u64,
+    /// What the session sculpted.
+    pub source: String,
+    /// The session's process id.
+    pub pid: u32,
+    /// Why the journal's end was discarded, if it was.
+    pub discarded: Option<String>,
+}
+
+/// Recovers every session that did not close and whose process is gone, oldest first: each
+/// sculpt, to its last complete stroke, is saved (atomically) in [`recovered_dir`], then the
+/// session folder is removed. A session that cannot be recovered or saved is left in place and
+/// its error returned.
+pub fn recover_sessions() -> Vec<Result<RecoveredSculpt>> {
+    let (Some(root), Some(out_dir)) = (autosave_root(), recovered_dir()) else { return Vec::new() };
+    unclosed_sessions(&root)
+        .into_iter()
+        .map(|session| -> Result<Option<RecoveredSculpt>> {
+            let recovered = match recover(&session.dir) {
+                Ok(r) => r,
+                Err(e) if e.empty => {
+                    // Nothing was sculpted yet when it ended: nothing to save.
+                    tracing::info!("{e}; the folder is removed");
+                    let _ = remove_session(&session.dir);
+                    return Ok(None);
+                }
+                Err(e) => return Err(e.into()),
+            };
+            std::fs::create_dir_all(&out_dir)
+                .with_context(|| format!("cannot create the folder {}", out_dir.display()))?;
+            let name = session.dir.file_name().and_then(|n| n.to_str()).unwrap_or("session");
+            let path = out_dir.join(format!("sculpt-{name}.argile"));
+            let bytes = encode(&recovered.sculpt.field, recovered.sculpt.scene_toml.as_deref(), &mut |_| {});
+            write_atomically(&path, true, |w| {
+                w.write_all(&bytes).with_context(|| format!("cannot write {}", path.display()))
+            })?;
+            // The recovered sculpt is safe: the session's files can go.
+            if let Err(e) = remove_session(&session.dir) {
+                tracing::warn!("cannot remove the recovered session folder {}: {e}", session.dir.display());
+            }
+            Ok(Some(RecoveredSculpt {
+                path,
+                strokes: recovered.strokes,
+                source: session.info.source,
+                pid: session.info.pid,
+                discarded: recovered.discarded,
+            }))
+        })
+        .filter_map(Result::transpose)
+        .collect()
+}
+
+/// Recovers the sessions that did not close (see [`recover_sessions`]) and says so on
+/// standard output, one sentence per session. Returns how many were recovered.
+pub fn recover_and_report() -> usize {
+    let mut count = 0;
+    for result in recover_sessions() {
+        match result {
+            Ok(r) => {
+                count += 1;
+                println!(
+                    "The session of process {} ({}) did not close cleanly: its sculpt is recovered to its last \
+                     completed stroke (stroke {}) in {}",
+                    r.pid,
+                    r.source,
+                    r.strokes,
+                    r.path.display()
+                );
+                if let Some(why) = r.discarded {
+                    tracing::info!("recovery discarded the stroke cut short by the crash: {why}");
+                }
+            }
+            Err(e) => eprintln!("warning: cannot recover an unclosed session: {e:#}"),
+        }
+    }
+    count
+}
