@@ -264,6 +264,23 @@ fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
+/// What a parallax budget verdict depends on: the clay's bounds and the stereo rig.
+type BudgetKey = ([f32; 6], [f32; 3], f32, f32);
+
+/// The bounds of the bricks of `field` that hold matter.
+fn clay_bounds(field: &crate::field::Field) -> crate::math::Aabb {
+    use crate::field::BRICK_SIZE;
+    let t = field.transform();
+    field.brick_keys().filter(|&k| field.density_range(k).is_some_and(|(_, max)| max > 0.0)).fold(
+        crate::math::Aabb::EMPTY,
+        |b, k| {
+            let lo = (k * BRICK_SIZE).as_vec3();
+            let hi = lo + Vec3::splat(BRICK_SIZE as f32);
+            b.union(&crate::math::Aabb { min: t.index_to_world(lo), max: t.index_to_world(hi) })
+        },
+    )
+}
+
 /// The actions the desk tool cycles through with `next-action`.
 fn action_cycle() -> [Action; 6] {
     [
@@ -307,6 +324,11 @@ pub struct Station<'s> {
     head: Option<OpentrackHead>,
     /// Keeps the desk tool at zero parallax while on.
     auto_convergence: Option<AutoConvergence>,
+    /// The clay's bounds (bricks holding matter), updated as it changes.
+    clay_bounds: crate::math::Aabb,
+    /// The parallax budget's verdict for the current clay and stereo settings: what it was
+    /// judged on, the warning (if over budget) and the interaxial it allows in limit mode.
+    budget: Option<(BudgetKey, Option<String>, Option<f32>)>,
     /// How the window shows the stereo pair.
     display_mode: DisplayMode,
     /// Whether the window's surface can show quad-buffer stereo.
@@ -376,6 +398,8 @@ impl<'s> Station<'s> {
             lights_follow_viewer: false,
             head: None,
             auto_convergence: None,
+            clay_bounds: crate::math::Aabb::EMPTY,
+            budget: None,
             display_mode: scene.display.mode.unwrap_or(DisplayMode::Anaglyph),
             quad_buffer: false,
             window_origin: (0, 0),
@@ -613,7 +637,7 @@ impl<'s> Station<'s> {
             MouseMode::Scene => "turns",
             MouseMode::Cursor => "places tool",
         };
-        vec![
+        let mut lines = vec![
             format!(
                 "tool {}: {} mm, {}",
                 self.tool_index + 1,
@@ -636,7 +660,11 @@ impl<'s> Station<'s> {
                     None => "",
                 }
             ),
-        ]
+        ];
+        if self.budget.as_ref().is_some_and(|(_, w, _)| w.is_some()) {
+            lines.push("over the parallax budget".to_owned());
+        }
+        lines
     }
 
     /// The display mode and, for interlaced modes, the parity in window pixels (the scene's
@@ -670,6 +698,31 @@ impl<'s> Station<'s> {
     /// The window moved to `origin` (its top-left corner on the screen, pixels).
     pub fn set_window_origin(&mut self, origin: (i32, i32)) {
         self.window_origin = origin;
+    }
+
+    /// Checks the clay against the parallax budget of the screen calibration, when the clay
+    /// or the stereo settings changed since the last check.
+    fn judge_parallax(&mut self) {
+        let (b, rig) = (&self.clay_bounds, &self.view.rig);
+        let key: BudgetKey = (
+            [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z],
+            rig.eye_m.to_array(),
+            rig.convergence_m,
+            rig.interaxial_m,
+        );
+        if self.budget.as_ref().is_some_and(|(k, _, _)| *k == key) {
+            return;
+        }
+        let mut judged = self.view.clone();
+        let verdict = super::comfort::apply_parallax_budget(&mut judged, self.clay_bounds);
+        let allowed = (judged.rig.interaxial_m < rig.interaxial_m).then_some(judged.rig.interaxial_m);
+        let warning = verdict.map(|(_, w)| w);
+        if let Some(w) = &warning {
+            if self.budget.as_ref().is_none_or(|(_, old, _)| old.is_none()) {
+                self.messages.push(w.clone());
+            }
+        }
+        self.budget = Some((key, warning, allowed));
     }
 
     /// Where the last [`Station::step`] spent its time.
@@ -765,9 +818,15 @@ impl<'s> Station<'s> {
         let diff = remesh_dirty(self.playback.field_mut());
         if !diff.is_empty() {
             apply(&diff);
+            self.clay_bounds = clay_bounds(self.playback.field());
         }
         self.times.mesh_ms = ms_since(mesh_started);
 
+        self.judge_parallax();
+        if let Some((_, _, Some(allowed))) = self.budget {
+            // Limit mode: this frame's eyes no farther apart than the budget allows.
+            self.view.rig.interaxial_m = self.view.rig.interaxial_m.min(allowed);
+        }
         let mut frame = build_frame(&self.view, &self.playback.hands(), true);
         if self.lights_follow_viewer {
             // The scene's lights, carried along with the viewer's turn about the target.
@@ -1312,5 +1371,39 @@ mod tests {
         let depth = (station.mouse.tool_position_m - station.view.rig.eye_m).dot(station.view.rig.forward());
         assert!(first < before && first > depth, "one step moves part of the way: {before} → {first}");
         assert!((station.view.rig.convergence_m - depth).abs() < 1e-3, "two seconds later it is there");
+    }
+
+    #[test]
+    fn the_hud_warns_while_the_clay_exceeds_the_parallax_budget() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tests/station.toml");
+        let scene = Scene::load(&path).unwrap();
+        let mut station =
+            Station::new(&scene, KeyBindings::shipped(), (320, 240), PathBuf::from("unused.argile"));
+        // The first frame meshes the initial clay and judges it: within budget from afar.
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert!(!station.hud_lines().iter().any(|l| l.contains("over the parallax budget")));
+        // Zoomed in, the slab's depth spans more than ±1° on the shipped display.
+        station.script(&ScriptEvent::Wheel(3.0));
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert!(!station.clay_bounds.is_empty());
+        assert!(
+            station.hud_lines().iter().any(|l| l.contains("over the parallax budget")),
+            "{:?}",
+            station.hud_lines()
+        );
+        let said: Vec<&String> =
+            station.messages.iter().filter(|m| m.contains("beyond the comfortable")).collect();
+        assert_eq!(said.len(), 1, "said once: {:?}", station.messages);
+        // Narrower eyes bring it within budget.
+        for _ in 0..12 {
+            station.key(KeyCode::Minus, true);
+            station.key(KeyCode::Minus, false);
+        }
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert!(
+            !station.hud_lines().iter().any(|l| l.contains("over the parallax budget")),
+            "{:?}",
+            station.hud_lines()
+        );
     }
 }
