@@ -40,6 +40,7 @@
 )]
 
 pub mod app;
+pub mod clay;
 pub mod field;
 pub mod input;
 pub mod io;
