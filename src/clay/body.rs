@@ -10,6 +10,8 @@
 //! surface found by propagation from the tool's edges inwards, computed once per tool when
 //! the push starts (§3.2.2).
 
+use rayon::prelude::*;
+
 use crate::math::{IVec3, Pose, UVec3, Vec3, VoxelTransform};
 use crate::tool::{Falloff, Freeform, ToolFrame, ToolShape, SOLID_BAND_VOXELS};
 
@@ -217,7 +219,9 @@ impl Body {
         }
     }
 
-    /// The cells the body covers at `pose`, with their outward directions.
+    /// The cells the body covers at `pose`, with their outward directions. Planes of the
+    /// box are evaluated in parallel and gathered in order, so the result does not depend
+    /// on the number of threads.
     pub fn footprint_at(&self, grid: &Grid, transform: &VoxelTransform, pose: Pose) -> Footprint {
         let (lo, hi, band_local) = self.reach(grid, transform, pose);
         let mut fp = Footprint::default();
@@ -226,29 +230,34 @@ impl Body {
         }
         let frame = self.frame(pose);
         let eps = 0.25 * transform.voxel_size_m;
-        for z in lo.z..=hi.z {
-            for y in lo.y..=hi.y {
-                for x in lo.x..=hi.x {
-                    let p = IVec3::new(x, y, z);
-                    let w = transform.index_to_world(p.as_vec3());
-                    let (t, _) = self.sample(&frame, band_local, w);
-                    if t <= 0.0 {
-                        continue;
+        let planes: Vec<Vec<(u32, f32, u8)>> = (lo.z..=hi.z)
+            .into_par_iter()
+            .map(|z| {
+                let mut out = Vec::new();
+                for y in lo.y..=hi.y {
+                    for x in lo.x..=hi.x {
+                        let p = IVec3::new(x, y, z);
+                        let w = transform.index_to_world(p.as_vec3());
+                        let (t, s0) = self.sample(&frame, band_local, w);
+                        if t <= 0.0 {
+                            continue;
+                        }
+                        // Forward differences of the outward distance, in world space.
+                        let g = Vec3::new(
+                            self.sample(&frame, band_local, w + Vec3::X * eps).1 - s0,
+                            self.sample(&frame, band_local, w + Vec3::Y * eps).1 - s0,
+                            self.sample(&frame, band_local, w + Vec3::Z * eps).1 - s0,
+                        );
+                        out.push((grid.index(p - grid.lo) as u32, t.min(1.0), outward_dirs(g)));
                     }
-                    // Central differences of the outward distance, in world space.
-                    let g = Vec3::new(
-                        self.sample(&frame, band_local, w + Vec3::X * eps).1
-                            - self.sample(&frame, band_local, w - Vec3::X * eps).1,
-                        self.sample(&frame, band_local, w + Vec3::Y * eps).1
-                            - self.sample(&frame, band_local, w - Vec3::Y * eps).1,
-                        self.sample(&frame, band_local, w + Vec3::Z * eps).1
-                            - self.sample(&frame, band_local, w - Vec3::Z * eps).1,
-                    );
-                    fp.cells.push(grid.index(p - grid.lo) as u32);
-                    fp.density.push(t.min(1.0));
-                    fp.dirs.push(outward_dirs(g));
                 }
-            }
+                out
+            })
+            .collect();
+        for (c, t, d) in planes.into_iter().flatten() {
+            fp.cells.push(c);
+            fp.density.push(t);
+            fp.dirs.push(d);
         }
         fp
     }

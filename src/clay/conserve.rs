@@ -14,6 +14,8 @@
 
 use std::collections::VecDeque;
 
+use rayon::prelude::*;
+
 use super::grid::{Grid, QUEUED, WALL};
 
 /// The factor by which a cell overshoots its excess (§3.2.3): what it gives its six
@@ -28,13 +30,29 @@ pub(crate) struct Conservation {
 
 impl Conservation {
     /// Queues every cell over its capacity by more than `threshold` that is not queued yet,
-    /// in index order.
+    /// in index order. Planes are searched in parallel and queued in order.
     pub fn seed(&mut self, grid: &mut Grid, threshold: f32) {
-        for i in 0..grid.len() {
-            if grid.density[i] > grid.capacity[i] + threshold && grid.flags[i] & (QUEUED | WALL) == 0 {
-                grid.flags[i] |= QUEUED;
-                self.queue.push_back(i as u32);
-            }
+        let g: &Grid = grid;
+        let plane = (g.dims.x * g.dims.y) as usize;
+        let found: Vec<Vec<u32>> = g
+            .density
+            .par_chunks(plane)
+            .zip(g.capacity.par_chunks(plane))
+            .zip(g.flags.par_chunks(plane))
+            .enumerate()
+            .map(|(z, ((d, cap), flags))| {
+                let mut out = Vec::new();
+                for i in 0..d.len() {
+                    if d[i] > cap[i] + threshold && flags[i] & (QUEUED | WALL) == 0 {
+                        out.push((z * plane + i) as u32);
+                    }
+                }
+                out
+            })
+            .collect();
+        for i in found.into_iter().flatten() {
+            grid.flags[i as usize] |= QUEUED;
+            self.queue.push_back(i);
         }
     }
 

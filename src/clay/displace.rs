@@ -136,6 +136,15 @@ pub(crate) struct Mover {
     pub to: Pose,
 }
 
+/// Where the groups' seeds are: the cells the bodies cover (each once), the fixed cells, and
+/// which bodies are supports.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Groups<'a> {
+    pub covered: &'a [u32],
+    pub fixed: &'a [u32],
+    pub supports: &'a [bool],
+}
+
 /// Scratch of the displacement layer, kept between steps.
 #[derive(Debug, Default)]
 pub(crate) struct Displacement {
@@ -158,10 +167,12 @@ impl Displacement {
         grid: &mut Grid,
         transform: &VoxelTransform,
         movers: &[Mover],
-        support: impl Fn(u8) -> bool,
+        groups: &Groups<'_>,
         fluidity: f32,
         min_density: f32,
     ) -> f64 {
+        let Groups { covered, fixed, supports } = *groups;
+        let support = |o: u8| supports.get(o as usize).copied().unwrap_or(false);
         if movers.is_empty() {
             return 0.0;
         }
@@ -170,15 +181,18 @@ impl Displacement {
         }
         let g: &Grid = grid;
         let is_fixed = |i: usize| g.flags[i] & FIXED != 0;
-        let is_static = |i: usize| is_fixed(i) || (g.owner[i] != NO_OWNER && support(g.owner[i]));
-        // The static group: supports and fixed cells; moving tools' cells stop it.
-        let static_seeds = (0..g.len()).filter(|&i| g.flags[i] & WALL == 0 && is_static(i));
+        // The static group: supports and fixed cells; moving tools' cells stop it. Seeds
+        // come from the bodies' footprints and the fixed list, never from a scan of the grid.
+        let static_seeds = covered
+            .iter()
+            .map(|&c| c as usize)
+            .filter(|&i| g.owner[i] != NO_OWNER && support(g.owner[i]))
+            .chain(fixed.iter().map(|&c| c as usize));
         self.fixed.propagate(g, static_seeds, min_density, |i| {
             g.owner[i] != NO_OWNER && !support(g.owner[i]) && !is_fixed(i)
         });
         for (m, dist) in movers.iter().zip(self.movers.iter_mut()) {
-            let seeds =
-                (0..g.len()).filter(|&i| g.owner[i] == m.body && !is_fixed(i) && g.flags[i] & WALL == 0);
+            let seeds = covered.iter().map(|&c| c as usize).filter(|&i| g.owner[i] == m.body && !is_fixed(i));
             dist.propagate(g, seeds, min_density, |i| {
                 is_fixed(i) || (g.owner[i] != NO_OWNER && g.owner[i] != m.body)
             });
@@ -189,6 +203,9 @@ impl Displacement {
         for (mi, m) in movers.iter().enumerate() {
             let d1 = &self.movers[mi];
             let d12 = d1.to_others;
+            // A tool that only translates moves every cell by the same vector.
+            let translation =
+                (m.from.rotation == m.to.rotation).then(|| (m.to.position_m - m.from.position_m) / h);
             for &c in &d1.reached {
                 let c = c as usize;
                 if g.flags[c] & (FIXED | WALL) != 0 || g.density[c] <= 0.0 {
@@ -213,10 +230,16 @@ impl Displacement {
                 if weight <= 0.0 {
                     continue;
                 }
-                let p = transform.index_to_world((g.lo + g.coord(c)).as_vec3());
-                let rigid =
-                    m.to.position_m + m.to.rotation * (m.from.rotation.inverse() * (p - m.from.position_m));
-                let step = (rigid - p) / h * weight;
+                let motion = match translation {
+                    Some(t) => t,
+                    None => {
+                        let p = transform.index_to_world((g.lo + g.coord(c)).as_vec3());
+                        let rigid = m.to.position_m
+                            + m.to.rotation * (m.from.rotation.inverse() * (p - m.from.position_m));
+                        (rigid - p) / h
+                    }
+                };
+                let step = motion * weight;
                 if self.delta[c] == Vec3::ZERO {
                     self.moved.push(c as u32);
                 }

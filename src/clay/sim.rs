@@ -8,7 +8,7 @@ use crate::math::{IVec3, Pose, VoxelTransform};
 
 use super::body::{Body, ClayTool};
 use super::conserve::Conservation;
-use super::displace::{Displacement, Mover};
+use super::displace::{Displacement, Groups, Mover};
 use super::grid::{write_back, Grid, ALL_DIRS, FIXED, NO_OWNER, WALL};
 use super::tension::Tension;
 
@@ -91,8 +91,10 @@ pub struct Clay {
     displacement: Displacement,
     conservation: Conservation,
     tension: Tension,
-    /// Cells some body covered at the last placement, to reset.
+    /// Cells some body covered at the last placement, ascending per body.
     covered: Vec<u32>,
+    /// The fixed cells, ascending.
+    fixed: Vec<u32>,
     written: Vec<f32>,
     colour: Colour,
     /// The field's iso-level: crumbs are counted in what the user sees.
@@ -120,6 +122,7 @@ impl Clay {
             conservation: Conservation::default(),
             tension: Tension::default(),
             covered: Vec::new(),
+            fixed: Vec::new(),
             written,
             colour,
             iso: field.iso(),
@@ -140,8 +143,9 @@ impl Clay {
     /// is never displaced, and it anchors the clay like a support (§3.1).
     pub fn fix_where(&mut self, fixed: impl Fn(IVec3) -> bool) {
         for i in 0..self.grid.len() {
-            if fixed(self.grid.lo + self.grid.coord(i)) {
+            if self.grid.flags[i] & (FIXED | WALL) == 0 && fixed(self.grid.lo + self.grid.coord(i)) {
                 self.grid.flags[i] |= FIXED;
+                self.fixed.push(i as u32);
             }
         }
     }
@@ -250,11 +254,12 @@ impl Clay {
         self.place_bodies();
         let t1 = Instant::now();
         let supports: Vec<bool> = self.bodies.iter().map(|b| b.tool.support).collect();
+        let groups = Groups { covered: &self.covered, fixed: &self.fixed, supports: &supports };
         self.displacement.run(
             &mut self.grid,
             &self.transform,
             &movers,
-            |o| supports.get(o as usize).copied().unwrap_or(false),
+            &groups,
             self.params.fluidity,
             self.params.min_density,
         );
