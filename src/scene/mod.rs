@@ -222,6 +222,21 @@ pub struct Scene {
     pub timeline: Timeline,
     /// Captures, in time order.
     pub captures: Vec<Capture>,
+    /// How the clay behaves under tools that push (`[virtual_clay]`).
+    pub virtual_clay: VirtualClaySettings,
+}
+
+/// The virtual clay's settings: its fluidity, its step, and what holds it besides the tools.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VirtualClaySettings {
+    /// α in [0, 1]: 1 is dry clay that follows the tool, near 0 fluid clay that takes prints.
+    pub fluidity: f32,
+    /// Simulation step, seconds.
+    pub step_s: f32,
+    /// Height of a table under the clay (a support plane facing +Y), metres.
+    pub table_y_m: Option<f32>,
+    /// World boxes (min, max corners, metres) whose clay is held still.
+    pub fixed_boxes_m: Vec<(Vec3, Vec3)>,
 }
 
 impl Scene {
@@ -611,6 +626,24 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
     }
     captures.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
 
+    let vc = &file.virtual_clay;
+    if !(0.0..=1.0).contains(&vc.fluidity) {
+        return Err(at(None, format!("[virtual_clay] fluidity must be in [0, 1], not {}", vc.fluidity)));
+    }
+    if !(vc.step_s > 0.0 && vc.step_s <= 1.0) {
+        return Err(at(None, format!("[virtual_clay] step_s must be in (0, 1] seconds, not {}", vc.step_s)));
+    }
+    let virtual_clay = VirtualClaySettings {
+        fluidity: vc.fluidity,
+        step_s: vc.step_s,
+        table_y_m: vc.table_y_m.filter(|y| y.is_finite()),
+        fixed_boxes_m: vc
+            .fixed_boxes_m
+            .iter()
+            .map(|[a, b]| (Vec3::from(*a).min(Vec3::from(*b)), Vec3::from(*a).max(Vec3::from(*b))))
+            .collect(),
+    };
+
     Ok(Scene {
         source: name.to_owned(),
         voxel_size_m: field_voxel,
@@ -625,6 +658,7 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
         tools,
         timeline,
         captures,
+        virtual_clay,
     })
 }
 
