@@ -229,7 +229,7 @@ impl Body {
             return fp;
         }
         let frame = self.frame(pose);
-        let eps = 0.25 * transform.voxel_size_m;
+        let eps = 0.5 * transform.voxel_size_m;
         let planes: Vec<Vec<(u32, f32, u8)>> = (lo.z..=hi.z)
             .into_par_iter()
             .map(|z| {
@@ -238,16 +238,17 @@ impl Body {
                     for x in lo.x..=hi.x {
                         let p = IVec3::new(x, y, z);
                         let w = transform.index_to_world(p.as_vec3());
-                        let (t, s0) = self.sample(&frame, band_local, w);
+                        let (t, _) = self.sample(&frame, band_local, w);
                         if t <= 0.0 {
                             continue;
                         }
-                        // Forward differences of the outward distance, in world space.
-                        let g = Vec3::new(
-                            self.sample(&frame, band_local, w + Vec3::X * eps).1 - s0,
-                            self.sample(&frame, band_local, w + Vec3::Y * eps).1 - s0,
-                            self.sample(&frame, band_local, w + Vec3::Z * eps).1 - s0,
-                        );
+                        // Central differences of the outward distance, in world space: they
+                        // are symmetric, so a freeform tool's stepped depth gives no slant.
+                        let diff = |axis: Vec3| {
+                            self.sample(&frame, band_local, w + axis * eps).1
+                                - self.sample(&frame, band_local, w - axis * eps).1
+                        };
+                        let g = Vec3::new(diff(Vec3::X), diff(Vec3::Y), diff(Vec3::Z));
                         out.push((grid.index(p - grid.lo) as u32, t.min(1.0), outward_dirs(g)));
                     }
                 }

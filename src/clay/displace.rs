@@ -22,6 +22,8 @@
 //! and may be expanded in any order. The result equals Dijkstra's, in linear time, without
 //! a heap; the bucket order is fixed, so it is deterministic.
 
+use rayon::prelude::*;
+
 use crate::math::{IVec3, Pose, Vec3, VoxelTransform};
 
 use super::grid::{Grid, FIXED, NO_OWNER, WALL};
@@ -188,15 +190,25 @@ impl Displacement {
             .map(|&c| c as usize)
             .filter(|&i| g.owner[i] != NO_OWNER && support(g.owner[i]))
             .chain(fixed.iter().map(|&c| c as usize));
-        self.fixed.propagate(g, static_seeds, min_density, |i| {
-            g.owner[i] != NO_OWNER && !support(g.owner[i]) && !is_fixed(i)
-        });
-        for (m, dist) in movers.iter().zip(self.movers.iter_mut()) {
-            let seeds = covered.iter().map(|&c| c as usize).filter(|&i| g.owner[i] == m.body && !is_fixed(i));
-            dist.propagate(g, seeds, min_density, |i| {
-                is_fixed(i) || (g.owner[i] != NO_OWNER && g.owner[i] != m.body)
-            });
-        }
+        // The distances are independent of each other: each group's runs on its own thread
+        // (each propagation is sequential, so the result does not depend on the threads).
+        let (fixed_dist, mover_dists) = (&mut self.fixed, &mut self.movers[..movers.len()]);
+        rayon::join(
+            || {
+                fixed_dist.propagate(g, static_seeds, min_density, |i| {
+                    g.owner[i] != NO_OWNER && !support(g.owner[i]) && !is_fixed(i)
+                })
+            },
+            || {
+                mover_dists.par_iter_mut().zip(movers).for_each(|(dist, m)| {
+                    let seeds =
+                        covered.iter().map(|&c| c as usize).filter(|&i| g.owner[i] == m.body && !is_fixed(i));
+                    dist.propagate(g, seeds, min_density, |i| {
+                        is_fixed(i) || (g.owner[i] != NO_OWNER && g.owner[i] != m.body)
+                    });
+                })
+            },
+        );
         // δ per reached cell, summed over the moving tools.
         self.moved.clear();
         let h = transform.voxel_size_m;
