@@ -24,6 +24,27 @@
 //! number of threads. While a push runs, cells may hold slightly more than 1 (the
 //! conservation layer's threshold, and work carried to the next step); the field only ever
 //! receives densities clamped to [0, 1], and [`Clay::finish`] settles the excess first.
+//!
+//! ## Where this departs from the paper, and why
+//!
+//! - Pseudo-distances are computed by a Dijkstra whose queue is a list of unit-wide buckets
+//!   (every step costs at least 1, a full cell's 1/density): exact, in linear time, without a
+//!   heap (`displace`; `bucketed_distances_equal_dijkstras` checks it against a heap). The
+//!   static group's distance and each moving tool's run side by side.
+//! - Several moving tools (both hands pushing): each tool's share is the paper's two-tool
+//!   blend against the nearest other group (static or moving), and the shares add. With one
+//!   moving tool this is exactly the paper's formula.
+//! - The tool's motion counts from the contact, found by bisection within the step (the
+//!   paper's "exact time of the collision").
+//! - Matter never moves into a cell covered more deeply by a body than its own: with the
+//!   60° rule alone, matter pushed out of a tool's rim could be pushed back into it by the
+//!   next cell, and the two would trade it forever.
+//! - The tolerated excess is settled when the push ends, so the field, whose densities stay
+//!   in [0, 1], loses no matter to clamping.
+//! - Crumbs are counted at the field's iso-level, the surface the user sees (the paper counts
+//!   "above-threshold" cells; its threshold, 0.3, would let a visible speck hang on the body
+//!   by a thread of invisible matter).
+//! - Colour is not carried with the matter: cells that fill up take the window's mean colour.
 
 mod body;
 mod conserve;
