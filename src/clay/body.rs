@@ -189,6 +189,20 @@ impl Body {
         }
     }
 
+    /// How far (world metres) a point whose outward value is `outward` surely is from every
+    /// point the body covers, for the shapes whose outward value bounds the distance to
+    /// their surface from below (solids, planes); `None` for the others.
+    #[inline]
+    fn clearance_m(&self, frame: &ToolFrame, band_local: f32, outward: f32) -> Option<f32> {
+        match &self.tool.shape {
+            ClayShape::Plane => Some(outward - 0.5 * band_local),
+            ClayShape::Tool { shape: ToolShape::Solid(_), .. } => {
+                Some((outward - 0.5 * band_local) * frame.min_scale())
+            }
+            ClayShape::Tool { .. } => None,
+        }
+    }
+
     fn frame(&self, pose: Pose) -> ToolFrame {
         match &self.tool.shape {
             ClayShape::Tool { scale, .. } => ToolFrame::new(pose, *scale),
@@ -235,11 +249,18 @@ impl Body {
             .map(|z| {
                 let mut out = Vec::new();
                 for y in lo.y..=hi.y {
-                    for x in lo.x..=hi.x {
+                    let mut x = lo.x;
+                    while x <= hi.x {
                         let p = IVec3::new(x, y, z);
+                        x += 1;
                         let w = transform.index_to_world(p.as_vec3());
-                        let (t, _) = self.sample(&frame, band_local, w);
+                        let (t, outward) = self.sample(&frame, band_local, w);
                         if t <= 0.0 {
+                            // Where the outward value bounds the distance, the cells it
+                            // clears along the row cannot be covered either.
+                            if let Some(clear_m) = self.clearance_m(&frame, band_local, outward) {
+                                x += (clear_m / transform.voxel_size_m).floor().max(0.0) as i32;
+                            }
                             continue;
                         }
                         // Central differences of the outward distance, in world space: they
