@@ -40,6 +40,7 @@
 )]
 
 pub mod app;
+pub mod clay;
 pub mod config;
 pub mod field;
 pub mod input;

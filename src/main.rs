@@ -57,6 +57,10 @@ enum Command {
         /// 127.0.0.1:4242: head-tracked views through the calibrated screen.
         #[arg(long)]
         opentrack: Option<std::net::SocketAddr>,
+        /// The screen calibration (TOML, see calibration/README.md), read over the shipped
+        /// calibration/screen.toml: display mode and parity, screen, viewer, tracker.
+        #[arg(long)]
+        calibration: Option<PathBuf>,
         /// Turn the Vulkan validation layer on (fails on any validation message).
         #[arg(long)]
         validation: bool,
@@ -233,6 +237,7 @@ fn main() -> ExitCode {
             size,
             display_mode,
             opentrack,
+            calibration,
             validation,
         }) => station(
             scene,
@@ -246,6 +251,7 @@ fn main() -> ExitCode {
                 validation,
                 display_mode,
                 opentrack,
+                calibration,
                 autosave: None,
                 scene_toml: None,
             },

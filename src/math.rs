@@ -151,6 +151,24 @@ impl Aabb {
     }
 }
 
+/// Trilinear interpolation at a fractional lattice coordinate of a function given at lattice
+/// points: the eight surrounding points, weighted by the products of their per-axis weights.
+#[inline]
+pub fn trilinear(index: Vec3, mut at: impl FnMut(IVec3) -> f32) -> f32 {
+    let base = index.floor();
+    let f = index - base;
+    let b = base.as_ivec3();
+    let mut acc = 0.0;
+    for c in 0..8 {
+        let o = IVec3::new(c & 1, (c >> 1) & 1, (c >> 2) & 1);
+        let w = (if o.x == 1 { f.x } else { 1.0 - f.x })
+            * (if o.y == 1 { f.y } else { 1.0 - f.y })
+            * (if o.z == 1 { f.z } else { 1.0 - f.z });
+        acc += w * at(b + o);
+    }
+    acc
+}
+
 /// Euclidean floor division of integers (rounds towards negative infinity).
 pub fn div_floor(a: i32, b: i32) -> i32 {
     a.div_euclid(b)

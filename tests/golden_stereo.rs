@@ -423,3 +423,42 @@ fn the_calibration_test_pattern_shows_zero_parallax_on_the_screen_and_the_predic
     let lit = grid_pixels.filter(|&(x, y)| grid(left.get_pixel(x, y))).count();
     assert!(lit > 300, "the grid is drawn ({lit} pixels)");
 }
+
+/// A virtual-clay scene of `scenes/`, every capture of its timeline at 256² per eye: the goldens
+/// are named after the captures.
+fn golden_timeline_case(scene_path: &str) {
+    let case = Path::new(scene_path).file_stem().and_then(|s| s.to_str()).expect("scene file name");
+    let scene = Scene::load(&root().join(scene_path)).expect("test scene loads");
+    let options = RenderOptions {
+        out_dir: out_dir(case),
+        display_modes: Vec::new(),
+        progress: false,
+        validation: true,
+        size_px: Some((256, 256)),
+    };
+    let written = render_scene(&scene, &options).unwrap_or_else(|e| panic!("rendering {case} failed: {e:#}"));
+    assert!(written.len() >= 2, "{case}: several times of the timeline");
+    for capture in &written {
+        let load = |p: &Path| image::open(p).expect("rendered image reads back").to_rgba8();
+        let (left, right) = (load(&capture.left), load(&capture.right));
+        assert_ne!(left, right, "{}: the two eyes must differ", capture.name);
+        std::fs::create_dir_all(out_dir(&capture.name)).expect("output folder");
+        check_against_golden(&capture.name, "left", &left);
+        check_against_golden(&capture.name, "right", &right);
+    }
+}
+
+#[test]
+fn bend_bar_matches_golden_through_its_timeline() {
+    golden_timeline_case("scenes/bend-bar.toml");
+}
+
+#[test]
+fn push_print_matches_golden_through_its_timeline() {
+    golden_timeline_case("scenes/push-print.toml");
+}
+
+#[test]
+fn poke_hole_matches_golden_through_its_timeline() {
+    golden_timeline_case("scenes/poke-hole.toml");
+}

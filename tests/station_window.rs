@@ -89,6 +89,7 @@ fn a_scripted_session_in_a_window_matches_its_golden_and_saves_the_sculpt() {
     // Any validation message (leaked objects at teardown included) makes the run fail.
     assert!(out.status.success(), "the station failed:\n{stdout}\n{stderr}");
     assert!(stdout.contains("station closed after 16 frames"), "{stdout}");
+    assert!(stdout.contains("frame stages, median ms over 16 frames: input"), "{stdout}");
     assert!(stdout.contains(&format!("saved the sculpt to {}", saved.display())), "{stdout}");
 
     let image = image::open(&shot).expect("the screenshot was written").to_rgba8();

@@ -49,11 +49,14 @@ pub enum Workload {
     SaveLarge,
     /// Loading that sculpt back: MB/s.
     LoadLarge,
+    /// Virtual-clay steps per second bending a bar held by a support (Dewaele–Cani §5.1) in
+    /// active windows of 32³, 128×32×32 and 128³ cells, with each layer's share of the time.
+    ClayBend,
 }
 
 impl Workload {
     /// Every workload, in the order `argile bench` runs them.
-    pub const ALL: [Workload; 11] = [
+    pub const ALL: [Workload; 12] = [
         Workload::Stamp,
         Workload::StampCarve,
         Workload::MeshFull,
@@ -65,6 +68,7 @@ impl Workload {
         Workload::JournalStroke,
         Workload::SaveLarge,
         Workload::LoadLarge,
+        Workload::ClayBend,
     ];
 }
 
@@ -87,6 +91,8 @@ pub struct BenchSize {
     pub input_frames: usize,
     /// Radius of the solid sphere the save and load workloads store, voxels.
     pub large_sphere_radius_voxels: f32,
+    /// Timed virtual-clay steps per window.
+    pub clay_steps: usize,
 }
 
 impl BenchSize {
@@ -100,6 +106,7 @@ impl BenchSize {
         sphere_radius_voxels: 100.0,
         input_frames: 20_000,
         large_sphere_radius_voxels: 130.0,
+        clay_steps: 60,
     };
     /// A small run that checks the workloads work (not for figures).
     pub const QUICK: BenchSize = BenchSize {
@@ -111,6 +118,7 @@ impl BenchSize {
         sphere_radius_voxels: 24.0,
         input_frames: 200,
         large_sphere_radius_voxels: 24.0,
+        clay_steps: 4,
     };
 }
 
@@ -141,6 +149,7 @@ pub fn run(workloads: &[Workload], size: BenchSize, mut emit: impl FnMut(Value))
             Workload::JournalStroke => super::bench_io::journal_stroke(size, &mut emit)?,
             Workload::SaveLarge => super::bench_io::save_large(size, &mut emit)?,
             Workload::LoadLarge => super::bench_io::load_large(size, &mut emit)?,
+            Workload::ClayBend => bench_clay_bend(size, &mut emit),
         }
     }
     Ok(())
@@ -411,6 +420,84 @@ fn bench_input(size: BenchSize, emit: &mut impl FnMut(Value)) {
             "us_per_frame_median": median(times),
             "us_per_frame_p99": p99,
             "tool_moved_m": desk.poses.get(crate::input::motion::Target::Tool).position_m.length(),
+        }));
+    }
+}
+
+/// The bend of Dewaele–Cani §5.1 in a window of `dims` cells (1 mm voxels): a bar along X,
+/// 3/4 of the window long, of radius a sixth of its smaller cross extent, rests on a support
+/// block under its left third; a ball of the bar's radius pushes its right end down by a
+/// voxel every two steps. Reports steps per second once the ball touches the bar.
+fn bench_clay_bend(size: BenchSize, emit: &mut impl FnMut(Value)) {
+    use crate::clay::{Clay, ClayParams, ClayTool};
+    use crate::math::Pose;
+    use crate::tool::{rasterize_solid, CsgOp, PlacedSolid, Solid, ToolShape};
+
+    let h = 0.001;
+    for (name, dims) in
+        [("32", IVec3::splat(32)), ("128x32x32", IVec3::new(128, 32, 32)), ("128", IVec3::splat(128))]
+    {
+        let d = dims.as_vec3();
+        let radius = (d.y.min(d.z) / 6.0).floor();
+        let half_length = 0.375 * d.x;
+        let mut field = Field::new(h, 0.5);
+        let bar = Solid::Bar { half_length_m: half_length * h, radius_m: radius * h };
+        rasterize_solid(
+            &mut field,
+            &PlacedSolid { solid: bar, pose: Pose::default(), scale: 1.0 },
+            CsgOp::Union,
+            [0.7, 0.4, 0.2, 1.0],
+        );
+        let at = |x: f32, y: f32| Pose { position_m: Vec3::new(x, y, 0.0) * h, ..Pose::default() };
+        // The bar's axis sits a third of the way down the window, so that its end has room.
+        let lo = IVec3::new(-dims.x / 2, -2 * dims.y / 3, -dims.z / 2);
+        let hi = lo + dims - IVec3::ONE;
+        let support_half = Vec3::new(half_length / 3.0, radius, radius * 1.5);
+        let support = ClayTool::support(
+            ToolShape::Solid(Solid::Box { half_m: support_half * h }),
+            Vec3::ONE,
+            at(-half_length + support_half.x, -2.0 * radius),
+        );
+        let x_push = half_length - radius;
+        let y0 = 2.0 * radius + 1.0;
+        let pusher = ClayTool::pusher(ToolShape::sphere(radius * h), Vec3::ONE, at(x_push, y0));
+        let mut clay = Clay::new(&field, lo, hi, vec![support, pusher], ClayParams::default());
+        let mass0 = clay.mass();
+        // Into contact, untimed.
+        let mut y = y0;
+        for _ in 0..4 {
+            y -= 0.5;
+            clay.step(&[Pose::default(), at(x_push, y)]);
+        }
+        let before = clay.times();
+        let start = Instant::now();
+        for _ in 0..size.clay_steps {
+            y -= 0.5;
+            clay.step(&[Pose::default(), at(x_push, y)]);
+        }
+        let seconds = start.elapsed().as_secs_f64();
+        let t = clay.times();
+        let layers = [
+            t.bodies_s - before.bodies_s,
+            t.displace_s - before.displace_s,
+            t.conserve_s - before.conserve_s,
+            t.tension_s - before.tension_s,
+        ];
+        let total: f64 = layers.iter().sum::<f64>().max(1e-12);
+        emit(json!({
+            "workload": "clay-bend",
+            "window": name,
+            "cells": dims.x * dims.y * dims.z,
+            "bar_radius_voxels": radius,
+            "steps": size.clay_steps,
+            "threads": rayon::current_num_threads(),
+            "steps_per_second": size.clay_steps as f64 / seconds,
+            "share_bodies": layers[0] / total,
+            "share_displacement": layers[1] / total,
+            "share_conservation": layers[2] / total,
+            "share_tension": layers[3] / total,
+            "conservation_pops_per_step": (t.conserve_pops - before.conserve_pops) as f64 / size.clay_steps as f64,
+            "mass_drift": (clay.mass() - mass0) / mass0,
         }));
     }
 }
@@ -713,6 +800,19 @@ mod tests {
             assert_eq!(l["workload"], "input-frame");
             assert!(l["us_per_frame_median"].as_f64().unwrap() > 0.0);
             assert!(l["tool_moved_m"].as_f64().unwrap() > 0.0, "the SpaceMice moved the tool: {l}");
+        }
+    }
+
+    #[test]
+    fn clay_workload_reports_every_window_and_keeps_the_mass() {
+        let mut lines = Vec::new();
+        run(&[Workload::ClayBend], BenchSize::QUICK, |v| lines.push(v)).unwrap();
+        assert_eq!(lines.len(), 3);
+        for l in &lines {
+            assert_eq!(l["workload"], "clay-bend");
+            assert!(l["steps_per_second"].as_f64().unwrap() > 0.0);
+            assert!(l["share_displacement"].as_f64().unwrap() > 0.0, "the ball moves the bar: {l}");
+            assert!(l["mass_drift"].as_f64().unwrap().abs() < 1e-3, "{l}");
         }
     }
 

@@ -6,8 +6,22 @@ use crate::io::autosave::Autosave;
 use crate::math::Pose;
 use std::sync::Arc;
 
+use crate::clay::{window_around, Clay, ClayParams, ClayTool};
+use crate::math::{Aabb, Vec3};
 use crate::scene::{Hand, Scene, SceneTool, SceneToolShape};
-use crate::tool::{rasterize_solid, Freeform, Stroke, Tool};
+use crate::tool::{rasterize_solid, Action, Freeform, Stroke, Tool, ToolFrame};
+
+/// Lattice points of room the virtual clay's window keeps around the tools' paths and the
+/// clay they touch.
+const CLAY_MARGIN_VOXELS: i32 = 12;
+
+/// A push in progress: the virtual clay, and which hand drives which of its tools.
+#[derive(Debug)]
+struct Push {
+    clay: Clay,
+    /// Per clay tool: the hand holding it (`None`: the table) and the scene tool index.
+    bodies: Vec<(Option<Hand>, usize)>,
+}
 
 /// The clay and the hands' strokes at the current time of a scene's timeline.
 #[derive(Debug)]
@@ -20,6 +34,8 @@ pub struct Playback<'s> {
     strokes: [Option<(usize, Stroke)>; 2],
     /// Whether the field's open stroke is the hands' (opened here).
     owns_stroke: bool,
+    /// The push the hands' push and support tools drive, while one pushes.
+    push: Option<Push>,
     time_s: f32,
     /// Journals every stroke that ends.
     autosave: Option<Autosave>,
@@ -48,8 +64,16 @@ impl<'s> Playback<'s> {
         }
         let tools = scene.tools.iter().map(|t| build_tool(t, &field)).collect();
         let autosave = start(&mut field);
-        let mut playback =
-            Self { scene, field, tools, strokes: [None, None], owns_stroke: false, time_s: 0.0, autosave };
+        let mut playback = Self {
+            scene,
+            field,
+            tools,
+            strokes: [None, None],
+            owns_stroke: false,
+            push: None,
+            time_s: 0.0,
+            autosave,
+        };
         // Keys at time 0 with their action on stamp at once.
         playback.step_to(0.0);
         playback
@@ -109,7 +133,7 @@ impl<'s> Playback<'s> {
             };
             let stroke = &mut self.strokes[slot(hand)];
             let active = during.active || (t == previous && at_end.active);
-            if !active {
+            if !active || self.tools[during.tool].action.is_clay_body() {
                 *stroke = None;
                 continue;
             }
@@ -126,9 +150,10 @@ impl<'s> Playback<'s> {
                 s.advance(&mut self.field, at_end.pose, t - previous);
             }
         }
-        // The hands' strokes form one undo step while any of them draws.
-        // A stroke someone else opened on the field (the station's desk tool) is theirs to close.
-        let drawing = self.strokes.iter().any(Option::is_some);
+        self.step_clay(previous, t);
+        // The hands' strokes and pushes form one undo step while any of them acts. A stroke
+        // someone else opened on the field (the station's desk tool) is theirs to close.
+        let drawing = self.strokes.iter().any(Option::is_some) || self.push.is_some();
         if drawing && !self.field.in_stroke() {
             self.field.begin_stroke();
             self.owns_stroke = true;
@@ -165,6 +190,98 @@ impl<'s> Playback<'s> {
         }
         autosave.record(&mut self.field);
         Some(autosave)
+    }
+
+    /// Runs the virtual clay over `previous ..= t`: a push starts when a hand's push tool turns
+    /// active (with the supports held at that moment, the table and the fixed boxes), follows
+    /// the hands at the clay's own step rate, is written back into the field after each
+    /// interval, and ends, settled, when no hand pushes any more.
+    fn step_clay(&mut self, previous: f32, t: f32) {
+        let timeline = &self.scene.timeline;
+        let mid = 0.5 * (previous + t);
+        let acting = |hand: Hand, action: Action| {
+            timeline.state_at(hand, mid).filter(|s| {
+                (s.active || (t == previous && timeline.state_at(hand, t).is_some_and(|e| e.active)))
+                    && self.tools[s.tool].action == action
+            })
+        };
+        let pushing: Vec<(Hand, usize)> =
+            Hand::BOTH.iter().filter_map(|&h| acting(h, Action::Push).map(|s| (h, s.tool))).collect();
+        if pushing.is_empty() {
+            if let Some(push) = self.push.take() {
+                push.clay.finish(&mut self.field);
+            }
+            return;
+        }
+        if self.push.is_none() {
+            if !self.field.in_stroke() {
+                self.field.begin_stroke();
+                self.owns_stroke = true;
+            }
+            self.push = Some(self.start_push(&pushing, previous));
+        }
+        let Some(push) = self.push.as_mut() else { return };
+        let poses: Vec<Pose> = push
+            .bodies
+            .iter()
+            .zip(push.clay.poses())
+            .map(|(&(hand, _), now)| hand.and_then(|h| timeline.state_at(h, t)).map_or(now, |s| s.pose))
+            .collect();
+        push.clay.advance(&poses, t - previous);
+        push.clay.write_to(&mut self.field);
+    }
+
+    fn start_push(&self, pushing: &[(Hand, usize)], t: f32) -> Push {
+        let scene = self.scene;
+        let timeline = &scene.timeline;
+        let mut tools = Vec::new();
+        let mut bodies = Vec::new();
+        let mut reach = Vec::new();
+        for hand in Hand::BOTH {
+            let Some(state) = timeline.state_at(hand, t) else { continue };
+            let tool = &self.tools[state.tool];
+            let support = match tool.action {
+                Action::Support => true,
+                Action::Push if pushing.contains(&(hand, state.tool)) => false,
+                _ => continue,
+            };
+            let shape = crate::clay::ClayShape::Tool { shape: tool.shape.clone(), scale: tool.scale };
+            tools.push(ClayTool { shape, pose: state.pose, support });
+            bodies.push((Some(hand), state.tool));
+            // The window holds every pose this hand's keys give the tool.
+            let half = tool.half_extents_m() / tool.scale + Vec3::splat(scene.voxel_size_m * 4.0);
+            for key in timeline.keys(hand).iter().filter(|k| k.tool == state.tool) {
+                reach.push(ToolFrame::new(key.pose, tool.scale).world_bounds(half));
+            }
+            reach.push(ToolFrame::new(state.pose, tool.scale).world_bounds(half));
+        }
+        if let Some(y) = scene.virtual_clay.table_y_m {
+            tools.push(ClayTool::table(Vec3::new(0.0, y, 0.0)));
+            bodies.push((None, usize::MAX));
+        }
+        let (mut lo, mut hi) = window_around(&self.field, &reach, CLAY_MARGIN_VOXELS);
+        if let Some(y) = scene.virtual_clay.table_y_m {
+            // Room under the table's surface for its band.
+            let table = self.field.transform().world_to_index(Vec3::new(0.0, y, 0.0)).y.floor() as i32 - 4;
+            lo.y = lo.y.max(table);
+            hi.y = hi.y.max(lo.y + 2);
+        }
+        let params = ClayParams {
+            fluidity: scene.virtual_clay.fluidity,
+            step_s: scene.virtual_clay.step_s,
+            ..ClayParams::default()
+        };
+        let mut clay = Clay::new(&self.field, lo, hi, tools, params);
+        if !scene.virtual_clay.fixed_boxes_m.is_empty() {
+            let transform = *self.field.transform();
+            let boxes: Vec<Aabb> =
+                scene.virtual_clay.fixed_boxes_m.iter().map(|&(min, max)| Aabb { min, max }).collect();
+            clay.fix_where(|p| {
+                let w = transform.index_to_world(p.as_vec3());
+                boxes.iter().any(|b| w.cmpge(b.min).all() && w.cmple(b.max).all())
+            });
+        }
+        Push { clay, bodies }
     }
 
     /// The tools as built for this playback, in the scene's order.
@@ -251,6 +368,24 @@ position_m = [0.1, 0.0, 0.0]
         assert!(field.undo().unwrap() && field.undo().unwrap());
         assert!(!field.undo().unwrap());
         assert!(field.same_samples(&initial), "undoing both strokes gives back the initial clay");
+    }
+
+    #[test]
+    fn the_pushing_scenes_keep_their_matter_and_make_one_undo_step() {
+        for name in ["bend-bar", "push-print", "poke-hole"] {
+            let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml"));
+            let scene = Scene::load(&path).unwrap();
+            let mut p = Playback::new(&scene);
+            let initial = p.field().clone();
+            let end = scene.timeline.duration_s() + 0.1;
+            p.advance_to(end, |_| {});
+            let (m0, m1) = (initial.mass(), p.field().mass());
+            assert!((m1 - m0).abs() / m0 < 0.01, "{name}: mass {m1} from {m0}");
+            assert!(!p.field().same_samples(&initial), "{name}: the push moved clay");
+            assert_eq!(p.field().history_stats().undo_in_memory, 1, "{name}: one push, one undo step");
+            assert!(p.field_mut().undo().unwrap());
+            assert!(p.field().same_samples(&initial), "{name}: undo takes the push back");
+        }
     }
 
     #[test]

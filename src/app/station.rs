@@ -79,6 +79,9 @@ pub struct StationOptions {
     /// Track the head with opentrack's UDP datagrams on this address (head-tracked views of the
     /// scene's screen calibration, else the shipped `calibration/screen.toml`).
     pub opentrack: Option<std::net::SocketAddr>,
+    /// The screen calibration (layered over the shipped `calibration/screen.toml`); the
+    /// scene's `[head] calibration` when absent, else the shipped one.
+    pub calibration: Option<PathBuf>,
     /// Journal every finished stroke (crash recovery), with these settings.
     pub autosave: Option<AutosaveConfig>,
     /// The scene's text, kept in the autosave snapshots.
@@ -319,6 +322,8 @@ pub struct Station<'s> {
     stroke: Option<Stroke>,
     convergence_factor: f32,
     lights_follow_viewer: bool,
+    /// The display, its screen and the viewer.
+    calibration: ScreenCalibration,
     /// Where the viewer's head is, for head-tracked views: opentrack, else the scene's
     /// scripted head, else none (the scene's camera rig).
     head: Option<OpentrackHead>,
@@ -396,11 +401,12 @@ impl<'s> Station<'s> {
             stroke: None,
             convergence_factor: scene.rig.convergence_m / distance.max(1e-6),
             lights_follow_viewer: false,
+            calibration: scene.head.as_ref().map_or_else(ScreenCalibration::shipped, |h| h.calibration),
             head: None,
             auto_convergence: None,
             clay_bounds: crate::math::Aabb::EMPTY,
             budget: None,
-            display_mode: scene.display.mode.unwrap_or(DisplayMode::Anaglyph),
+            display_mode: DisplayMode::Anaglyph,
             quad_buffer: false,
             window_origin: (0, 0),
             window_px,
@@ -411,8 +417,18 @@ impl<'s> Station<'s> {
             times: StepTimes::default(),
             messages: Vec::new(),
         };
+        station.set_calibration(station.calibration);
         station.resize(window_px);
         station
+    }
+
+    /// Uses `calibration` for the display, the screen and the viewer: its display mode unless
+    /// the scene names one, and its interlace parity.
+    pub fn set_calibration(&mut self, calibration: ScreenCalibration) {
+        self.calibration = calibration;
+        self.display_mode =
+            self.scene.display.mode.or(calibration.display.mode).unwrap_or(DisplayMode::Anaglyph);
+        self.fit_views();
     }
 
     /// The clay.
@@ -475,9 +491,9 @@ impl<'s> Station<'s> {
         self.head = Some(head);
     }
 
-    /// The screen calibration head-tracked views use: the scene's, else the shipped one.
+    /// The screen calibration in use.
     fn screen_calibration(&self) -> ScreenCalibration {
-        self.scene.head.as_ref().map_or_else(ScreenCalibration::shipped, |h| h.calibration)
+        self.calibration
     }
 
     /// Reads SpaceMouse events and states from `mailbox` (filled by a reader thread).
@@ -667,10 +683,10 @@ impl<'s> Station<'s> {
         lines
     }
 
-    /// The display mode and, for interlaced modes, the parity in window pixels (the scene's
-    /// parity is the screen's; a window on an odd row or column flips it).
+    /// The display mode and, for interlaced modes, the parity in window pixels (the
+    /// calibration's parity is the screen's; a window on an odd row or column flips it).
     pub fn display(&self) -> (DisplayMode, Parity) {
-        let screen = self.scene.display.parity;
+        let screen = self.calibration.display.parity;
         let parity = match self.display_mode {
             DisplayMode::ColumnInterlaced => screen.for_origin(self.window_origin.0),
             _ => screen.for_origin(self.window_origin.1),
@@ -873,6 +889,7 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
         bail!("cannot open the station window: {reason}");
     }
     let (bindings, _) = KeyBindings::load(options.keys.as_deref())?;
+    let calibration = options.calibration.as_deref().map(ScreenCalibration::load).transpose()?;
     let script = options.script.as_deref().map(InputScript::load).transpose()?;
     let event_loop = EventLoop::new().context("cannot connect to the display server")?;
     event_loop.set_control_flow(ControlFlow::Poll);
@@ -885,7 +902,13 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
         })
     };
     let mut app = WindowApp {
-        station: Station::new_autosaved(scene, bindings, window_px, save_to, start),
+        station: {
+            let mut station = Station::new_autosaved(scene, bindings, window_px, save_to, start);
+            if let Some(c) = calibration {
+                station.set_calibration(c);
+            }
+            station
+        },
         options,
         script: script.unwrap_or_default(),
         scene_name,
@@ -899,6 +922,7 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
         last: None,
         screenshot: None,
         error: None,
+        stage_ms: Vec::new(),
     };
     event_loop.run_app(&mut app).context("the window's event loop failed")?;
     // Drop the renderer before its window, then read what the validation layer said of the
@@ -917,6 +941,21 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
                 messages.join("\n")
             );
         }
+    }
+    if options.frames.is_some() && !app.stage_ms.is_empty() {
+        let median = |i: usize| {
+            let mut v: Vec<f64> = app.stage_ms.iter().map(|s| s[i]).collect();
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        println!(
+            "frame stages, median ms over {} frames: input {:.3}, tools {:.3}, mesh {:.3}, render + composition + present {:.2}",
+            app.stage_ms.len(),
+            median(0),
+            median(1),
+            median(2),
+            median(3)
+        );
     }
     let mut saved = app.station.saved.clone();
     let stats = app.station.playback.field().history_stats();
@@ -948,6 +987,8 @@ struct WindowApp<'s, 'o> {
     last: Option<Instant>,
     screenshot: Option<PathBuf>,
     error: Option<anyhow::Error>,
+    /// Per frame: input, tools, mesh, and render + composition + present (waited for), ms.
+    stage_ms: Vec<[f64; 4]>,
 }
 
 impl WindowApp<'_, '_> {
@@ -1050,7 +1091,10 @@ impl WindowApp<'_, '_> {
         }
         let last = self.options.frames.is_some_and(|n| index + 1 >= n);
         let want_shot = last && self.options.screenshot.is_some();
+        let present_started = Instant::now();
         let presented = renderer.present(&frame, self.station.display(), want_shot)?;
+        let t = self.station.times();
+        self.stage_ms.push([t.input_ms, t.tools_ms, t.mesh_ms, ms_since(present_started)]);
         // A scripted run shows its fixed step, so its pictures do not depend on the machine.
         self.station.set_frame_time(match self.options.frames {
             Some(_) => SCRIPTED_STEP_S * 1e3,
@@ -1318,6 +1362,19 @@ mod tests {
         station.set_window_origin((0, 7));
         assert_eq!(station.display().1, even.flipped(), "a window on an odd row flips the rows' eyes");
         assert!(station.set_surface(DisplayMode::QuadBuffer, "a flat display", 2).unwrap().is_none());
+
+        // A passive monitor's calibration names its mode and its polariser's parity.
+        let passive = ScreenCalibration::parse(
+            "[display]\nmode = \"row-interlaced\"\nparity = \"left-odd\"\n",
+            "passive.toml",
+        )
+        .unwrap();
+        let mut station =
+            Station::new(&scene, KeyBindings::shipped(), (200, 100), PathBuf::from("unused.argile"));
+        station.set_calibration(passive);
+        assert_eq!(station.display(), (DisplayMode::RowInterlaced, Parity::LeftOdd));
+        station.set_window_origin((0, 3));
+        assert_eq!(station.display().1, Parity::LeftEven, "odd window row: flipped");
     }
 
     #[test]

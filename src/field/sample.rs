@@ -50,18 +50,7 @@ impl<'f> FieldReader<'f> {
 
     /// Trilinear density at a fractional lattice coordinate.
     pub fn density_at(&mut self, index: Vec3) -> f32 {
-        let base = index.floor();
-        let f = index - base;
-        let b = base.as_ivec3();
-        let mut acc = 0.0;
-        for c in 0..8 {
-            let o = IVec3::new(c & 1, (c >> 1) & 1, (c >> 2) & 1);
-            let w = (if o.x == 1 { f.x } else { 1.0 - f.x })
-                * (if o.y == 1 { f.y } else { 1.0 - f.y })
-                * (if o.z == 1 { f.z } else { 1.0 - f.z });
-            acc += w * self.density(b + o);
-        }
-        acc
+        crate::math::trilinear(index, |p| self.density(p))
     }
 
     /// Trilinear colour at a fractional lattice coordinate.

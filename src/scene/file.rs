@@ -36,6 +36,30 @@ pub(super) struct SceneFile {
     #[serde(default)]
     pub display: DisplaySpec,
     pub head: Option<super::head::HeadSpec>,
+    #[serde(default)]
+    pub virtual_clay: VirtualClaySpec,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct VirtualClaySpec {
+    #[serde(default = "one")]
+    pub fluidity: f32,
+    #[serde(default = "clay_step")]
+    pub step_s: f32,
+    pub table_y_m: Option<f32>,
+    #[serde(default)]
+    pub fixed_boxes_m: Vec<[[f32; 3]; 2]>,
+}
+
+impl Default for VirtualClaySpec {
+    fn default() -> Self {
+        Self { fluidity: 1.0, step_s: clay_step(), table_y_m: None, fixed_boxes_m: Vec::new() }
+    }
+}
+
+fn clay_step() -> f32 {
+    1.0 / 60.0
 }
 
 #[derive(Deserialize)]
@@ -383,6 +407,8 @@ pub(super) enum ActionSpec {
     Stamp,
     Inflate,
     Deflate,
+    Push,
+    Support,
 }
 
 #[derive(Deserialize)]

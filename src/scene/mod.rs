@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 
 pub use colour::{parse_hex, SceneColour};
 pub use head::{HeadKey, HeadPath};
-pub use screen::{ScreenCalibration, TrackerCalibration, SHIPPED_SCREEN_TOML};
+pub use screen::{DisplayCalibration, ScreenCalibration, TrackerCalibration, SHIPPED_SCREEN_TOML};
 pub use timeline::{Hand, HandState, Key, Timeline};
 pub use tool::SceneToolShape;
 
@@ -249,6 +249,21 @@ pub struct Scene {
     pub display: DisplaySettings,
     /// The scripted head, for head-tracked views of a calibrated screen (`[head]`).
     pub head: Option<HeadPath>,
+    /// How the clay behaves under tools that push (`[virtual_clay]`).
+    pub virtual_clay: VirtualClaySettings,
+}
+
+/// The virtual clay's settings: its fluidity, its step, and what holds it besides the tools.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VirtualClaySettings {
+    /// α in [0, 1]: 1 is dry clay that follows the tool, near 0 fluid clay that takes prints.
+    pub fluidity: f32,
+    /// Simulation step, seconds.
+    pub step_s: f32,
+    /// Height of a table under the clay (a support plane facing +Y), metres.
+    pub table_y_m: Option<f32>,
+    /// World boxes (min, max corners, metres) whose clay is held still.
+    pub fixed_boxes_m: Vec<(Vec3, Vec3)>,
 }
 
 impl Scene {
@@ -672,6 +687,24 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
     };
     let display = DisplaySettings { mode: file.display.mode, parity: file.display.parity, fallback };
 
+    let vc = &file.virtual_clay;
+    if !(0.0..=1.0).contains(&vc.fluidity) {
+        return Err(at(None, format!("[virtual_clay] fluidity must be in [0, 1], not {}", vc.fluidity)));
+    }
+    if !(vc.step_s > 0.0 && vc.step_s <= 1.0) {
+        return Err(at(None, format!("[virtual_clay] step_s must be in (0, 1] seconds, not {}", vc.step_s)));
+    }
+    let virtual_clay = VirtualClaySettings {
+        fluidity: vc.fluidity,
+        step_s: vc.step_s,
+        table_y_m: vc.table_y_m.filter(|y| y.is_finite()),
+        fixed_boxes_m: vc
+            .fixed_boxes_m
+            .iter()
+            .map(|[a, b]| (Vec3::from(*a).min(Vec3::from(*b)), Vec3::from(*a).max(Vec3::from(*b))))
+            .collect(),
+    };
+
     Ok(Scene {
         source: name.to_owned(),
         voxel_size_m: field_voxel,
@@ -688,6 +721,7 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
         captures,
         display,
         head,
+        virtual_clay,
     })
 }
 

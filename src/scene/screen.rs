@@ -9,6 +9,8 @@ use std::ops::Range;
 use std::path::Path;
 
 use serde::Deserialize;
+
+use crate::stereo::display::{DisplayMode, Parity};
 use toml::Spanned;
 
 use super::{line_column, FileError};
@@ -53,6 +55,19 @@ pub struct ScreenCalibration {
     pub tracker: TrackerCalibration,
     /// The parallax budget.
     pub budget: ParallaxBudget,
+    /// How the display shows stereo pairs.
+    pub display: DisplayCalibration,
+}
+
+/// What the display does with a stereo pair: the mode it needs (a passive 3D monitor needs an
+/// interlaced one, a 3D TV side-by-side-half, ...) and which rows or columns its polariser gives
+/// the left eye.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DisplayCalibration {
+    /// The display mode for this display (the station's default when absent).
+    pub mode: Option<DisplayMode>,
+    /// The screen rows (columns) of the left eye, counted from the screen's top left.
+    pub parity: Parity,
 }
 
 impl ScreenCalibration {
@@ -243,7 +258,12 @@ impl ScreenCalibration {
                 (None, None) => return Err(missing("comfort.limit")),
             },
         };
-        Ok(Self { screen, default_eye_m, ipd_m, near_m, far_m, tracker, budget })
+        let bd = base.map(|b| b.display).unwrap_or_default();
+        let display = DisplayCalibration {
+            mode: file.display.mode.or(bd.mode),
+            parity: file.display.parity.unwrap_or(bd.parity),
+        };
+        Ok(Self { screen, default_eye_m, ipd_m, near_m, far_m, tracker, budget, display })
     }
 }
 
@@ -258,6 +278,15 @@ struct File {
     tracker: TrackerFile,
     #[serde(default)]
     comfort: ComfortFile,
+    #[serde(default)]
+    display: DisplayFile,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct DisplayFile {
+    mode: Option<DisplayMode>,
+    parity: Option<Parity>,
 }
 
 #[derive(Deserialize, Default)]
@@ -360,5 +389,25 @@ mod tests {
             ("[viewer]\nnear_m = 2.0\nfar_m = 1.0\n", "mine.toml:3:9", "far_m"),
         ];
         super::super::tests::assert_refused(&cases, |t| ScreenCalibration::parse(t, "mine.toml"));
+    }
+
+    #[test]
+    fn the_display_table_names_the_mode_and_the_screen_parity() {
+        let shipped = ScreenCalibration::shipped();
+        assert_eq!(shipped.display, DisplayCalibration { mode: None, parity: Parity::LeftEven });
+        let passive = ScreenCalibration::parse_layer(
+            "[display]\nmode = \"row-interlaced\"\nparity = \"left-odd\"\n",
+            "passive.toml",
+            Some(&shipped),
+        )
+        .unwrap();
+        assert_eq!(passive.display.mode, Some(DisplayMode::RowInterlaced));
+        assert_eq!(passive.display.parity, Parity::LeftOdd);
+        assert_eq!(passive.screen, shipped.screen, "the rest comes from the base");
+        let e =
+            ScreenCalibration::parse_layer("[display]\nmode = \"holographic\"\n", "bad.toml", Some(&shipped))
+                .unwrap_err()
+                .to_string();
+        assert!(e.starts_with("bad.toml:2:") && e.contains("holographic"), "{e}");
     }
 }

@@ -127,7 +127,9 @@ pub(super) fn action_of(
 ) -> Result<Action, SceneError> {
     let name = format!("{:?}", t.action).to_lowercase();
     let allowed: &[&str] = match t.action {
-        ActionSpec::Add | ActionSpec::Remove | ActionSpec::Paint => &[],
+        ActionSpec::Add | ActionSpec::Remove | ActionSpec::Paint | ActionSpec::Push | ActionSpec::Support => {
+            &[]
+        }
         ActionSpec::SoftRemove | ActionSpec::Build | ActionSpec::SoftPaint => &["rate_per_s"],
         ActionSpec::Smooth => &["rate_per_s", "centre_weight"],
         ActionSpec::Stamp => &["s", "m", "r", "k", "n", "falloff_m"],
@@ -162,6 +164,8 @@ pub(super) fn action_of(
     };
     Ok(match t.action {
         ActionSpec::Add => Action::Add,
+        ActionSpec::Push => Action::Push,
+        ActionSpec::Support => Action::Support,
         ActionSpec::Remove => Action::Remove,
         ActionSpec::Paint => Action::Paint,
         ActionSpec::SoftRemove => Action::SoftRemove { rate_per_s: rate(1.0)? },

@@ -12,6 +12,7 @@
 //! | [`Action::Smooth`] (sandpaper) | `d ← d + min(1, rate·τ)·T·(avg − d)`, `avg = (w·d + Σ₆ dᵢ)/(w + 6)` | rate |
 //! | [`Action::Stamp`] | `d ← clamp(d + def(1 − T), 0, 1)`, see [`crate::tool::Deformation`] | per stamp |
 //! | [`Action::Inflate`] / [`Action::Deflate`] | `d ← clamp(d ± T·speed·τ·|∇d|, 0, 1)` | rate |
+//! | [`Action::Push`] / [`Action::Support`] | none: the virtual clay (`crate::clay`) moves matter | — |
 //!
 //! Per-stamp actions act once per stamp, stamps being spaced along the tool's path; rate
 //! actions act in proportion to the time the tool is held, in fixed ticks (see
@@ -77,6 +78,12 @@ pub enum Action {
         /// Surface speed where `T = 1`, metres per second.
         speed_m_per_s: f32,
     },
+    /// Pushes the clay as a rigid body: the virtual clay of `crate::clay` moves, bends and
+    /// dents it while conserving its matter. Stamping does nothing with it.
+    Push,
+    /// Holds the clay still where it touches it, as a support for pushes
+    /// (`crate::clay`). Stamping does nothing with it.
+    Support,
 }
 
 impl Action {
@@ -93,6 +100,8 @@ impl Action {
             Action::Stamp { .. } => "stamp",
             Action::Inflate { .. } => "inflate",
             Action::Deflate { .. } => "deflate",
+            Action::Push => "push",
+            Action::Support => "support",
         }
     }
 
@@ -126,6 +135,12 @@ impl Action {
             Action::Stamp { deformation, .. } => deformation.parameters().4 > 0.0,
             _ => false,
         }
+    }
+
+    /// Whether the tool acts through the virtual clay (pushing or holding) rather than by
+    /// stamping.
+    pub fn is_clay_body(&self) -> bool {
+        matches!(self, Action::Push | Action::Support)
     }
 
     /// Whether the action reads each sample's six neighbours (and so needs a snapshot).

@@ -195,6 +195,7 @@ pub fn apply_tool(field: &mut Field, tool: &Tool, pose: Pose, dt_s: f32) -> Stam
         }
         let (old_d, old_c) = (*d, *c);
         match action {
+            Action::Push | Action::Support => {}
             Action::Add => {
                 let new = d.max(t);
                 mix_in(c, *d, new, colour);

@@ -1,5 +1,6 @@
 //! Criterion benchmarks of the CPU kernels: marching one brick, stamping the band-limited
-//! sphere, re-meshing what a stroke dirtied, and the head-tracked stereo views of a frame. `argile bench` holds the end-to-end workloads.
+//! sphere, re-meshing what a stroke dirtied, the head-tracked stereo views of a frame and one
+//! virtual-clay step. `argile bench` holds the end-to-end workloads.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 
@@ -101,5 +102,48 @@ fn head_tracked_views(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, march, stamp, remesh, head_tracked_views);
+/// One virtual-clay step (all three layers) of a ball bending a bar of radius 5 voxels that
+/// rests on a support, in a 64×32×32 window; the ball goes down and up by a quarter voxel per
+/// step, so it stays in contact.
+fn clay_step(c: &mut Criterion) {
+    use argile::clay::{Clay, ClayParams, ClayTool};
+    use argile::math::IVec3;
+    use argile::tool::ToolShape;
+    let h = 0.001;
+    let field = {
+        let mut f = Field::new(h, 0.5);
+        let bar = PlacedSolid {
+            solid: Solid::Bar { half_length_m: 24.0 * h, radius_m: 5.0 * h },
+            pose: Pose::default(),
+            scale: 1.0,
+        };
+        rasterize_solid(&mut f, &bar, CsgOp::Union, [0.7, 0.4, 0.2, 1.0]);
+        f
+    };
+    let at = |x: f32, y: f32| Pose { position_m: Vec3::new(x, y, 0.0) * h, rotation: Quat::IDENTITY };
+    let support = ClayTool::support(
+        ToolShape::Solid(Solid::Box { half_m: Vec3::new(10.0, 5.0, 8.0) * h }),
+        Vec3::ONE,
+        at(-14.0, -10.0),
+    );
+    let ball = ClayTool::pusher(ToolShape::sphere(5.0 * h), Vec3::ONE, at(19.0, 11.0));
+    let (lo, hi) = (IVec3::new(-32, -20, -16), IVec3::new(31, 11, 15));
+    let mut clay = Clay::new(&field, lo, hi, vec![support, ball], ClayParams::default());
+    let mut i = 0u32;
+    let y = |i: u32| 11.0 - 0.25 * (i % 32).min(32 - i % 32) as f32;
+    for _ in 0..16 {
+        i += 1;
+        clay.step(&[Pose::default(), at(19.0, y(i))]);
+    }
+    let mut group = c.benchmark_group("clay_step");
+    group.bench_function("bend_bar/window=64x32x32", |b| {
+        b.iter(|| {
+            i += 1;
+            clay.step(&[Pose::default(), at(19.0, y(i))]);
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, march, stamp, remesh, head_tracked_views, clay_step);
 criterion_main!(benches);

@@ -1,0 +1,61 @@
+//! Virtual clay: the plastic, mass-conserving deformation of Dewaele and Cani (2003, §3).
+//!
+//! Owns the three layers that move matter when tools push the clay, and the supports that
+//! hold it. Depends on `math`, `field` (its public API) and `tool` (shapes and frames); knows
+//! nothing of meshes, devices or Vulkan.
+//!
+//! ```text
+//!  Field ──load window──► ClayGrid (dense, one cell per lattice point, a wall layer around)
+//!                           │  each fixed step, in this order:
+//!                           │   1. displacement  pseudo-distances from the moving tool and the
+//!                           │                    supports (+1/density per cell), blended by
+//!                           │                    k = (d1 − d2)/d12, δ = (1−k)/2·αδ1 + (1+k)/2·δ2,
+//!                           │                    matter splatted trilinearly at x + δ
+//!                           │   2. conservation  excess over the capacity (1 − tool density)
+//!                           │                    pushed to the six neighbours through a FIFO
+//!                           │   3. tension       loose low-density cells give their matter to
+//!                           │                    denser neighbours; crumbs are eaten back
+//!  Field ◄──write back─────┘  (changed bricks only, marked dirty; one undo stroke per push)
+//! ```
+//!
+//! Invariants: matter (the sum of densities) is conserved by every layer, except for crumbs
+//! removed with [`ClayParams::return_crumbs`] off; no density is ever negative or NaN; the
+//! result of a step depends only on the grid, the tools and the parameters, never on the
+//! number of threads. While a push runs, cells may hold slightly more than 1 (the
+//! conservation layer's threshold, and work carried to the next step); the field only ever
+//! receives densities clamped to [0, 1], and [`Clay::finish`] settles the excess first.
+//!
+//! ## Where this departs from the paper, and why
+//!
+//! - Pseudo-distances are computed by a Dijkstra whose queue is a list of unit-wide buckets
+//!   (every step costs at least 1, a full cell's 1/density): exact, in linear time, without a
+//!   heap (`displace`; `bucketed_distances_equal_dijkstras` checks it against a heap). The
+//!   static group's distance and each moving tool's run side by side.
+//! - Several moving tools (both hands pushing): each tool's share is the paper's two-tool
+//!   blend against the nearest other group (static or moving), and the shares add. With one
+//!   moving tool this is exactly the paper's formula.
+//! - The tool's motion counts from the contact, found by bisection within the step (the
+//!   paper's "exact time of the collision").
+//! - Matter never moves into a cell covered more deeply by a body than its own: with the
+//!   60° rule alone, matter pushed out of a tool's rim could be pushed back into it by the
+//!   next cell, and the two would trade it forever.
+//! - The tolerated excess is settled when the push ends, so the field, whose densities stay
+//!   in [0, 1], loses no matter to clamping.
+//! - Crumbs are counted at the field's iso-level, the surface the user sees (the paper counts
+//!   "above-threshold" cells; its threshold, 0.3, would let a visible speck hang on the body
+//!   by a thread of invisible matter).
+//! - Colour is not carried with the matter: cells that fill up take the window's mean colour.
+
+mod body;
+mod conserve;
+mod displace;
+mod grid;
+mod sim;
+mod tension;
+
+pub use body::{ClayShape, ClayTool};
+pub use grid::window_around;
+pub use sim::{Clay, ClayParams, LayerTimes};
+
+#[cfg(test)]
+mod tests;
