@@ -1228,16 +1228,20 @@ mod tests {
         assert!(e.contains("not a key name"), "{e}");
     }
 
+    /// An empty scene whose first tool adds clay with a 3 cm ball.
+    fn ball_scene() -> Scene {
+        let text = "[[tool]]\nname = \"ball\"\nshape = \"sphere\"\nradius_m = 0.03\naction = \"add\"\n";
+        Scene::parse(text, "ball", None).unwrap()
+    }
+
+    fn small_station(scene: &Scene) -> Station<'_> {
+        Station::new(scene, KeyBindings::shipped(), (64, 64), PathBuf::from("unused.argile"))
+    }
+
     #[test]
     fn keys_sculpt_undo_and_redo_through_the_bindings() {
-        let scene = Scene::parse(
-            "[[tool]]\nname = \"ball\"\nshape = \"sphere\"\nradius_m = 0.03\naction = \"add\"\n",
-            "t",
-            None,
-        )
-        .unwrap();
-        let mut station =
-            Station::new(&scene, KeyBindings::shipped(), (64, 64), PathBuf::from("unused.argile"));
+        let scene = ball_scene();
+        let mut station = small_station(&scene);
         let mut applied = 0;
         station.step(SCRIPTED_STEP_S, |_| applied += 1);
         assert_eq!(station.playback.field().mass(), 0.0, "nothing sculpted yet");
@@ -1293,14 +1297,8 @@ mod tests {
     fn a_spacemouse_moves_the_desk_tool_and_its_button_sculpts() {
         use crate::input::reader::{DeviceId, DeviceInfo, ReaderEvent};
         use crate::input::spacemouse::{ButtonChange, RawAxes, SpaceMouseState};
-        let scene = Scene::parse(
-            "[[tool]]\nname = \"ball\"\nshape = \"sphere\"\nradius_m = 0.03\naction = \"add\"\n",
-            "t",
-            None,
-        )
-        .unwrap();
-        let mut station =
-            Station::new(&scene, KeyBindings::shipped(), (64, 64), PathBuf::from("unused.argile"));
+        let scene = ball_scene();
+        let mut station = small_station(&scene);
         let mailbox = Arc::new(Mailbox::new(16));
         station.attach_spacemice(mailbox.clone());
         let id = DeviceId(1);
