@@ -334,7 +334,7 @@ fn station(scene_path: Option<PathBuf>, options: app::StationOptions) -> Result<
         .map_or("default".to_owned(), |s| s.to_string_lossy().into_owned());
     app::recover_and_report();
     if let Some(reason) = app::no_display_reason() {
-        println!("No window can open here ({reason}): rendering the {name} scene headless.");
+        println!("No window can open here: {reason}. Rendering the {name} scene headless.");
         let options = RenderOptions {
             out_dir: PathBuf::from("argile-out"),
             display_modes: vec![DisplayMode::Anaglyph],
