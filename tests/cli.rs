@@ -190,3 +190,24 @@ fn calibrate_prints_the_frusta_and_writes_the_test_pattern() {
     assert!(err.contains(&format!("{}:2:9: `viewer.ipd_m`", calibration.display())), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn the_station_without_a_display_renders_the_default_scene_headless_and_says_where() {
+    let dir = temp_dir("headless-station");
+    let out = argile()
+        .current_dir(&dir)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env("XDG_STATE_HOME", dir.join("state"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("No window can open here: no display"), "{stdout}");
+    for name in ["default-left.png", "default-right.png", "default-anaglyph.png"] {
+        let path = dir.join("argile-out").join(name);
+        assert!(stdout.contains(&format!("argile-out/{name}")), "says where {name} is: {stdout}");
+        let image = image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert_eq!(image.width(), 1024);
+    }
+}
