@@ -46,7 +46,7 @@ use crate::scene::{line_column, FileError, Scene};
 use crate::stereo::comfort::AutoConvergence;
 use crate::stereo::display::{choose_mode, DisplayMode, Parity};
 use crate::stereo::{HeadTrackedRig, Placement};
-use crate::tool::{Action, Stroke, Tool, ToolShape};
+use crate::tool::{Action, Ellipsoid, Falloff, Solid, Stroke, Tool, ToolShape};
 
 /// The time step of a scripted run, seconds.
 pub const SCRIPTED_STEP_S: f32 = 1.0 / 60.0;
@@ -282,6 +282,34 @@ fn clay_bounds(field: &crate::field::Field) -> crate::math::Aabb {
             b.union(&crate::math::Aabb { min: t.index_to_world(lo), max: t.index_to_world(hi) })
         },
     )
+}
+
+/// The shapes the desk tool cycles through with `next-shape`, all of size `s` (their smallest
+/// half extent), and their names.
+fn shape_cycle(s: f32) -> [(ToolShape, &'static str); 5] {
+    [
+        (ToolShape::sphere(s), "sphere"),
+        (ToolShape::Solid(Solid::Box { half_m: Vec3::splat(s) }), "box"),
+        (ToolShape::Solid(Solid::Cylinder { radius_m: s, half_height_m: s }), "cylinder"),
+        (ToolShape::Solid(Solid::Torus { major_m: 2.0 * s, minor_m: s }), "torus"),
+        (
+            ToolShape::Ellipsoid(Ellipsoid { radii_m: Vec3::new(2.0 * s, s, s), falloff: Falloff::Wyvill }),
+            "soft ellipsoid",
+        ),
+    ]
+}
+
+/// The name of a tool shape for the HUD.
+fn shape_name(shape: &ToolShape) -> &'static str {
+    match shape {
+        ToolShape::Solid(Solid::Sphere { .. }) => "sphere",
+        ToolShape::Solid(Solid::Box { .. } | Solid::RoundedBox { .. }) => "box",
+        ToolShape::Solid(Solid::Cylinder { .. }) => "cylinder",
+        ToolShape::Solid(Solid::Torus { .. }) => "torus",
+        ToolShape::Solid(Solid::Bar { .. }) => "bar",
+        ToolShape::Ellipsoid(_) => "ellipsoid",
+        ToolShape::Freeform(_) => "freeform",
+    }
 }
 
 /// The actions the desk tool cycles through with `next-action`.
@@ -589,6 +617,13 @@ impl<'s> Station<'s> {
                     self.desk_tool = Tool { scale, ..tools[self.tool_index].clone() };
                 }
             }
+            StationAction::NextShape => {
+                let size = self.desk_tool.shape.half_extents_m().min_element();
+                let cycle = shape_cycle(size);
+                let at = cycle.iter().position(|(_, n)| *n == shape_name(&self.desk_tool.shape));
+                let next = at.map_or(0, |i| (i + 1) % cycle.len());
+                self.desk_tool.shape = cycle[next].0.clone();
+            }
             StationAction::NextAction => {
                 let cycle = action_cycle();
                 self.action_index = (self.action_index + 1) % cycle.len();
@@ -655,8 +690,9 @@ impl<'s> Station<'s> {
         };
         let mut lines = vec![
             format!(
-                "tool {}: {} mm, {}",
+                "tool {}: {} {} mm, {}",
                 self.tool_index + 1,
+                shape_name(&self.desk_tool.shape),
                 (self.desk_tool.size_m() * 1000.0).round(),
                 self.desk_tool.action.name()
             ),
@@ -1267,6 +1303,21 @@ mod tests {
         station.set_modifiers(Modifiers::default());
         station.key(KeyCode::KeyZ, true);
         assert_eq!(station.playback.field().mass(), sculpted, "z alone is not undo");
+
+        // S cycles the shapes at the same size, back to the sphere; ] grows the tool.
+        let size = station.desk_tool.size_m();
+        let mut names = Vec::new();
+        for _ in 0..5 {
+            station.key(KeyCode::KeyS, true);
+            station.key(KeyCode::KeyS, false);
+            names.push(shape_name(&station.desk_tool.shape));
+            assert!((station.desk_tool.size_m() - size).abs() < 1e-6, "same size");
+        }
+        assert_eq!(names, ["box", "cylinder", "torus", "ellipsoid", "sphere"]);
+        station.key(KeyCode::BracketRight, true);
+        assert!((station.desk_tool.size_m() - size * SIZE_STEP).abs() < 1e-6);
+        let shown = format!("sphere {} mm", (station.desk_tool.size_m() * 1000.0).round());
+        assert!(station.hud_lines()[0].contains(&shown), "{:?}", station.hud_lines());
     }
 
     #[test]

@@ -35,6 +35,8 @@ pub enum StationAction {
     Apply,
     /// Next tool of the scene.
     NextTool,
+    /// Next shape for the desk tool (sphere, box, cylinder, torus, soft ellipsoid), same size.
+    NextShape,
     /// Next action for the tool (add, remove, paint, smooth, ...).
     NextAction,
     /// Grow the tool.
@@ -81,6 +83,7 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("save", StationAction::Save),
     ("apply", StationAction::Apply),
     ("next-tool", StationAction::NextTool),
+    ("next-shape", StationAction::NextShape),
     ("next-action", StationAction::NextAction),
     ("bigger", StationAction::Bigger),
     ("smaller", StationAction::Smaller),
