@@ -7,10 +7,22 @@ use crate::scene::{Scene, ScreenCalibration};
 use crate::stereo::comfort::BudgetCheck;
 use crate::stereo::BudgetMode;
 
-/// Checks the clay inside `clay` against the budget, seen from the default eye. When it is
-/// exceeded, returns the check and a sentence for the user; in `limit` mode the scene's
-/// interaxial distance is lowered until the clay fits.
-pub fn apply_parallax_budget(scene: &mut Scene, clay: Aabb) -> Option<(BudgetCheck, String)> {
+/// The budget's verdict on a scene's clay when it exceeds the budget.
+#[derive(Clone, Debug)]
+pub struct BudgetVerdict {
+    /// The check of the clay's depth range.
+    pub check: BudgetCheck,
+    /// Whether the budget asks to lower the interaxial (rather than only warn).
+    pub limit: bool,
+    /// World metres per physical metre of the head-tracked placement (1 without a head).
+    scale: f32,
+    /// A sentence for the user.
+    pub warning: String,
+}
+
+/// Checks the clay inside `clay` against the budget, seen from the default eye, without
+/// changing the scene; `None` when it fits.
+pub fn judge_parallax_budget(scene: &Scene, clay: Aabb) -> Option<BudgetVerdict> {
     if clay.is_empty() {
         return None;
     }
@@ -47,15 +59,23 @@ pub fn apply_parallax_budget(scene: &mut Scene, clay: Aabb) -> Option<(BudgetChe
             (display.budget.check(&viewing, near, far), display.budget, 1.0)
         }
     };
-    let warning = check.warning(&budget)?;
-    if budget.mode == BudgetMode::Limit {
+    let warning = format!("{}: {}", scene.source, check.warning(&budget)?);
+    Some(BudgetVerdict { check, limit: budget.mode == BudgetMode::Limit, scale, warning })
+}
+
+/// [`judge_parallax_budget`], then in `limit` mode the scene's interaxial distance is lowered
+/// until the clay fits. Returns the check and the sentence for the user when it was exceeded.
+pub fn apply_parallax_budget(scene: &mut Scene, clay: Aabb) -> Option<(BudgetCheck, String)> {
+    let verdict = judge_parallax_budget(scene, clay)?;
+    if verdict.limit {
+        let allowed = verdict.check.allowed_interaxial_m;
         match &mut scene.head {
             // The head-tracked interaxial is the calibrated eye separation, in physical metres.
-            Some(head) => head.calibration.ipd_m = check.allowed_interaxial_m / scale,
-            None => scene.rig.set_interaxial_m(check.allowed_interaxial_m),
+            Some(head) => head.calibration.ipd_m = allowed / verdict.scale,
+            None => scene.rig.set_interaxial_m(allowed),
         }
     }
-    Some((check, format!("{}: {warning}", scene.source)))
+    Some((verdict.check, verdict.warning))
 }
 
 #[cfg(test)]

@@ -23,7 +23,7 @@ pub use calibrate::{calibrate, describe, test_pattern, CalibrateOptions, Calibra
 pub use capture::{
     render_scene, render_scene_autosaved, renderer_for, save_png_atomically, RenderOptions, WrittenCapture,
 };
-pub use comfort::apply_parallax_budget;
+pub use comfort::{apply_parallax_budget, judge_parallax_budget, BudgetVerdict};
 pub use environment::{load_environment, EnvironmentError};
 pub use export::{export, final_field, final_mesh, welded_surface, ExportSummary};
 pub use frame::{build_frame, world_lights};

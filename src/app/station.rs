@@ -765,10 +765,13 @@ impl<'s> Station<'s> {
         if self.budget.as_ref().is_some_and(|(k, _, _)| *k == key) {
             return;
         }
-        let mut judged = self.view.clone();
-        let verdict = super::comfort::apply_parallax_budget(&mut judged, self.clay_bounds);
-        let allowed = (judged.rig.interaxial_m < rig.interaxial_m).then_some(judged.rig.interaxial_m);
-        let warning = verdict.map(|(_, w)| w);
+        let verdict = super::comfort::judge_parallax_budget(&self.view, self.clay_bounds);
+        // Limit mode narrows the rig's eyes; a head-tracked view keeps the viewer's own.
+        let allowed = verdict
+            .as_ref()
+            .filter(|v| v.limit && self.scene.head.is_none())
+            .map(|v| v.check.allowed_interaxial_m);
+        let warning = verdict.map(|v| v.warning);
         if let Some(w) = &warning {
             if self.budget.as_ref().is_none_or(|(_, old, _)| old.is_none()) {
                 self.messages.push(w.clone());
