@@ -64,6 +64,13 @@ enum Command {
         /// Turn the Vulkan validation layer on (fails on any validation message).
         #[arg(long)]
         validation: bool,
+        /// Sculpt in an OpenXR headset; without a loader, runtime or headset, says which is
+        /// missing and opens the desktop stereo station instead.
+        #[arg(long)]
+        xr: bool,
+        /// In the headset, the left hand holds the tool (the right one grabs).
+        #[arg(long, requires = "xr")]
+        left_handed: bool,
     },
     /// Plays a scene's timeline offscreen and writes every capture as NAME-left.png and
     /// NAME-right.png.
@@ -226,7 +233,7 @@ fn main() -> ExitCode {
         .init();
     let cli = Cli::parse();
     let result = match cli.command {
-        None => station(None, app::StationOptions::default()),
+        None => station(None, None, app::StationOptions::default()),
         Some(Command::Run {
             scene,
             frames,
@@ -239,8 +246,11 @@ fn main() -> ExitCode {
             opentrack,
             calibration,
             validation,
+            xr,
+            left_handed,
         }) => station(
             scene,
+            xr.then_some(left_handed),
             app::StationOptions {
                 frames,
                 screenshot,
@@ -319,7 +329,9 @@ fn print_written(written: &[app::WrittenCapture]) {
     }
 }
 
-fn station(scene_path: Option<PathBuf>, options: app::StationOptions) -> Result<()> {
+/// Runs the station: in the headset when `xr` is set (`Some(left_handed)`) and one is
+/// there, else in a window, else headless.
+fn station(scene_path: Option<PathBuf>, xr: Option<bool>, options: app::StationOptions) -> Result<()> {
     let (scene, scene_text) = match &scene_path {
         Some(p) => {
             let text = std::fs::read_to_string(p)
@@ -333,6 +345,34 @@ fn station(scene_path: Option<PathBuf>, options: app::StationOptions) -> Result<
         .and_then(|p| p.file_stem())
         .map_or("default".to_owned(), |s| s.to_string_lossy().into_owned());
     app::recover_and_report();
+    if let Some(left_handed) = xr {
+        let xr_options = app::XrRunOptions {
+            session: argile::xr::XrOptions { validation: options.validation, ..Default::default() },
+            frames: options.frames,
+            save_to: options.save_to.clone(),
+            autosave: Some(AutosaveConfig::default()),
+            scene_toml: scene_text.clone(),
+            left_handed,
+        };
+        match app::run_xr(&scene, &name, &xr_options) {
+            Ok(report) => {
+                println!(
+                    "headset session on {} closed after {} frames{}",
+                    report.runtime,
+                    report.frames,
+                    if report.depth { " (with depth)" } else { "" }
+                );
+                if let Some(p) = &report.saved {
+                    println!("saved the sculpt to {}", p.display());
+                }
+                return Ok(());
+            }
+            Err(e) => match app::xr_absent(&e) {
+                Some(absent) => println!("No headset session: {absent}. Using the desktop stereo station."),
+                None => return Err(e),
+            },
+        }
+    }
     if let Some(reason) = app::no_display_reason() {
         println!("No window can open here: {reason}. Rendering the {name} scene headless.");
         let options = RenderOptions {

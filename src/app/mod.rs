@@ -14,6 +14,7 @@ mod frame;
 mod playback;
 mod sculpt;
 mod station;
+mod xr_station;
 
 pub use crate::io::write_atomically;
 pub use autosave::{
@@ -36,6 +37,7 @@ pub use station::{
     no_display_reason, run_station, InputScript, ScriptEvent, Station, StationOptions, StationReport,
     StepTimes, SCRIPTED_STEP_S,
 };
+pub use xr_station::{run_xr, xr_absent, XrReport, XrRunOptions, XrSculptor, CONTACT_NS, TOUCH_PULSE};
 
 use crate::field::HistoryConfig;
 

@@ -121,3 +121,11 @@ pub fn convert_sculpt(
     })?;
     Ok(SavedSculpt { path: out.to_path_buf(), bricks: sculpt.field.brick_count(), bytes: bytes.len() })
 }
+
+/// Writes `field` (with its undo history) to `path` as a sculpt, atomically.
+pub(crate) fn save_field(field: &crate::field::Field, path: &Path) -> Result<()> {
+    let bytes = encode(field, None, &mut |_| {});
+    write_atomically(path, true, |w| {
+        w.write_all(&bytes).with_context(|| format!("cannot write {}", path.display()))
+    })
+}

@@ -286,7 +286,7 @@ fn clay_bounds(field: &crate::field::Field) -> crate::math::Aabb {
 
 /// The shapes the desk tool cycles through with `next-shape`, all of size `s` (their smallest
 /// half extent), and their names.
-fn shape_cycle(s: f32) -> [(ToolShape, &'static str); 5] {
+pub(super) fn shape_cycle(s: f32) -> [(ToolShape, &'static str); 5] {
     [
         (ToolShape::sphere(s), "sphere"),
         (ToolShape::Solid(Solid::Box { half_m: Vec3::splat(s) }), "box"),
@@ -300,7 +300,7 @@ fn shape_cycle(s: f32) -> [(ToolShape, &'static str); 5] {
 }
 
 /// The name of a tool shape for the HUD.
-fn shape_name(shape: &ToolShape) -> &'static str {
+pub(super) fn shape_name(shape: &ToolShape) -> &'static str {
     match shape {
         ToolShape::Solid(Solid::Sphere { .. }) => "sphere",
         ToolShape::Solid(Solid::Box { .. } | Solid::RoundedBox { .. }) => "box",
@@ -313,7 +313,7 @@ fn shape_name(shape: &ToolShape) -> &'static str {
 }
 
 /// The actions the desk tool cycles through with `next-action`.
-fn action_cycle() -> [Action; 6] {
+pub(super) fn action_cycle() -> [Action; 6] {
     [
         Action::Add,
         Action::Remove,
@@ -792,11 +792,8 @@ impl<'s> Station<'s> {
 
     /// Writes the sculpt to the save path, atomically.
     pub fn save(&mut self) -> Result<PathBuf> {
-        let bytes = crate::io::encode(self.playback.field(), None, &mut |_| {});
         let path = self.save_to.clone();
-        crate::io::write_atomically(&path, true, |w| {
-            std::io::Write::write_all(w, &bytes).with_context(|| format!("cannot write {}", path.display()))
-        })?;
+        super::sculpt::save_field(self.playback.field(), &path)?;
         self.saved = Some(path.clone());
         Ok(path)
     }

@@ -23,6 +23,8 @@
 //!   shows (offscreen, or a window's swapchain image).
 //! - `chunks`: where mesh chunks live on the GPU.
 //! - `environment`: cube map and irradiance from the scene's environment (CPU).
+//! - `xr_target`: an OpenXR runtime's swapchain images as the stereo passes' output (never
+//!   destroyed here: the runtime owns them).
 //! - `renderer`: [`Renderer`], which ties them together.
 
 mod chunks;
@@ -35,13 +37,16 @@ mod renderer;
 mod shapes;
 mod target;
 mod window;
+mod xr_target;
 
 pub use frame::*;
 pub use gpu::{choose_device, DeviceInfo, DeviceKind, ValidationLog, DEVICE_VARIABLE};
 pub use renderer::{
-    probe_devices, DeviceProbe, Renderer, RendererDesc, StereoImage, ViewPasses, VIEW_PASSES_VARIABLE,
+    probe_devices, DeviceProbe, Renderer, RendererDesc, StereoImage, ViewPasses, VulkanHandles, VulkanMaker,
+    VIEW_PASSES_VARIABLE,
 };
 pub use window::{Presented, WindowHandles};
+pub use xr_target::SwapchainImages;
 
 use ash::vk;
 

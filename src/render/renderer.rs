@@ -20,9 +20,10 @@ use super::gpu::instance::Instance;
 use super::gpu::pipeline::{DescriptorPool, Layout, Pipeline, PipelineDesc, PUSH_CONSTANT_BYTES};
 use super::gpu::swapchain::{color_range, surface_extensions, Surface, SwapchainDesc};
 use super::shapes::{full_screen_quad, icosphere, unit_box};
-use super::target::{StereoTarget, ViewPass};
+use super::target::{begin_pass, StereoTarget, ViewPass};
 pub use super::target::{ViewPasses, VIEW_PASSES_VARIABLE};
 use super::window::{to_rgba, Presented, WindowHandles, WindowOutput};
+use super::xr_target::{SwapchainImages, SwapchainTarget};
 use super::{Environment, Frame, Light, RenderError, ValidationLog, MAX_LIGHTS};
 use crate::math::Vec3;
 use crate::mesh::{MeshDiff, Vertex};
@@ -193,11 +194,60 @@ struct HudMesh {
     extent: (u32, u32),
 }
 
+/// Makes the Vulkan instance and device for a renderer that does not make its own: an OpenXR
+/// runtime does, through XR_KHR_vulkan_enable2, from the create infos Argile gives it (adding
+/// the extensions it needs). The instance and device belong to the renderer all the same,
+/// which destroys them when dropped.
+pub trait VulkanMaker {
+    /// Creates the instance from `info` with the loader's `get_instance_proc_addr`.
+    ///
+    /// # Safety
+    /// `info` must be a valid create info whose pointers live across the call, and
+    /// `get_instance_proc_addr` the loaded Vulkan loader's.
+    unsafe fn create_instance(
+        &mut self,
+        get_instance_proc_addr: vk::PFN_vkGetInstanceProcAddr,
+        info: &vk::InstanceCreateInfo<'_>,
+    ) -> Result<vk::Instance, RenderError>;
+
+    /// The physical device of `instance` to render on.
+    fn physical_device(&mut self, instance: vk::Instance) -> Result<vk::PhysicalDevice, RenderError>;
+
+    /// Creates the device on `physical` from `info`.
+    ///
+    /// # Safety
+    /// As [`VulkanMaker::create_instance`]; `physical` must come from
+    /// [`VulkanMaker::physical_device`].
+    unsafe fn create_device(
+        &mut self,
+        get_instance_proc_addr: vk::PFN_vkGetInstanceProcAddr,
+        physical: vk::PhysicalDevice,
+        info: &vk::DeviceCreateInfo<'_>,
+    ) -> Result<vk::Device, RenderError>;
+}
+
+/// The renderer's Vulkan handles, as an OpenXR session's graphics binding needs them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VulkanHandles {
+    /// The instance.
+    pub instance: vk::Instance,
+    /// The physical device.
+    pub physical_device: vk::PhysicalDevice,
+    /// The device.
+    pub device: vk::Device,
+    /// The family of the queue the renderer submits to.
+    pub queue_family: u32,
+    /// The queue's index in its family.
+    pub queue_index: u32,
+}
+
 /// The offscreen stereo renderer.
 ///
 /// Field order is drop order (after `Drop::drop` waits for the device): the composition's
 /// destination and pass, pipelines and the descriptor pool, the target, buffers, the environment, layouts, and the device last.
 pub struct Renderer {
+    /// A runtime's swapchain images the stereo passes draw into, if attached.
+    swapchain: Option<SwapchainTarget>,
     /// The window frames are presented in, if any.
     window: Option<WindowOutput>,
     /// The offscreen destination of the last composition, made for its mode and size.
@@ -246,7 +296,20 @@ impl Renderer {
         environment: &Environment,
         environment_intensity: f32,
     ) -> Result<Self, RenderError> {
-        Self::build(desc, environment, environment_intensity, None)
+        Self::build(desc, environment, environment_intensity, None, None)
+    }
+
+    /// As [`Renderer::new`], on a Vulkan instance and device that `maker` makes from Argile's
+    /// create infos (an OpenXR runtime, through XR_KHR_vulkan_enable2), on the physical device
+    /// it names. Draw into its swapchains with [`Renderer::attach_swapchains`] and
+    /// [`Renderer::draw_to_swapchain`].
+    pub fn for_external(
+        desc: &RendererDesc,
+        environment: &Environment,
+        environment_intensity: f32,
+        maker: &mut dyn VulkanMaker,
+    ) -> Result<Self, RenderError> {
+        Self::build(desc, environment, environment_intensity, None, Some(maker))
     }
 
     /// As [`Renderer::new`], for a window of `window_size` pixels that [`Renderer::present`]
@@ -259,7 +322,7 @@ impl Renderer {
         window: Arc<dyn WindowHandles>,
         window_size: (u32, u32),
     ) -> Result<Self, RenderError> {
-        Self::build(desc, environment, environment_intensity, Some((window, window_size)))
+        Self::build(desc, environment, environment_intensity, Some((window, window_size)), None)
     }
 
     fn build(
@@ -267,6 +330,7 @@ impl Renderer {
         environment: &Environment,
         environment_intensity: f32,
         window: Option<(Arc<dyn WindowHandles>, (u32, u32))>,
+        external: Option<&mut dyn VulkanMaker>,
     ) -> Result<Self, RenderError> {
         let display = match &window {
             Some((w, _)) => Some(
@@ -280,7 +344,17 @@ impl Renderer {
             Some(display) => surface_extensions(display)?,
             None => Vec::new(),
         };
-        let instance = Arc::new(Instance::new(desc.validation, &extensions)?);
+        let (instance, device_maker) = match external {
+            None => (Arc::new(Instance::new(desc.validation, &extensions)?), None),
+            Some(maker) => {
+                let instance = Instance::create_with(desc.validation, &extensions, |entry, info| {
+                    // SAFETY: `info` and what it points to live across the call; the entry's
+                    // vkGetInstanceProcAddr is the loader's own.
+                    unsafe { maker.create_instance(entry.static_fn().get_instance_proc_addr, info) }
+                })?;
+                (Arc::new(instance), Some(maker))
+            }
+        };
         let surface = match (&window, display) {
             (Some((w, _)), Some(display)) => {
                 let handle = w
@@ -293,7 +367,17 @@ impl Renderer {
             }
             _ => None,
         };
-        let device = Device::new(instance, surface.as_deref())?;
+        let device = match device_maker {
+            None => Device::new(instance, surface.as_deref())?,
+            Some(maker) => {
+                let physical = maker.physical_device(instance.raw.handle())?;
+                let get_instance_proc_addr = instance.entry.static_fn().get_instance_proc_addr;
+                Device::create_with(instance, None, Some(physical), |physical, info| {
+                    // SAFETY: as for the instance; `physical` is the one the maker named.
+                    unsafe { maker.create_device(get_instance_proc_addr, physical, info) }
+                })?
+            }
+        };
         let view_passes = match desc.view_passes {
             Some(v) => v,
             None => {
@@ -378,6 +462,7 @@ impl Renderer {
         };
 
         Ok(Self {
+            swapchain: None,
             window,
             composed: None,
             composer,
@@ -798,6 +883,100 @@ impl Renderer {
             (Some(left), Some(right)) => Ok(StereoImage { left, right }),
             _ => unreachable!("the stereo target has two layers"),
         }
+    }
+}
+
+impl Renderer {
+    /// The Vulkan handles an OpenXR session is created on.
+    pub fn vulkan_handles(&self) -> VulkanHandles {
+        VulkanHandles {
+            instance: self.device.instance.raw.handle(),
+            physical_device: self.device.physical,
+            device: self.device.raw.handle(),
+            queue_family: self
+                .device
+                .info
+                .graphics_queue_family
+                .expect("usable devices have a graphics queue"),
+            queue_index: 0,
+        }
+    }
+
+    /// The depth format the renderer draws with (a depth swapchain of this format can be
+    /// drawn into directly).
+    pub fn depth_format(&self) -> vk::Format {
+        self.target.depth.desc.format
+    }
+
+    /// The colour format of the stereo images (a colour swapchain must have it).
+    pub fn colour_format(&self) -> vk::Format {
+        self.target.output.desc.format
+    }
+
+    /// Draws from now on into a runtime's swapchains of `width` × `height` pixels per eye and
+    /// two array layers: `colour`, and `depth` where it can be the depth attachment (one
+    /// sample per pixel, the renderer's depth format). Returns whether the depth is drawn
+    /// into `depth` (and may be submitted). The images stay the runtime's.
+    pub fn attach_swapchains(
+        &mut self,
+        (width, height): (u32, u32),
+        colour: &SwapchainImages,
+        depth: Option<&SwapchainImages>,
+    ) -> Result<bool, RenderError> {
+        self.swapchain = None;
+        if (width, height) != (self.target.extent.width, self.target.extent.height) {
+            self.resize_eyes(width, height)?;
+        }
+        let masks = self.view_passes().view_masks();
+        let target = SwapchainTarget::new(&self.device, &self.target, masks, colour, depth)?;
+        let stored = target.depth_stored;
+        self.swapchain = Some(target);
+        Ok(stored)
+    }
+
+    /// Draws `frame` into colour swapchain image `colour` (and depth image `depth`, when the
+    /// depth is drawn into the swapchain) and waits for it, leaving the images in the layouts
+    /// the runtime handed them over in.
+    pub fn draw_to_swapchain(
+        &mut self,
+        frame: &Frame,
+        colour: u32,
+        depth: Option<u32>,
+    ) -> Result<(), RenderError> {
+        let Some(swapchain) = self.swapchain.as_mut() else {
+            return Err(RenderError::Unsupported("no swapchain is attached to this renderer".into()));
+        };
+        let passes = swapchain.passes(&self.target, colour, depth)?;
+        self.write_uniforms(frame);
+        self.write_hud(&frame.hud)?;
+        self.submit(
+            |cb| {
+                for (pass, pipelines) in passes.iter().zip(&self.pipelines) {
+                    begin_pass(
+                        &self.device,
+                        cb,
+                        pass,
+                        self.target.extent,
+                        frame.background.extend(1.0).to_array(),
+                    );
+                    self.record_pass(cb, pipelines, frame);
+                    // SAFETY: `cb` is inside the render pass begun above.
+                    unsafe { self.device.raw.cmd_end_render_pass(cb) };
+                }
+            },
+            None,
+            None,
+        )?;
+        self.finish()
+    }
+
+    /// Forgets the runtime's swapchain images (before their swapchain is destroyed).
+    pub fn detach_swapchains(&mut self) {
+        // SAFETY: waiting for idle makes every submission that used the images finish.
+        unsafe {
+            let _ = self.device.raw.device_wait_idle();
+        }
+        self.swapchain = None;
     }
 }
 

@@ -65,7 +65,7 @@ impl ViewPasses {
 /// One multiview render pass over the target's attachments.
 pub(crate) struct ViewPass {
     pub(crate) render_pass: vk::RenderPass,
-    framebuffer: vk::Framebuffer,
+    pub(crate) framebuffer: vk::Framebuffer,
 }
 
 /// Both eyes' attachments and the render passes. Field order is drop order: framebuffers and
@@ -75,14 +75,14 @@ pub(crate) struct StereoTarget {
     /// The single-sample image that is read back (the resolve target with MSAA).
     pub(crate) output: Image,
     /// Multisampled colour (MSAA only).
-    _msaa: Option<Image>,
-    _depth: Image,
+    pub(crate) msaa: Option<Image>,
+    pub(crate) depth: Image,
     pub(crate) extent: vk::Extent2D,
     pub(crate) samples: vk::SampleCountFlags,
     device: Arc<Device>,
 }
 
-fn depth_format(device: &Device) -> Result<vk::Format, RenderError> {
+pub(crate) fn depth_format(device: &Device) -> Result<vk::Format, RenderError> {
     [vk::Format::D32_SFLOAT, vk::Format::X8_D24_UNORM_PACK32, vk::Format::D16_UNORM]
         .into_iter()
         .find(|&f| {
@@ -153,7 +153,17 @@ impl StereoTarget {
         let mut passes: Vec<ViewPass> = Vec::new();
         for (i, &mask) in mode.view_masks().iter().enumerate() {
             let formats = (depth_format, sample_flags);
-            match create_pass(device, mask, i > 0, formats, &views, extent) {
+            let made = create_render_pass(device, mask, i > 0, formats, OutputUse::Readback).and_then(
+                |render_pass| match create_framebuffer(device, render_pass, &views, extent) {
+                    Ok(framebuffer) => Ok(ViewPass { render_pass, framebuffer }),
+                    Err(e) => {
+                        // SAFETY: nothing uses the render pass yet.
+                        unsafe { device.raw.destroy_render_pass(render_pass, None) };
+                        Err(e)
+                    }
+                },
+            );
+            match made {
                 Ok(p) => passes.push(p),
                 Err(e) => {
                     for p in passes {
@@ -170,8 +180,8 @@ impl StereoTarget {
         Ok(Self {
             passes,
             output,
-            _msaa: msaa_image,
-            _depth: depth,
+            msaa: msaa_image,
+            depth,
             extent,
             samples: sample_flags,
             device: device.clone(),
@@ -180,19 +190,31 @@ impl StereoTarget {
 
     /// Begins pass `pass`, clearing its views' colour to `clear` (linear RGBA) and depth to 1.
     pub(crate) fn begin(&self, cb: vk::CommandBuffer, pass: &ViewPass, clear: [f32; 4]) {
-        let clear_values = [
-            vk::ClearValue { color: vk::ClearColorValue { float32: clear } },
-            vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } },
-            vk::ClearValue { color: vk::ClearColorValue { float32: clear } },
-        ];
-        let info = vk::RenderPassBeginInfo::default()
-            .render_pass(pass.render_pass)
-            .framebuffer(pass.framebuffer)
-            .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent: self.extent })
-            .clear_values(&clear_values);
-        // SAFETY: `cb` is recording outside a render pass; the framebuffer matches the pass.
-        unsafe { self.device.raw.cmd_begin_render_pass(cb, &info, vk::SubpassContents::INLINE) };
+        begin_pass(&self.device, cb, pass, self.extent, clear);
     }
+}
+
+/// Begins `pass` over `extent`, clearing its views' colour to `clear` (linear RGBA) and depth
+/// to 1.
+pub(crate) fn begin_pass(
+    device: &Device,
+    cb: vk::CommandBuffer,
+    pass: &ViewPass,
+    extent: vk::Extent2D,
+    clear: [f32; 4],
+) {
+    let clear_values = [
+        vk::ClearValue { color: vk::ClearColorValue { float32: clear } },
+        vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } },
+        vk::ClearValue { color: vk::ClearColorValue { float32: clear } },
+    ];
+    let info = vk::RenderPassBeginInfo::default()
+        .render_pass(pass.render_pass)
+        .framebuffer(pass.framebuffer)
+        .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
+        .clear_values(&clear_values);
+    // SAFETY: `cb` is recording outside a render pass; the framebuffer matches the pass.
+    unsafe { device.raw.cmd_begin_render_pass(cb, &info, vk::SubpassContents::INLINE) };
 }
 
 impl Drop for StereoTarget {
@@ -220,20 +242,42 @@ pub(crate) fn colour_to_transfer() -> vk::SubpassDependency {
         .dst_access_mask(vk::AccessFlags::TRANSFER_READ)
 }
 
-/// A render pass drawing the views in `view_mask`, and its framebuffer over `views` (drawn
-/// colour, depth, and with MSAA the resolve target). A pass that `follows` another keeps the
-/// output image's other layer: its output starts in the layout the previous pass left it in.
-fn create_pass(
+/// What the output image of the passes is for, which sets its layouts around them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum OutputUse {
+    /// Read back or composed: the passes leave it in `TRANSFER_SRC_OPTIMAL`.
+    Readback,
+    /// A runtime's swapchain image: handed over and left in `COLOR_ATTACHMENT_OPTIMAL`
+    /// (XR_KHR_vulkan_enable2's rule). With `depth_stored`, the depth attachment is a depth
+    /// swapchain image whose values the runtime reads, so they are kept.
+    Swapchain {
+        /// The depth attachment's values are stored for the runtime.
+        depth_stored: bool,
+    },
+}
+
+/// A render pass drawing the views in `view_mask` into (drawn colour, depth, and with MSAA
+/// the resolve target). A pass that `follows` another keeps the output image's other layer:
+/// its output starts in the layout the previous pass left it in.
+pub(crate) fn create_render_pass(
     device: &Device,
     view_mask: u32,
     follows: bool,
     (depth_format, sample_flags): (vk::Format, vk::SampleCountFlags),
-    views: &[vk::ImageView],
-    extent: vk::Extent2D,
-) -> Result<ViewPass, RenderError> {
+    output: OutputUse,
+) -> Result<vk::RenderPass, RenderError> {
     let msaa = sample_flags != vk::SampleCountFlags::TYPE_1;
-    let output_initial =
-        if follows { vk::ImageLayout::TRANSFER_SRC_OPTIMAL } else { vk::ImageLayout::UNDEFINED };
+    let output_final = match output {
+        OutputUse::Readback => vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        OutputUse::Swapchain { .. } => vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+    };
+    let depth_stored = matches!(output, OutputUse::Swapchain { depth_stored: true });
+    let output_initial = if follows { output_final } else { vk::ImageLayout::UNDEFINED };
+    let depth_initial = if follows && depth_stored {
+        vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL
+    } else {
+        vk::ImageLayout::UNDEFINED
+    };
     // Attachment 0: what the pass draws into (MSAA colour, or the output itself);
     // attachment 1: depth; attachment 2 (MSAA only): the resolve into the output.
     // The output ends in TRANSFER_SRC_OPTIMAL, ready to be read back. Load and store ops
@@ -246,19 +290,15 @@ fn create_pass(
         .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
         .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
         .initial_layout(if msaa { vk::ImageLayout::UNDEFINED } else { output_initial })
-        .final_layout(if msaa {
-            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL
-        } else {
-            vk::ImageLayout::TRANSFER_SRC_OPTIMAL
-        });
+        .final_layout(if msaa { vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL } else { output_final });
     let depth_attachment = vk::AttachmentDescription::default()
         .format(depth_format)
         .samples(sample_flags)
         .load_op(vk::AttachmentLoadOp::CLEAR)
-        .store_op(vk::AttachmentStoreOp::DONT_CARE)
+        .store_op(if depth_stored { vk::AttachmentStoreOp::STORE } else { vk::AttachmentStoreOp::DONT_CARE })
         .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
         .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
-        .initial_layout(vk::ImageLayout::UNDEFINED)
+        .initial_layout(depth_initial)
         .final_layout(vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL);
     let resolve = vk::AttachmentDescription::default()
         .format(COLOUR_FORMAT)
@@ -268,7 +308,7 @@ fn create_pass(
         .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
         .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
         .initial_layout(output_initial)
-        .final_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL);
+        .final_layout(output_final);
     let mut attachments = vec![drawn, depth_attachment];
     if msaa {
         attachments.push(resolve);
@@ -315,10 +355,18 @@ fn create_pass(
         .subpasses(&subpasses)
         .dependencies(&dependencies)
         .push_next(&mut multiview);
-    let d = &device.raw;
     // SAFETY: every array the create info points to lives across the call.
-    let render_pass =
-        unsafe { d.create_render_pass(&info, None) }.map_err(RenderError::vk("vkCreateRenderPass"))?;
+    unsafe { device.raw.create_render_pass(&info, None) }.map_err(RenderError::vk("vkCreateRenderPass"))
+}
+
+/// The framebuffer of `render_pass` over `views` (drawn colour, depth, and with MSAA the
+/// resolve target).
+pub(crate) fn create_framebuffer(
+    device: &Device,
+    render_pass: vk::RenderPass,
+    views: &[vk::ImageView],
+    extent: vk::Extent2D,
+) -> Result<vk::Framebuffer, RenderError> {
     // With multiview the framebuffer has one layer; the views address both layers.
     let fb_info = vk::FramebufferCreateInfo::default()
         .render_pass(render_pass)
@@ -327,15 +375,7 @@ fn create_pass(
         .height(extent.height)
         .layers(1);
     // SAFETY: the views are live 2-layer views matching the render pass's attachments.
-    let framebuffer = match unsafe { d.create_framebuffer(&fb_info, None) } {
-        Ok(f) => f,
-        Err(e) => {
-            // SAFETY: nothing uses the render pass yet.
-            unsafe { d.destroy_render_pass(render_pass, None) };
-            return Err(RenderError::vk("vkCreateFramebuffer")(e));
-        }
-    };
-    Ok(ViewPass { render_pass, framebuffer })
+    unsafe { device.raw.create_framebuffer(&fb_info, None) }.map_err(RenderError::vk("vkCreateFramebuffer"))
 }
 
 #[cfg(test)]

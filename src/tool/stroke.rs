@@ -85,6 +85,12 @@ impl Stroke {
         &self.tool
     }
 
+    /// Changes the tool mid-stroke (a controller's trigger pressure changes a soft action's
+    /// rate); the path and the time not yet applied carry on.
+    pub fn set_tool(&mut self, tool: Tool) {
+        self.tool = tool;
+    }
+
     /// Stamps (or ticks) applied so far.
     pub fn stamp_count(&self) -> usize {
         self.stamps

@@ -1,8 +1,110 @@
-//! OpenXR: for now, what the station learns about the OpenXR loader and runtime.
+//! OpenXR: the headset session, its state machine, the reference space, the two-hand action
+//! set, haptics, and what the station learns about the OpenXR loader and runtime.
 //!
 //! The Khronos loader is loaded at run time (`libopenxr_loader.so.1`, Debian/Ubuntu package
 //! `libopenxr-loader1`), so Argile runs where there is none. Debian's loader (1.0.20) speaks
-//! API 1.0 only, so instances ask for 1.0. Knows nothing of the field or meshes.
+//! API 1.0 only, so instances ask for 1.0. The runtime makes the renderer's Vulkan instance
+//! and device (XR_KHR_vulkan_enable2); both eyes are drawn in one multiview pass into the
+//! runtime's 2-layer swapchain images, which stay the runtime's.
+//!
+//! Knows nothing of the field, meshes, tools or clay: the caller's step gets the hands and
+//! returns the frame to draw (see [`XrStation::turn`]).
+//!
+//! - `lifecycle`: the session states and what each asks of Argile (pure).
+//! - `views`: the runtime's views as the renderer's eye cameras (pure).
+//! - `grab`: where the sculpture is in the room and how one or two grips move it (pure).
+//! - `actions`: the action set, bindings per controller, haptics.
+//! - `session`: the instance, system, renderer, session, swapchains and frame loop.
+
+mod actions;
+mod grab;
+mod lifecycle;
+mod session;
+mod views;
+
+pub use actions::{Bindings, HandState, Haptic, PROFILES};
+pub use grab::{one_hand_grab, two_hand_grab, Placement, SCALE_RANGE};
+pub use lifecycle::{Command, Lifecycle, SessionState};
+pub use session::{FrameInput, FrameOutput, FrameTimes, Turn, XrOptions, XrStation};
+pub use views::{eye_view, recentred, stereo_views, Fov, XrView, FAR_M, NEAR_M, WORK_POINT_M};
+
+/// The environment variable naming the OpenXR loader library to use instead of the system's.
+pub const LOADER_VARIABLE: &str = "ARGILE_XR_LOADER";
+
+/// Why a headset session could not start or went wrong. The first four are "no headset
+/// here" cases, after which the station falls back to the desktop stereo modes.
+#[derive(Debug, thiserror::Error)]
+pub enum XrError {
+    /// No loader library could be opened.
+    #[error("no OpenXR loader ({0}); install the package libopenxr-loader1 to use a headset")]
+    NoLoader(String),
+    /// The loader is there but no runtime answered.
+    #[error(
+        "OpenXR loader present, but no runtime is active ({0}); install and start an OpenXR runtime \
+         (for example Monado) or point XR_RUNTIME_JSON at its manifest"
+    )]
+    NoRuntime(String),
+    /// The runtime cannot make Vulkan instances and devices.
+    #[error(
+        "the OpenXR runtime {runtime} does not offer XR_KHR_vulkan_enable2, so Argile cannot render to it"
+    )]
+    NoVulkan {
+        /// The runtime's name and version.
+        runtime: String,
+    },
+    /// The runtime has no head-mounted display.
+    #[error("the OpenXR runtime {runtime} finds no headset ({reason}); connect and switch on a headset")]
+    NoHeadset {
+        /// The runtime's name and version.
+        runtime: String,
+        /// Its answer.
+        reason: String,
+    },
+    /// The runtime or headset lacks something Argile needs.
+    #[error("{0}")]
+    Unsupported(String),
+    /// An OpenXR call failed.
+    #[error("the OpenXR call {call} failed: {result}")]
+    Call {
+        /// The call.
+        call: &'static str,
+        /// What it returned.
+        result: String,
+    },
+    /// Rendering failed.
+    #[error(transparent)]
+    Render(#[from] crate::render::RenderError),
+}
+
+impl XrError {
+    /// Whether this means "no headset here" (no loader, runtime, Vulkan support or headset),
+    /// after which the station uses the desktop stereo modes.
+    pub fn is_absent(&self) -> bool {
+        matches!(
+            self,
+            XrError::NoLoader(_)
+                | XrError::NoRuntime(_)
+                | XrError::NoVulkan { .. }
+                | XrError::NoHeadset { .. }
+        )
+    }
+}
+
+/// The loader at `path` (else `ARGILE_XR_LOADER`, else the system's), or why none loads.
+pub fn load_entry(path: Option<&std::path::Path>) -> Result<openxr::Entry, XrError> {
+    let from_env = std::env::var_os(LOADER_VARIABLE).map(std::path::PathBuf::from);
+    session::load_from(path.or(from_env.as_deref())).map_err(XrError::NoLoader)
+}
+
+fn app_info() -> openxr::ApplicationInfo<'static> {
+    openxr::ApplicationInfo {
+        application_name: "argile",
+        application_version: 1,
+        engine_name: "argile",
+        engine_version: 1,
+        api_version: openxr::Version::new(1, 0, 0),
+    }
+}
 
 /// What was found of OpenXR on this machine.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -58,9 +160,7 @@ impl std::fmt::Display for XrState {
 
 /// Looks for the OpenXR loader, a runtime and a headset, without creating a session.
 pub fn probe() -> XrState {
-    // SAFETY: loading the system's OpenXR loader runs its initialisers; the library named by
-    // the OpenXR loader specification is trusted to conform to it, as for any OpenXR app.
-    let entry = match unsafe { openxr::Entry::load() } {
+    let entry = match load_entry(None) {
         Ok(entry) => entry,
         Err(e) => return XrState::NoLoader { reason: e.to_string() },
     };
@@ -68,14 +168,7 @@ pub fn probe() -> XrState {
         Ok(x) => x,
         Err(e) => return XrState::NoRuntime { reason: e.to_string() },
     };
-    let app = openxr::ApplicationInfo {
-        application_name: "argile",
-        application_version: 1,
-        engine_name: "argile",
-        engine_version: 1,
-        api_version: openxr::Version::new(1, 0, 0),
-    };
-    let instance = match entry.create_instance(&app, &openxr::ExtensionSet::default(), &[]) {
+    let instance = match entry.create_instance(&app_info(), &openxr::ExtensionSet::default(), &[]) {
         Ok(i) => i,
         Err(e) => return XrState::NoRuntime { reason: e.to_string() },
     };
@@ -109,6 +202,25 @@ mod tests {
         }
         .to_string();
         assert!(s.contains("Monado") && s.contains("no headset"));
+    }
+
+    #[test]
+    fn a_loader_that_does_not_load_says_which_package_to_install() {
+        let missing = std::path::Path::new("no-such-dir/libopenxr_loader.so.1");
+        let Err(e) = load_entry(Some(missing)) else { panic!("a loader loaded from {}", missing.display()) };
+        assert!(e.is_absent());
+        let s = e.to_string();
+        assert!(s.starts_with("no OpenXR loader (") && s.contains("libopenxr-loader1"), "{s}");
+        assert!(s.contains("no-such-dir"), "the loader's own error names the file: {s}");
+        // The other "absent" cases read as one sentence each and name the runtime.
+        let v = XrError::NoVulkan { runtime: "Test 1.0".into() }.to_string();
+        assert!(v.contains("Test 1.0") && v.contains("XR_KHR_vulkan_enable2"), "{v}");
+        let h = XrError::NoHeadset {
+            runtime: "Test 1.0".into(),
+            reason: "XR_ERROR_FORM_FACTOR_UNAVAILABLE".into(),
+        };
+        assert!(h.is_absent() && h.to_string().contains("no headset"));
+        assert!(!XrError::Unsupported("x".into()).is_absent());
     }
 
     #[test]

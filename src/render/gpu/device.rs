@@ -219,11 +219,53 @@ impl Device {
     /// Picks a device (see [`choose_device`]) and creates it with multiview enabled; with a
     /// `surface`, its graphics queue must present to it and the swapchain extension is on.
     pub(crate) fn new(instance: Arc<Instance>, surface: Option<&Surface>) -> Result<Arc<Self>, RenderError> {
+        let raw_instance = instance.raw.clone();
+        Self::create_with(instance, surface, None, |physical, create| {
+            // SAFETY: `physical` belongs to the instance; `create` and what it points to
+            // outlive the call.
+            unsafe { raw_instance.create_device(physical, create, None) }
+                .map(|d| d.handle())
+                .map_err(RenderError::vk("vkCreateDevice"))
+        })
+    }
+
+    /// As [`Device::new`], on `physical` when given (an OpenXR runtime names the device its
+    /// headset is on), with the device made by `create_device` from Argile's create info (a
+    /// runtime makes it through `xrCreateVulkanDeviceKHR`). The device belongs to this value
+    /// all the same: `Drop` destroys it.
+    pub(crate) fn create_with(
+        instance: Arc<Instance>,
+        surface: Option<&Surface>,
+        physical: Option<vk::PhysicalDevice>,
+        create_device: impl FnOnce(
+            vk::PhysicalDevice,
+            &vk::DeviceCreateInfo<'_>,
+        ) -> Result<vk::Device, RenderError>,
+    ) -> Result<Arc<Self>, RenderError> {
         let devices = enumerate(&instance.raw)?;
-        let infos: Vec<DeviceInfo> = devices.iter().map(|(_, i)| i.clone()).collect();
-        let wanted = std::env::var(DEVICE_VARIABLE).ok();
-        let (index, why) = choose_device(&infos, wanted.as_deref()).map_err(RenderError::NoDevice)?;
-        let (physical, info) = devices[index].clone();
+        let (physical, info, why) = match physical {
+            Some(wanted) => {
+                let Some((pd, info)) = devices.iter().find(|(pd, _)| *pd == wanted).cloned() else {
+                    return Err(RenderError::NoDevice(
+                        "the OpenXR runtime named a Vulkan device this instance does not list".into(),
+                    ));
+                };
+                if let Some(why) = info.unusable_because() {
+                    return Err(RenderError::NoDevice(format!(
+                        "the headset's Vulkan device {} cannot run Argile: {why}",
+                        info.name
+                    )));
+                }
+                (pd, info, "the OpenXR runtime renders the headset on it".to_owned())
+            }
+            None => {
+                let infos: Vec<DeviceInfo> = devices.iter().map(|(_, i)| i.clone()).collect();
+                let wanted = std::env::var(DEVICE_VARIABLE).ok();
+                let (index, why) = choose_device(&infos, wanted.as_deref()).map_err(RenderError::NoDevice)?;
+                let (pd, info) = devices[index].clone();
+                (pd, info, why)
+            }
+        };
         tracing::info!(
             "Vulkan device: {} ({}, Vulkan {}), chosen because {why}",
             info.name,
@@ -250,9 +292,9 @@ impl Device {
             .queue_create_infos(&queue_info)
             .enabled_extension_names(&extensions)
             .push_next(&mut multiview);
-        // SAFETY: `physical` belongs to `instance`; `create` and what it points to outlive the call.
-        let raw = unsafe { instance.raw.create_device(physical, &create, None) }
-            .map_err(RenderError::vk("vkCreateDevice"))?;
+        let handle = create_device(physical, &create)?;
+        // SAFETY: `handle` is a live device just created on `physical` of this instance.
+        let raw = unsafe { ash::Device::load(instance.raw.fp_v1_0(), handle) };
         // SAFETY: the queue family and index were requested above.
         let queue = unsafe { raw.get_device_queue(family, 0) };
         let pool_info = vk::CommandPoolCreateInfo::default()

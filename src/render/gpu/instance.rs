@@ -59,6 +59,25 @@ impl Instance {
         validation: bool,
         window_extensions: &[*const std::ffi::c_char],
     ) -> Result<Self, RenderError> {
+        Self::create_with(validation, window_extensions, |entry, create| {
+            // SAFETY: every pointer in `create` refers to data that lives across the call.
+            unsafe { entry.create_instance(create, None) }
+                .map(|i| i.handle())
+                .map_err(RenderError::vk("vkCreateInstance"))
+        })
+    }
+
+    /// As [`Instance::new`], with the instance made by `create` from Argile's create info
+    /// (an OpenXR runtime makes it through `xrCreateVulkanInstanceKHR`, adding what it needs).
+    /// The instance belongs to this value all the same: `Drop` destroys it.
+    pub(crate) fn create_with(
+        validation: bool,
+        window_extensions: &[*const std::ffi::c_char],
+        create_instance: impl FnOnce(
+            &ash::Entry,
+            &vk::InstanceCreateInfo<'_>,
+        ) -> Result<vk::Instance, RenderError>,
+    ) -> Result<Self, RenderError> {
         let entry = load_entry()?;
         // SAFETY: a plain query on a loaded entry.
         let version = unsafe { entry.try_enumerate_instance_version() }
@@ -113,11 +132,11 @@ impl Instance {
             // Also reports problems in vkCreateInstance/vkDestroyInstance themselves.
             create = create.push_next(&mut messenger_info);
         }
-        // SAFETY: every pointer in `create` refers to locals that live across the call; the
-        // user-data pointer refers to the shared log, which the instance keeps until after the
-        // messenger and the instance are destroyed.
-        let raw =
-            unsafe { entry.create_instance(&create, None) }.map_err(RenderError::vk("vkCreateInstance"))?;
+        // The user-data pointer refers to the shared log, which the instance keeps until after
+        // the messenger and the instance are destroyed.
+        let handle = create_instance(&entry, &create)?;
+        // SAFETY: `handle` is a live instance just created from this entry's loader.
+        let raw = unsafe { ash::Instance::load(entry.static_fn(), handle) };
         let debug = if validation {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &raw);
             // SAFETY: as above; the messenger is destroyed in Drop before the instance.

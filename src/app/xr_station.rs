@@ -1,0 +1,419 @@
+//! The station in a headset: the scene's clay floats in the room, the dominant hand's
+//! controller holds the tool, the other hand grabs the sculpture; both grips turn, move and
+//! scale it about the hands' midpoint.
+//!
+//! Each frame the headset session ([`XrStation::turn`]) hands over the hands, and
+//! [`XrSculptor::step`] runs the stages of the data flow: controls (buttons, thumbstick,
+//! grips) → tools (the scene's scripted hands, the dominant hand's stroke) → field →
+//! incremental mesh → the frame to draw, with haptic pulses where the tool meets the clay.
+//!
+//! Controls (right-handed; mirrored in left-handed mode):
+//! - right trigger: apply the tool (its pressure sets the rate of soft actions);
+//! - right thumbstick up/down: tool size; left/right flick: next shape; click: next action;
+//! - A / B (X / Y on the left hand): undo / redo;
+//! - left squeeze: grab the sculpture; both squeezes: turn, move and scale it;
+//! - left menu: recentre the sculpture in front of the head.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+
+use super::frame::build_frame;
+use super::playback::Playback;
+use super::station::{action_cycle, shape_cycle, shape_name};
+use crate::field::FieldReader;
+use crate::io::autosave::AutosaveConfig;
+use crate::math::{Mat4, Pose, Vec3, Vec4};
+use crate::mesh::remesh_dirty;
+use crate::render::{Renderer, ToolGlyph};
+use crate::scene::{Hand, Scene};
+use crate::tool::{Action, Stroke, Tool, ToolShape};
+use crate::xr::{
+    one_hand_grab, recentred, two_hand_grab, FrameInput, FrameOutput, HandState, Haptic, Placement, Turn,
+    XrError, XrOptions, XrStation,
+};
+
+/// Trigger travel below which the tool is not applied.
+const TRIGGER_ON: f32 = 0.1;
+/// Squeeze travel from which a hand grabs.
+const SQUEEZE_ON: f32 = 0.5;
+/// Thumbstick deflection that counts as a flick (next shape).
+const FLICK: f32 = 0.8;
+/// How fast a full thumbstick deflection resizes the tool: factor per second.
+const RESIZE_PER_S: f32 = 2.0;
+/// The short pulse when the tool starts touching the clay.
+pub const TOUCH_PULSE: (f32, i64) = (0.8, 20_000_000);
+/// Duration of each contact vibration while sculpting (renewed every frame), nanoseconds.
+pub const CONTACT_NS: i64 = 30_000_000;
+/// Density under the tool from which it touches the clay.
+const TOUCH_DENSITY: f32 = 0.5;
+
+/// How a headset run goes.
+#[derive(Clone, Debug, Default)]
+pub struct XrRunOptions {
+    /// The session's options (validation, samples, loader).
+    pub session: XrOptions,
+    /// Ask to quit after this many drawn frames (scripted runs, tests).
+    pub frames: Option<u64>,
+    /// Where the sculpt is saved (when the session ends, is lost, or the runtime quits).
+    pub save_to: Option<PathBuf>,
+    /// Journal strokes for crash recovery.
+    pub autosave: Option<AutosaveConfig>,
+    /// The scene file's text, for the recovery journal.
+    pub scene_toml: Option<String>,
+    /// The dominant hand is the left one.
+    pub left_handed: bool,
+}
+
+/// What a headset run did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct XrReport {
+    /// The runtime's name and version.
+    pub runtime: String,
+    /// Frames drawn.
+    pub frames: u64,
+    /// Sessions lost and made again.
+    pub recreated: u32,
+    /// Where the sculpt was saved, if it was.
+    pub saved: Option<PathBuf>,
+    /// Whether depth was submitted with the projection layer.
+    pub depth: bool,
+    /// Per drawn frame: (before the step, simulation, meshing, render submission), ms.
+    pub stage_ms: Vec<[f64; 4]>,
+}
+
+/// A grab of the sculpture in progress: the placement and the hands when it began.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Grab {
+    One { hand: usize, start: Placement, hand_start: Pose },
+    Two { start: Placement, hands_start: (Vec3, Vec3) },
+}
+
+/// The headset station's state between frames, without the session and renderer.
+#[derive(Debug)]
+pub struct XrSculptor<'s> {
+    scene: &'s Scene,
+    playback: Playback<'s>,
+    placement: Placement,
+    /// Index of the dominant hand in `[left, right]`.
+    dominant: usize,
+    tool: Tool,
+    action_index: usize,
+    stroke: Option<Stroke>,
+    grab: Option<Grab>,
+    previous: [HandState; 2],
+    /// The tool touched the clay last frame.
+    touching: bool,
+    /// The scene's clock, seconds.
+    time_s: f32,
+    save_to: PathBuf,
+    saved: Option<PathBuf>,
+    /// Time spent in the last step: tools and simulation, meshing (ms).
+    times: (f64, f64),
+    /// Messages for the user.
+    pub messages: Vec<String>,
+}
+
+impl<'s> XrSculptor<'s> {
+    /// The scene at time 0, shown at the work point in front of the viewer.
+    pub fn new(scene: &'s Scene, playback: Playback<'s>, save_to: PathBuf, left_handed: bool) -> Self {
+        let tool = playback
+            .tools()
+            .iter()
+            .find(|t| !t.action.is_clay_body())
+            .cloned()
+            .unwrap_or_else(|| Tool::new(ToolShape::sphere(0.01), Action::Add, [0.8, 0.5, 0.35, 1.0]));
+        let action_index = action_cycle().iter().position(|a| *a == tool.action).unwrap_or(0);
+        Self {
+            scene,
+            playback,
+            placement: recentred(scene.rig.target_m, None),
+            dominant: if left_handed { 0 } else { 1 },
+            tool,
+            action_index,
+            stroke: None,
+            grab: None,
+            previous: Default::default(),
+            touching: false,
+            time_s: 0.0,
+            save_to,
+            saved: None,
+            times: (0.0, 0.0),
+            messages: Vec::new(),
+        }
+    }
+
+    /// The clay.
+    pub fn field(&self) -> &crate::field::Field {
+        self.playback.field()
+    }
+
+    /// Where the sculpture is in the room.
+    pub fn placement(&self) -> Placement {
+        self.placement
+    }
+
+    /// The dominant hand's tool.
+    pub fn tool(&self) -> &Tool {
+        &self.tool
+    }
+
+    /// Writes the sculpt to the save path, atomically, first closing a stroke in progress.
+    pub fn save(&mut self) -> Result<PathBuf> {
+        if self.stroke.take().is_some() {
+            self.playback.field_mut().end_stroke();
+            self.playback.journal();
+        }
+        let path = self.save_to.clone();
+        super::sculpt::save_field(self.playback.field(), &path)?;
+        self.saved = Some(path.clone());
+        Ok(path)
+    }
+
+    /// The dominant hand's tool as it acts in the scene: its room size kept whatever the
+    /// sculpture's scale, soft actions at the rate the trigger's pressure sets.
+    fn acting_tool(&self, pressure: f32) -> Tool {
+        let mut tool = self.tool.clone();
+        tool.scale /= self.placement.scale;
+        tool.action = match tool.action {
+            Action::Build { rate_per_s } => Action::Build { rate_per_s: rate_per_s * pressure },
+            Action::SoftRemove { rate_per_s } => Action::SoftRemove { rate_per_s: rate_per_s * pressure },
+            Action::SoftPaint { rate_per_s } => Action::SoftPaint { rate_per_s: rate_per_s * pressure },
+            Action::Smooth { centre_weight, rate_per_s } => {
+                Action::Smooth { centre_weight, rate_per_s: rate_per_s * pressure }
+            }
+            other => other,
+        };
+        tool
+    }
+
+    /// Buttons and thumbstick of the dominant hand; menu of the other.
+    fn controls(&mut self, input: &FrameInput, dt_s: f32) {
+        let (d, o) = (self.dominant, 1 - self.dominant);
+        let (now, before) = (input.hands[d], self.previous[d]);
+        let field = self.playback.field_mut();
+        if now.primary && !before.primary {
+            self.stroke = None;
+            match field.undo() {
+                Ok(true) => self.playback.journal(),
+                Ok(false) => self.messages.push("nothing to undo".into()),
+                Err(e) => self.messages.push(format!("undo failed: {e}")),
+            }
+        } else if now.secondary && !before.secondary {
+            self.stroke = None;
+            if field.redo() {
+                self.playback.journal();
+            } else {
+                self.messages.push("nothing to redo".into());
+            }
+        }
+        let y = now.thumbstick.y;
+        if y.abs() > 0.2 {
+            self.tool.scale *= RESIZE_PER_S.powf(y * dt_s);
+        }
+        let flick = |x: f32| {
+            if x > FLICK {
+                1
+            } else if x < -FLICK {
+                -1
+            } else {
+                0
+            }
+        };
+        if flick(now.thumbstick.x) != 0 && flick(before.thumbstick.x) == 0 {
+            let size = self.tool.shape.half_extents_m().min_element();
+            let cycle = shape_cycle(size);
+            let at = cycle.iter().position(|(_, n)| *n == shape_name(&self.tool.shape)).unwrap_or(0);
+            let step = if flick(now.thumbstick.x) > 0 { 1 } else { cycle.len() - 1 };
+            self.tool.shape = cycle[(at + step) % cycle.len()].0.clone();
+        }
+        if now.thumbstick_click && !before.thumbstick_click {
+            let cycle = action_cycle();
+            self.action_index = (self.action_index + 1) % cycle.len();
+            self.tool.action = cycle[self.action_index];
+        }
+        if input.hands[o].menu && !self.previous[o].menu {
+            self.placement = recentred(self.scene.rig.target_m, input.head);
+        }
+    }
+
+    /// Grips: one hand drags and turns the sculpture, two also scale it.
+    fn grabs(&mut self, hands: &[HandState; 2]) {
+        let gripping: Vec<(usize, Pose)> = (0..2)
+            .filter_map(|i| hands[i].grip.filter(|_| hands[i].squeeze >= SQUEEZE_ON).map(|p| (i, p)))
+            .collect();
+        self.grab = match (gripping.as_slice(), self.grab) {
+            ([(_, a), (_, b)], Some(Grab::Two { start, hands_start })) => {
+                self.placement = two_hand_grab(&start, hands_start, (a.position_m, b.position_m));
+                self.grab
+            }
+            ([(_, a), (_, b)], _) => {
+                Some(Grab::Two { start: self.placement, hands_start: (a.position_m, b.position_m) })
+            }
+            ([(i, p)], Some(Grab::One { hand, start, hand_start })) if *i == hand => {
+                self.placement = one_hand_grab(&start, hand_start, *p);
+                self.grab
+            }
+            ([(i, p)], _) => Some(Grab::One { hand: *i, start: self.placement, hand_start: *p }),
+            _ => None,
+        };
+    }
+
+    /// Runs one headset frame: controls, grabs, the scene's timeline and the dominant hand's
+    /// stroke, meshing into `renderer`; returns the frame to draw and the haptic pulses.
+    pub fn step(&mut self, input: &FrameInput, renderer: &mut Renderer) -> FrameOutput {
+        let started = std::time::Instant::now();
+        let dt_s = input.period_s.clamp(1e-4, 0.1);
+        self.controls(input, dt_s);
+        self.grabs(&input.hands);
+        self.time_s += dt_s;
+        self.playback.advance_to(self.time_s, |_| {});
+
+        let hand = input.hands[self.dominant];
+        let tool_pose = hand.grip.map(|g| self.placement.pose_to_world(g));
+        let applying = hand.trigger >= TRIGGER_ON && tool_pose.is_some() && self.grab.is_none();
+        let tool = self.acting_tool(hand.trigger.clamp(0.0, 1.0));
+        let mut haptics = Vec::new();
+        let side = if self.dominant == 0 { Hand::Left } else { Hand::Right };
+        if let Some(pose) = tool_pose {
+            let field = self.playback.field();
+            let density =
+                FieldReader::new(field).density_at(field.transform().world_to_index(pose.position_m));
+            let touching = density >= TOUCH_DENSITY;
+            if touching && !self.touching {
+                haptics.push(Haptic { hand: side, amplitude: TOUCH_PULSE.0, duration_ns: TOUCH_PULSE.1 });
+            } else if touching && applying {
+                // While sculpting, the vibration follows the contact: the density under the tool.
+                haptics.push(Haptic {
+                    hand: side,
+                    amplitude: density.clamp(0.0, 1.0),
+                    duration_ns: CONTACT_NS,
+                });
+            }
+            self.touching = touching;
+        } else {
+            self.touching = false;
+        }
+        let field = self.playback.field_mut();
+        match (applying, tool_pose) {
+            (true, Some(pose)) => {
+                if self.stroke.is_none() {
+                    field.begin_stroke();
+                    let mut s = Stroke::new(tool.clone());
+                    s.advance(field, pose, 0.0);
+                    self.stroke = Some(s);
+                }
+                if let Some(s) = &mut self.stroke {
+                    s.set_tool(tool.clone());
+                    s.advance(field, pose, dt_s);
+                }
+            }
+            _ => {
+                if self.stroke.take().is_some() {
+                    field.end_stroke();
+                    self.playback.journal();
+                }
+            }
+        }
+        let tools_ms = started.elapsed().as_secs_f64() * 1e3;
+        let meshing = std::time::Instant::now();
+        let diff = remesh_dirty(self.playback.field_mut());
+        if !diff.is_empty() {
+            if let Err(e) = renderer.apply(&diff) {
+                self.messages.push(format!("cannot upload the mesh: {e}"));
+            }
+        }
+        self.times = (tools_ms, meshing.elapsed().as_secs_f64() * 1e3);
+        let mut frame = build_frame(self.scene, &self.playback.hands(), true);
+        if let Some(pose) = tool_pose {
+            frame.tools.push(ToolGlyph {
+                model: pose.to_matrix() * Mat4::from_scale(tool.half_extents_m()),
+                colour: Vec4::from(tool.colour).truncate().extend(if applying { 0.6 } else { 0.35 }),
+            });
+        }
+        self.previous = input.hands;
+        FrameOutput { frame, placement: self.placement, haptics }
+    }
+}
+
+/// Runs the station in the headset on `scene` until the runtime ends the session (or the
+/// frame count of `options` is reached). Fails with an [`XrError`] that
+/// [`XrError::is_absent`] when there is no loader, runtime, Vulkan support or headset: the
+/// caller then falls back to the desktop stereo modes.
+pub fn run_xr(scene: &Scene, scene_name: &str, options: &XrRunOptions) -> Result<XrReport> {
+    let environment = super::environment::load_environment(&scene.environment.choice)?;
+    let mut station = XrStation::start(&options.session, &environment, scene.environment.intensity)?;
+    let save_to = options.save_to.clone().unwrap_or_else(|| PathBuf::from(format!("{scene_name}.argile")));
+    let source = scene.source.clone();
+    let playback = Playback::new_autosaved(scene, |field| {
+        options.autosave.clone().and_then(|config| {
+            super::autosave::start_autosave(field, options.scene_toml.as_deref(), &source, config)
+        })
+    });
+    let mut sculptor = XrSculptor::new(scene, playback, save_to, options.left_handed);
+    let mut report = XrReport {
+        runtime: station.runtime().to_owned(),
+        frames: 0,
+        recreated: 0,
+        saved: None,
+        depth: station.submits_depth(),
+        stage_ms: Vec::new(),
+    };
+    let mut exit_asked = false;
+    loop {
+        let turn = station.turn(|input, renderer| sculptor.step(input, renderer));
+        let turn = match turn {
+            Ok(t) => t,
+            Err(e) => {
+                // No sculpt is lost to a failing runtime: save, then report.
+                let saved = sculptor.save();
+                let e = anyhow::Error::new(e);
+                return Err(match saved {
+                    Ok(p) => e.context(format!(
+                        "the headset session failed (the sculpt is saved in {})",
+                        p.display()
+                    )),
+                    Err(s) => e.context(format!("the headset session failed, and saving failed too: {s:#}")),
+                });
+            }
+        };
+        match turn {
+            Turn::Waiting => std::thread::sleep(std::time::Duration::from_millis(5)),
+            Turn::Skipped => {}
+            Turn::Drawn => {
+                report.frames += 1;
+                let t = station.times();
+                report.stage_ms.push([t.before_ms, sculptor.times.0, sculptor.times.1, t.submit_ms]);
+                report.depth = station.submits_depth();
+                if options.frames.is_some_and(|n| report.frames >= n) && !exit_asked {
+                    exit_asked = true;
+                    station.request_exit()?;
+                }
+            }
+            Turn::Recreated => {
+                report.recreated += 1;
+                report.saved =
+                    Some(sculptor.save().context("cannot save the sculpt after the session was lost")?);
+                sculptor
+                    .messages
+                    .push("the headset session was lost and made again; the sculpt is saved".into());
+            }
+            Turn::Finished => break,
+        }
+    }
+    for m in sculptor.messages.drain(..) {
+        tracing::info!("{m}");
+    }
+    report.saved = Some(sculptor.save()?);
+    if let Some(session) = sculptor.playback.finish_autosave() {
+        session.close()?;
+    }
+    // OpenXR and then Vulkan go (XrStation's drop order) before the report is returned.
+    drop(station);
+    Ok(report)
+}
+
+/// Whether `e` says there is no headset here (no loader, runtime, Vulkan support or headset).
+pub fn xr_absent(e: &anyhow::Error) -> Option<&XrError> {
+    e.downcast_ref::<XrError>().filter(|x| x.is_absent())
+}
