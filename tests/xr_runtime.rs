@@ -864,3 +864,39 @@ fn a_lost_session_refuses_frames_until_destroyed_and_a_new_one_runs_to_exit() {
     assert!(Case::kinds(&log, "violation").is_empty(), "{:?}", Case::kinds(&log, "violation"));
     assert_eq!(Case::kinds(&log, "refused").len(), 1, "the lost session's xrWaitFrame");
 }
+
+#[test]
+fn a_runtime_without_vulkan_or_without_a_headset_says_so() {
+    let case = Case::new("no-vulkan", SCRIPT);
+    std::env::set_var("ARGILE_XR_TEST_NO_VULKAN", "1");
+    std::env::set_var("ARGILE_XR_TEST_NO_HMD", "1");
+    let exts = case.entry.enumerate_extensions().expect("extensions");
+    assert!(!exts.khr_vulkan_enable2 && exts.khr_composition_layer_depth);
+    let app = xr::ApplicationInfo {
+        application_name: "argile-xr-runtime-test",
+        application_version: 1,
+        engine_name: "argile",
+        engine_version: 1,
+        api_version: xr::Version::new(1, 0, 0),
+    };
+    let mut vulkan = xr::ExtensionSet::default();
+    vulkan.khr_vulkan_enable2 = true;
+    assert_eq!(
+        case.entry.create_instance(&app, &vulkan, &[]).err(),
+        Some(xr::sys::Result::ERROR_EXTENSION_NOT_PRESENT)
+    );
+    let instance = case
+        .entry
+        .create_instance(&app, &xr::ExtensionSet::default(), &[])
+        .expect("an instance without Vulkan");
+    assert_eq!(
+        instance.system(xr::FormFactor::HEAD_MOUNTED_DISPLAY).unwrap_err(),
+        xr::sys::Result::ERROR_FORM_FACTOR_UNAVAILABLE
+    );
+    drop(instance);
+    std::env::remove_var("ARGILE_XR_TEST_NO_VULKAN");
+    std::env::remove_var("ARGILE_XR_TEST_NO_HMD");
+    let log = case.log();
+    assert!(Case::kinds(&log, "violation").is_empty(), "{:?}", Case::kinds(&log, "violation"));
+    assert_eq!(Case::kinds(&log, "refused").len(), 1, "xrGetSystem's refusal is logged");
+}
