@@ -326,17 +326,13 @@ impl App {
         states
     }
 
-    /// One frame: wait, begin, locate the views, clear both layers, end with a projection layer
-    /// (or no layer when the runtime says not to render).
-    fn frame(&mut self, colours: &[[f32; 4]; 2]) -> xr::FrameState {
-        let state = self.waiter.wait().expect("xrWaitFrame");
-        self.stream.begin().expect("xrBeginFrame");
-        if !state.should_render {
-            self.stream
-                .end(state.predicted_display_time, xr::EnvironmentBlendMode::OPAQUE, &[])
-                .expect("xrEndFrame");
-            return state;
-        }
+    /// Clears the colour swapchain's next image (one colour per eye layer) and locates the
+    /// views for the frame; returns them with the full-image rectangle.
+    fn render_colour(
+        &mut self,
+        state: &xr::FrameState,
+        colours: &[[f32; 4]; 2],
+    ) -> (Vec<xr::View>, xr::Rect2Di) {
         let i = self.swapchain.acquire_image().expect("acquire") as usize;
         self.swapchain.wait_image(xr::Duration::INFINITE).expect("wait image");
         self.gpu.clear_layers(self.images[i], colours);
@@ -353,6 +349,21 @@ impl App {
             offset: xr::Offset2Di { x: 0, y: 0 },
             extent: xr::Extent2Di { width: self.size[0] as i32, height: self.size[1] as i32 },
         };
+        (views, rect)
+    }
+
+    /// One frame: wait, begin, locate the views, clear both layers, end with a projection layer
+    /// (or no layer when the runtime says not to render).
+    fn frame(&mut self, colours: &[[f32; 4]; 2]) -> xr::FrameState {
+        let state = self.waiter.wait().expect("xrWaitFrame");
+        self.stream.begin().expect("xrBeginFrame");
+        if !state.should_render {
+            self.stream
+                .end(state.predicted_display_time, xr::EnvironmentBlendMode::OPAQUE, &[])
+                .expect("xrEndFrame");
+            return state;
+        }
+        let (views, rect) = self.render_colour(&state, colours);
         let proj: Vec<_> = views
             .iter()
             .enumerate()
@@ -899,4 +910,173 @@ fn a_runtime_without_vulkan_or_without_a_headset_says_so() {
     let log = case.log();
     assert!(Case::kinds(&log, "violation").is_empty(), "{:?}", Case::kinds(&log, "violation"));
     assert_eq!(Case::kinds(&log, "refused").len(), 1, "xrGetSystem's refusal is logged");
+}
+
+const FOCUS_SCRIPT: &str = r#"
+recommended_size = [32, 32]
+interaction_profile = "/interaction_profiles/valve/index_controller"
+[[key]]
+frame = 0
+left = { trigger = 1.0 }
+[[event]]
+frame = 2
+kind = "focus_lost"
+[[event]]
+frame = 4
+kind = "focus_gained"
+[[event]]
+frame = 6
+kind = "instance_loss"
+"#;
+
+#[test]
+fn depth_layers_focus_changes_and_instance_loss_follow_the_script() {
+    let case = Case::new("focus", FOCUS_SCRIPT);
+    let mut app = App::new(&case);
+    let instance = app.instance.clone();
+    let fp = instance.fp();
+    let set = instance.create_action_set("tools", "Tools", 0).expect("set");
+    let select = set.create_action::<bool>("select", "Select", &[]).expect("action");
+    let p = |s: &str| instance.string_to_path(s).unwrap();
+    // Only simple-controller bindings: the Index controllers present themselves as simple ones.
+    instance
+        .suggest_interaction_profile_bindings(
+            p("/interaction_profiles/khr/simple_controller"),
+            &[xr::Binding::new(&select, p("/user/hand/left/input/select/click"))],
+        )
+        .expect("bindings");
+    app.session.attach_action_sets(&[&set]).expect("attach");
+    assert_eq!(
+        app.session.current_interaction_profile(p("/user/hand/left")).expect("profile"),
+        p("/interaction_profiles/khr/simple_controller")
+    );
+    let depth = app
+        .session
+        .create_swapchain(&xr::SwapchainCreateInfo {
+            create_flags: xr::SwapchainCreateFlags::EMPTY,
+            usage_flags: xr::SwapchainUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            format: vk::Format::D32_SFLOAT.as_raw() as u32,
+            sample_count: 1,
+            width: app.size[0],
+            height: app.size[1],
+            face_count: 1,
+            array_size: 2,
+            mip_count: 1,
+        })
+        .expect("a two-layer depth swapchain");
+    app.poll();
+    app.session.begin(xr::ViewConfigurationType::PRIMARY_STEREO).expect("begin");
+    let sync = |session: &xr::Session<xr::Vulkan>| {
+        let active = [xr::sys::ActiveActionSet { action_set: set.as_raw(), subaction_path: xr::Path::NULL }];
+        let info = xr::sys::ActionsSyncInfo {
+            ty: xr::sys::ActionsSyncInfo::TYPE,
+            next: std::ptr::null(),
+            count_active_action_sets: 1,
+            active_action_sets: active.as_ptr(),
+        };
+        // SAFETY: valid structures.
+        unsafe { (fp.sync_actions)(session.as_raw(), &info) }
+    };
+    let mut seen = Vec::new();
+    let mut synced = Vec::new();
+    for frame in 0..7 {
+        let state = app.waiter.wait().expect("wait");
+        app.stream.begin().expect("begin frame");
+        synced
+            .push((sync(&app.session), select.state(&app.session, xr::Path::NULL).expect("state").is_active));
+        let result = if state.should_render {
+            let (views, rect) = app.render_colour(&state, &[LEFT_COLOUR, RIGHT_COLOUR]);
+            let d = depth.as_raw();
+            // SAFETY: the depth images are not rendered; they stay in their layout.
+            unsafe {
+                (fp.acquire_swapchain_image)(d, std::ptr::null(), &mut 0);
+                let wait = xr::sys::SwapchainImageWaitInfo {
+                    ty: xr::sys::SwapchainImageWaitInfo::TYPE,
+                    next: std::ptr::null(),
+                    timeout: xr::Duration::INFINITE,
+                };
+                (fp.wait_swapchain_image)(d, &wait);
+                (fp.release_swapchain_image)(d, std::ptr::null());
+            }
+            let sub = |sc: xr::sys::Swapchain, eye: u32| xr::sys::SwapchainSubImage {
+                swapchain: sc,
+                image_rect: rect,
+                image_array_index: eye,
+            };
+            let depth_infos = [0, 1].map(|eye| xr::sys::CompositionLayerDepthInfoKHR {
+                ty: xr::sys::CompositionLayerDepthInfoKHR::TYPE,
+                next: std::ptr::null(),
+                sub_image: sub(depth.as_raw(), eye),
+                min_depth: 0.0,
+                max_depth: 1.0,
+                near_z: 0.05,
+                far_z: 100.0,
+            });
+            let proj = [0usize, 1].map(|eye| xr::sys::CompositionLayerProjectionView {
+                ty: xr::sys::CompositionLayerProjectionView::TYPE,
+                next: &depth_infos[eye] as *const _ as *const _,
+                pose: views[eye].pose,
+                fov: views[eye].fov,
+                sub_image: sub(app.swapchain.as_raw(), eye as u32),
+            });
+            let layer = xr::sys::CompositionLayerProjection {
+                ty: xr::sys::CompositionLayerProjection::TYPE,
+                next: std::ptr::null(),
+                layer_flags: xr::CompositionLayerFlags::EMPTY,
+                space: app.stage.as_raw(),
+                view_count: 2,
+                views: proj.as_ptr(),
+            };
+            let layers = [&layer as *const _ as *const xr::sys::CompositionLayerBaseHeader];
+            let info = xr::sys::FrameEndInfo {
+                ty: xr::sys::FrameEndInfo::TYPE,
+                next: std::ptr::null(),
+                display_time: state.predicted_display_time,
+                environment_blend_mode: xr::EnvironmentBlendMode::OPAQUE,
+                layer_count: 1,
+                layers: layers.as_ptr(),
+            };
+            // SAFETY: valid structures that live across the call.
+            unsafe { (fp.end_frame)(app.session.as_raw(), &info) }
+        } else {
+            let info = xr::sys::FrameEndInfo {
+                ty: xr::sys::FrameEndInfo::TYPE,
+                next: std::ptr::null(),
+                display_time: state.predicted_display_time,
+                environment_blend_mode: xr::EnvironmentBlendMode::OPAQUE,
+                layer_count: 0,
+                layers: std::ptr::null(),
+            };
+            // SAFETY: a valid structure.
+            unsafe { (fp.end_frame)(app.session.as_raw(), &info) }
+        };
+        assert_eq!(result, xr::sys::Result::SUCCESS, "frame {frame}");
+        let mut buffer = xr::EventDataBuffer::new();
+        while let Some(e) = instance.poll_event(&mut buffer).expect("poll") {
+            match e {
+                xr::Event::SessionStateChanged(s) => seen.push(format!("{frame}:{:?}", s.state())),
+                xr::Event::InstanceLossPending(_) => seen.push(format!("{frame}:instance loss")),
+                _ => {}
+            }
+        }
+    }
+    assert_eq!(
+        seen,
+        ["0:SYNCHRONIZED", "0:VISIBLE", "0:FOCUSED", "2:VISIBLE", "4:FOCUSED", "6:instance loss"],
+    );
+    // Actions are active only while focused (frames 1, 2, 5, 6 are synced focused).
+    let s = xr::sys::Result::SUCCESS;
+    let nf = xr::sys::Result::SESSION_NOT_FOCUSED;
+    assert_eq!(synced, [(nf, false), (s, true), (s, true), (nf, false), (nf, false), (s, true), (s, true)]);
+    // After the loss every call but the destroy calls answers XR_ERROR_INSTANCE_LOST.
+    assert_eq!(app.waiter.wait().unwrap_err(), xr::sys::Result::ERROR_INSTANCE_LOST);
+    app.gpu.assert_no_validation_messages();
+    drop((depth, select, set));
+    drop(app);
+    drop(instance);
+    let log = case.log();
+    assert!(Case::kinds(&log, "violation").is_empty(), "{:?}", Case::kinds(&log, "violation"));
+    let ends = Case::kinds(&log, "end_frame");
+    assert_eq!(ends.len(), 7);
+    assert!(ends[1..].iter().all(|e| e["depth"] == true && e["layers"] == 1));
 }

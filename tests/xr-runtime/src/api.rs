@@ -712,12 +712,9 @@ pub(crate) unsafe extern "system" fn poll_event(
             );
         }
         let buffer = output(buffer, xr::StructureType::EVENT_DATA_BUFFER, "XrEventDataBuffer")?;
-        let Some(event) = inst.events.pop_front() else {
-            if inst.lost {
-                return refuse(xr::Result::ERROR_INSTANCE_LOST, "the instance was lost; destroy it");
-            }
-            return Ok(xr::Result::EVENT_UNAVAILABLE);
-        };
+        // Polling keeps working after an instance loss, so the application is sure to see the
+        // loss event; every other call then answers XR_ERROR_INSTANCE_LOST.
+        let Some(event) = inst.events.pop_front() else { return Ok(xr::Result::EVENT_UNAVAILABLE) };
         let p = buffer as *mut xr::EventDataBuffer;
         match event {
             Event::State { session, state, time } => {
