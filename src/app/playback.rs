@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use crate::clay::{window_around, Clay, ClayParams, ClayTool};
 use crate::math::{Aabb, Vec3};
-use crate::scene::{Hand, Scene, SceneTool, SceneToolShape};
+use crate::scene::{Hand, HandState, Key, Scene, SceneTool, SceneToolShape};
 use crate::tool::{rasterize_solid, Action, Freeform, Stroke, Tool, ToolFrame};
 
 /// Lattice points of room the virtual clay's window keeps around the tools' paths and the
@@ -39,7 +39,12 @@ pub struct Playback<'s> {
     time_s: f32,
     /// Journals every stroke that ends.
     autosave: Option<Autosave>,
+    /// The hands' states given live (a headset's controllers) instead of the timeline's.
+    live: Option<[Option<HandState>; 2]>,
 }
+
+/// How far a live hand may move during one push and stay in the clay's window, metres.
+const LIVE_REACH_M: f32 = 0.08;
 
 fn slot(hand: Hand) -> usize {
     match hand {
@@ -73,6 +78,7 @@ impl<'s> Playback<'s> {
             push: None,
             time_s: 0.0,
             autosave,
+            live: None,
         };
         // Keys at time 0 with their action on stamp at once.
         playback.step_to(0.0);
@@ -99,6 +105,29 @@ impl<'s> Playback<'s> {
         self.time_s
     }
 
+    /// From now on the hands are `hands` (left, right; `None`: no tool held), as a headset's
+    /// controllers give them, instead of the timeline's keys: their tools (indices into
+    /// [`Playback::tools`]) act while `active`, pushes and supports included.
+    pub fn set_live_hands(&mut self, hands: [Option<HandState>; 2]) {
+        self.live = Some(hands);
+    }
+
+    /// What `hand` does at `t`: the live state when hands are live, else the timeline's.
+    fn state_at(&self, hand: Hand, t: f32) -> Option<HandState> {
+        match &self.live {
+            Some(live) => live[slot(hand)],
+            None => self.scene.timeline.state_at(hand, t),
+        }
+    }
+
+    /// The keys of `hand` (none when hands are live).
+    fn keys(&self, hand: Hand) -> &'s [Key] {
+        match self.live {
+            Some(_) => &[],
+            None => self.scene.timeline.keys(hand),
+        }
+    }
+
     /// Plays the timeline up to `t` in fixed steps; key times are always step boundaries, so
     /// strokes follow the keyed path exactly. Calls `progress(time)` after each step.
     pub fn advance_to(&mut self, t: f32, mut progress: impl FnMut(f32)) {
@@ -112,7 +141,7 @@ impl<'s> Playback<'s> {
     pub fn step_towards(&mut self, t: f32) -> f32 {
         let mut next = (self.time_s + self.scene.timeline.step_s()).min(t);
         for hand in Hand::BOTH {
-            if let Some(k) = self.scene.timeline.keys(hand).iter().find(|k| k.time_s > self.time_s) {
+            if let Some(k) = self.keys(hand).iter().find(|k| k.time_s > self.time_s) {
                 next = next.min(k.time_s);
             }
         }
@@ -123,11 +152,10 @@ impl<'s> Playback<'s> {
     fn step_to(&mut self, t: f32) {
         let previous = self.time_s;
         for hand in Hand::BOTH {
-            let timeline = &self.scene.timeline;
             // The interval's midpoint tells which key interval (and so which action) it is in.
-            let during = timeline.state_at(hand, 0.5 * (previous + t));
+            let during = self.state_at(hand, 0.5 * (previous + t));
             let (Some(during), Some(at_start), Some(at_end)) =
-                (during, timeline.state_at(hand, previous), timeline.state_at(hand, t))
+                (during, self.state_at(hand, previous), self.state_at(hand, t))
             else {
                 continue;
             };
@@ -197,11 +225,10 @@ impl<'s> Playback<'s> {
     /// the hands at the clay's own step rate, is written back into the field after each
     /// interval, and ends, settled, when no hand pushes any more.
     fn step_clay(&mut self, previous: f32, t: f32) {
-        let timeline = &self.scene.timeline;
         let mid = 0.5 * (previous + t);
         let acting = |hand: Hand, action: Action| {
-            timeline.state_at(hand, mid).filter(|s| {
-                (s.active || (t == previous && timeline.state_at(hand, t).is_some_and(|e| e.active)))
+            self.state_at(hand, mid).filter(|s| {
+                (s.active || (t == previous && self.state_at(hand, t).is_some_and(|e| e.active)))
                     && self.tools[s.tool].action == action
             })
         };
@@ -220,25 +247,25 @@ impl<'s> Playback<'s> {
             }
             self.push = Some(self.start_push(&pushing, previous));
         }
-        let Some(push) = self.push.as_mut() else { return };
-        let poses: Vec<Pose> = push
-            .bodies
+        let Some(bodies) = self.push.as_ref().map(|p| p.bodies.clone()) else { return };
+        let now = self.push.as_ref().map(|p| p.clay.poses()).unwrap_or_default();
+        let poses: Vec<Pose> = bodies
             .iter()
-            .zip(push.clay.poses())
-            .map(|(&(hand, _), now)| hand.and_then(|h| timeline.state_at(h, t)).map_or(now, |s| s.pose))
+            .zip(now)
+            .map(|(&(hand, _), now)| hand.and_then(|h| self.state_at(h, t)).map_or(now, |s| s.pose))
             .collect();
+        let Some(push) = self.push.as_mut() else { return };
         push.clay.advance(&poses, t - previous);
         push.clay.write_to(&mut self.field);
     }
 
     fn start_push(&self, pushing: &[(Hand, usize)], t: f32) -> Push {
         let scene = self.scene;
-        let timeline = &scene.timeline;
         let mut tools = Vec::new();
         let mut bodies = Vec::new();
         let mut reach = Vec::new();
         for hand in Hand::BOTH {
-            let Some(state) = timeline.state_at(hand, t) else { continue };
+            let Some(state) = self.state_at(hand, t) else { continue };
             let tool = &self.tools[state.tool];
             let support = match tool.action {
                 Action::Support => true,
@@ -250,8 +277,13 @@ impl<'s> Playback<'s> {
             bodies.push((Some(hand), state.tool));
             // The window holds every pose this hand's keys give the tool.
             let half = tool.half_extents_m() / tool.scale + Vec3::splat(scene.voxel_size_m * 4.0);
-            for key in timeline.keys(hand).iter().filter(|k| k.tool == state.tool) {
+            for key in self.keys(hand).iter().filter(|k| k.tool == state.tool) {
                 reach.push(ToolFrame::new(key.pose, tool.scale).world_bounds(half));
+            }
+            if self.live.is_some() {
+                // A live hand's path is unknown: room for it to move.
+                let room = half + Vec3::splat(LIVE_REACH_M) / tool.scale;
+                reach.push(ToolFrame::new(state.pose, tool.scale).world_bounds(room));
             }
             reach.push(ToolFrame::new(state.pose, tool.scale).world_bounds(half));
         }
@@ -296,11 +328,7 @@ impl<'s> Playback<'s> {
 
     /// Where each hand holds which tool now: `(tool index, pose)` for the hands with keys.
     pub fn hands(&self) -> Vec<(usize, Pose)> {
-        Hand::BOTH
-            .iter()
-            .filter_map(|&h| self.scene.timeline.state_at(h, self.time_s))
-            .map(|s| (s.tool, s.pose))
-            .collect()
+        Hand::BOTH.iter().filter_map(|&h| self.state_at(h, self.time_s)).map(|s| (s.tool, s.pose)).collect()
     }
 }
 

@@ -26,7 +26,7 @@ use crate::io::autosave::AutosaveConfig;
 use crate::math::{Mat4, Pose, Vec3, Vec4};
 use crate::mesh::remesh_dirty;
 use crate::render::{Renderer, ToolGlyph};
-use crate::scene::{Hand, Scene};
+use crate::scene::{Hand, HandState as PlaybackHand, Scene};
 use crate::tool::{Action, Stroke, Tool, ToolShape};
 use crate::xr::{
     one_hand_grab, recentred, two_hand_grab, FrameInput, FrameOutput, HandState, Haptic, Placement, Turn,
@@ -98,6 +98,11 @@ pub struct XrSculptor<'s> {
     /// Index of the dominant hand in `[left, right]`.
     dominant: usize,
     tool: Tool,
+    /// The scene tool the dominant hand's tool came from (a push tool pushes the virtual clay
+    /// through the playback).
+    tool_index: Option<usize>,
+    /// The scene's support tool, which the other hand's trigger holds against the clay.
+    support: Option<usize>,
     action_index: usize,
     stroke: Option<Stroke>,
     grab: Option<Grab>,
@@ -117,11 +122,11 @@ pub struct XrSculptor<'s> {
 impl<'s> XrSculptor<'s> {
     /// The scene at time 0, shown at the work point in front of the viewer.
     pub fn new(scene: &'s Scene, playback: Playback<'s>, save_to: PathBuf, left_handed: bool) -> Self {
-        let tool = playback
-            .tools()
-            .iter()
-            .find(|t| !t.action.is_clay_body())
-            .cloned()
+        let tools = playback.tools();
+        let tool_index = tools.iter().position(|t| t.action != Action::Support);
+        let support = tools.iter().position(|t| t.action == Action::Support);
+        let tool = tool_index
+            .map(|i| tools[i].clone())
             .unwrap_or_else(|| Tool::new(ToolShape::sphere(0.01), Action::Add, [0.8, 0.5, 0.35, 1.0]));
         let action_index = action_cycle().iter().position(|a| *a == tool.action).unwrap_or(0);
         Self {
@@ -130,6 +135,8 @@ impl<'s> XrSculptor<'s> {
             placement: recentred(scene.rig.target_m, None),
             dominant: if left_handed { 0 } else { 1 },
             tool,
+            tool_index,
+            support,
             action_index,
             stroke: None,
             grab: None,
@@ -266,12 +273,27 @@ impl<'s> XrSculptor<'s> {
         let dt_s = input.period_s.clamp(1e-4, 0.1);
         self.controls(input, dt_s);
         self.grabs(&input.hands);
-        self.time_s += dt_s;
-        self.playback.advance_to(self.time_s, |_| {});
-
         let hand = input.hands[self.dominant];
         let tool_pose = hand.grip.map(|g| self.placement.pose_to_world(g));
         let applying = hand.trigger >= TRIGGER_ON && tool_pose.is_some() && self.grab.is_none();
+        // The virtual clay: the dominant hand's push tool and the other hand's support act
+        // through the playback, as the scene's scripted hands do.
+        let pushing_tool = self.tool_index.filter(|_| self.tool.action == Action::Push);
+        let mut live = [None, None];
+        if let (Some(tool), Some(pose)) = (pushing_tool, tool_pose) {
+            live[self.dominant] = Some(PlaybackHand { tool, pose, active: applying });
+        }
+        let other = input.hands[1 - self.dominant];
+        if let (Some(tool), Some(grip)) = (self.support, other.grip) {
+            let active = other.trigger >= TRIGGER_ON && self.grab.is_none();
+            let pose = self.placement.pose_to_world(grip);
+            live[1 - self.dominant] = Some(PlaybackHand { tool, pose, active });
+        }
+        self.playback.set_live_hands(live);
+        self.time_s += dt_s;
+        self.playback.advance_to(self.time_s, |_| {});
+        // The playback draws with the push tool; the stroke below is for the other actions.
+        let applying_stroke = applying && pushing_tool.is_none();
         let tool = self.acting_tool(hand.trigger.clamp(0.0, 1.0));
         let mut haptics = Vec::new();
         let side = if self.dominant == 0 { Hand::Left } else { Hand::Right };
@@ -295,7 +317,7 @@ impl<'s> XrSculptor<'s> {
             self.touching = false;
         }
         let field = self.playback.field_mut();
-        match (applying, tool_pose) {
+        match (applying_stroke, tool_pose) {
             (true, Some(pose)) => {
                 if self.stroke.is_none() {
                     field.begin_stroke();
@@ -325,7 +347,7 @@ impl<'s> XrSculptor<'s> {
         }
         self.times = (tools_ms, meshing.elapsed().as_secs_f64() * 1e3);
         let mut frame = build_frame(self.scene, &self.playback.hands(), true);
-        if let Some(pose) = tool_pose {
+        if let Some(pose) = tool_pose.filter(|_| pushing_tool.is_none()) {
             frame.tools.push(ToolGlyph {
                 model: pose.to_matrix() * Mat4::from_scale(tool.half_extents_m()),
                 colour: Vec4::from(tool.colour).truncate().extend(if applying { 0.6 } else { 0.35 }),
@@ -343,6 +365,7 @@ impl<'s> XrSculptor<'s> {
 pub fn run_xr(scene: &Scene, scene_name: &str, options: &XrRunOptions) -> Result<XrReport> {
     let environment = super::environment::load_environment(&scene.environment.choice)?;
     let mut station = XrStation::start(&options.session, &environment, scene.environment.intensity)?;
+    let validation = station.renderer().validation_log();
     let save_to = options.save_to.clone().unwrap_or_else(|| PathBuf::from(format!("{scene_name}.argile")));
     let source = scene.source.clone();
     let playback = Playback::new_autosaved(scene, |field| {
@@ -408,8 +431,17 @@ pub fn run_xr(scene: &Scene, scene_name: &str, options: &XrRunOptions) -> Result
     if let Some(session) = sculptor.playback.finish_autosave() {
         session.close()?;
     }
-    // OpenXR and then Vulkan go (XrStation's drop order) before the report is returned.
+    // OpenXR and then Vulkan go (XrStation's drop order) before the report is returned, so
+    // what the validation layer says of the teardown is read too.
     drop(station);
+    let messages = validation.take();
+    if !messages.is_empty() {
+        anyhow::bail!(
+            "the Vulkan validation layer reported {} problem(s):\n{}",
+            messages.len(),
+            messages.join("\n")
+        );
+    }
     Ok(report)
 }
 

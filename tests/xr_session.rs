@@ -1,0 +1,255 @@
+//! The headset session end to end, without a headset: `argile run --xr` against the repository's
+//! OpenXR test runtime (`tests/xr-runtime`), loaded by the real Khronos loader through
+//! `XR_RUNTIME_JSON`, with the Vulkan validation layer on. The runtime plays a scripted head
+//! and hands, writes the images submitted in the projection layer and logs every frame, state,
+//! haptic pulse and spec violation (`log.jsonl`).
+//!
+//! Needs the loader (Debian package `libopenxr-loader1`) and a Vulkan device; fails, never
+//! skips, without them.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use argile::math::{Pose, Quat, Vec3};
+use argile::render::{Renderer, RendererDesc};
+use argile::scene::Scene;
+use argile::xr::{recentred, stereo_views, Fov, XrView};
+
+mod common;
+use common::{check_against_golden, out_dir, root};
+
+const SCENE: &str = "scenes/tests/xr-session.toml";
+
+/// A fresh folder for a case's files.
+fn case_dir(case: &str) -> PathBuf {
+    common::xr::pin_lavapipe();
+    let dir = out_dir(case);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("test output folder");
+    dir
+}
+
+/// `argile run --xr SCENE` with `args`, the runtime's manifest and script, in `dir`.
+fn run_xr(dir: &Path, manifest: &Path, script: &str, args: &[&str], env: &[(&str, &str)]) -> Output {
+    let script_path = dir.join("script.toml");
+    std::fs::write(&script_path, script).expect("script written");
+    let mut c = Command::new(env!("CARGO_BIN_EXE_argile"));
+    c.current_dir(dir)
+        .arg("run")
+        .arg("--xr")
+        .arg(root().join(SCENE))
+        .args(["--validation", "--save-to"])
+        .arg(dir.join("sculpt.argile"))
+        .args(args)
+        .env("XR_RUNTIME_JSON", manifest)
+        .env("ARGILE_XR_TEST_SCRIPT", &script_path)
+        .env("ARGILE_XR_TEST_OUT", dir.join("runtime"))
+        .env("XDG_STATE_HOME", dir.join("state"))
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env("RUST_LOG", "warn");
+    for (k, v) in env {
+        c.env(k, v);
+    }
+    c.output().expect("argile runs")
+}
+
+fn text(o: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+/// The runtime's log, one JSON object per line.
+fn log(dir: &Path) -> Vec<serde_json::Value> {
+    let path = dir.join("runtime/log.jsonl");
+    let text =
+        std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
+    text.lines().map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l}: {e}"))).collect()
+}
+
+fn kind<'a>(log: &'a [serde_json::Value], kind: &str) -> Vec<&'a serde_json::Value> {
+    log.iter().filter(|e| e["kind"] == kind).collect()
+}
+
+fn no_violations(log: &[serde_json::Value]) {
+    let v = kind(log, "violation");
+    assert!(v.is_empty(), "the runtime saw spec violations: {v:#?}");
+}
+
+fn floats(v: &serde_json::Value) -> Vec<f32> {
+    v.as_array().expect("an array").iter().map(|x| x.as_f64().expect("a number") as f32).collect()
+}
+
+/// The views the app submitted in frame `frame`.
+fn submitted_views(log: &[serde_json::Value], frame: u64) -> [XrView; 2] {
+    let end = kind(log, "end_frame")
+        .into_iter()
+        .find(|e| e["frame"] == frame)
+        .unwrap_or_else(|| panic!("no end_frame {frame} in the log"));
+    let view = |v: &serde_json::Value| {
+        let p = floats(&v["pose"]["position"]);
+        let o = floats(&v["pose"]["orientation"]);
+        let f = &v["fov"];
+        let angle = |k: &str| f[k].as_f64().expect("an angle") as f32;
+        XrView {
+            pose: Pose {
+                position_m: Vec3::new(p[0], p[1], p[2]),
+                rotation: Quat::from_xyzw(o[0], o[1], o[2], o[3]),
+            },
+            fov: Fov { left: angle("left"), right: angle("right"), up: angle("up"), down: angle("down") },
+        }
+    };
+    let views = end["views"].as_array().expect("views");
+    assert_eq!(views.len(), 2, "a projection layer of two views");
+    [view(&views[0]), view(&views[1])]
+}
+
+/// Largest and mean per-pixel channel difference.
+fn difference(a: &image::RgbaImage, b: &image::RgbaImage) -> (u8, f64) {
+    assert_eq!(a.dimensions(), b.dimensions());
+    let errors: Vec<u8> = a
+        .pixels()
+        .zip(b.pixels())
+        .map(|(p, q)| (0..4).map(|i| p[i].abs_diff(q[i])).max().unwrap_or(0))
+        .collect();
+    let max = errors.iter().copied().max().unwrap_or(0);
+    (max, errors.iter().map(|&e| f64::from(e)).sum::<f64>() / errors.len() as f64)
+}
+
+/// The head standing at the stage origin, looking down at the work point.
+const HEAD: &str = "head = { position = [0.0, 1.6, 0.0], orientation = [-0.2898, 0.0, 0.0, 0.9571] }";
+
+/// The right hand carves a groove across the slab's front face (frames 4 to 12), then both
+/// hands go behind the viewer (out of view) before the captured frame.
+fn carving_script() -> String {
+    format!(
+        r#"
+display_hz = 90.0
+interaction_profile = "/interaction_profiles/oculus/touch_controller"
+recommended_size = [128, 128]
+fov_deg = [-25.0, 25.0, 25.0, -25.0]
+ipd_m = 0.064
+capture = [24]
+[[key]]
+frame = 0
+{HEAD}
+left = {{ grip = {{ position = [-0.3, 1.9, 0.6], orientation = [0, 0, 0, 1] }} }}
+right = {{ grip = {{ position = [0.05, 1.33, -0.40], orientation = [0, 0, 0, 1] }}, trigger = 0.0 }}
+[[key]]
+frame = 3
+right = {{ grip = {{ position = [0.05, 1.33, -0.43] }}, trigger = 0.0 }}
+[[key]]
+frame = 4
+right = {{ trigger = 1.0 }}
+[[key]]
+frame = 12
+right = {{ grip = {{ position = [-0.05, 1.33, -0.43] }}, trigger = 1.0 }}
+[[key]]
+frame = 13
+right = {{ trigger = 0.0 }}
+[[key]]
+frame = 16
+right = {{ grip = {{ position = [0.3, 1.9, 0.6] }} }}
+"#
+    )
+}
+
+#[test]
+fn a_headset_session_submits_what_the_offscreen_renderer_draws_of_the_same_views() {
+    let dir = case_dir("xr-session");
+    let manifest = common::xr::test_runtime_manifest(&dir);
+    let out = run_xr(&dir, &manifest, &carving_script(), &["--frames", "28"], &[]);
+    let said = text(&out);
+    assert!(out.status.success(), "argile failed:\n{said}");
+    assert!(said.contains("headset session on") && said.contains("(with depth)"), "{said}");
+    let log = log(&dir);
+    no_violations(&log);
+    let states: Vec<&str> = kind(&log, "state").iter().filter_map(|s| s["state"].as_str()).collect();
+    for s in ["READY", "SYNCHRONIZED", "VISIBLE", "FOCUSED", "STOPPING", "EXITING"] {
+        assert!(states.contains(&s), "the session never was {s}: {states:?}");
+    }
+    let drawn: Vec<_> = kind(&log, "end_frame").into_iter().filter(|e| e["layers"] != 0).collect();
+    assert!(drawn.len() >= 25, "{} frames drawn", drawn.len());
+    assert!(drawn.iter().all(|e| e["depth"] == true), "every drawn frame submits its depth");
+
+    // The offscreen renderer draws the saved clay from the views submitted in frame 24.
+    let scene_text = std::fs::read_to_string(root().join(SCENE)).unwrap();
+    let scene = Scene::parse(&scene_text, SCENE, None).unwrap();
+    let sculpt = argile::app::load_sculpt(&dir.join("sculpt.argile")).expect("the sculpt was saved");
+    let mut field = sculpt.field;
+    // The trigger carved a groove into the slab's front face where the hand went.
+    {
+        let mut reader = argile::field::FieldReader::new(&field);
+        let mut at = |p: Vec3| reader.density_at(field.transform().world_to_index(p));
+        assert!(at(Vec3::new(0.0, 0.03, 0.012)) < 0.5, "the groove is cut");
+        assert!(at(Vec3::new(0.0, -0.03, 0.012)) > 0.5, "the slab is whole below it");
+    }
+    // A loaded field has nothing dirty: mesh every brick.
+    let size = argile::field::BRICK_SIZE;
+    let keys: Vec<_> = field.brick_keys().collect();
+    for k in keys {
+        field.mark_dirty(k * size, k * size + (size - 1));
+    }
+    let diff = argile::mesh::remesh_dirty(&mut field);
+    let desc = RendererDesc { width: 128, height: 128, samples: 1, validation: true, view_passes: None };
+    let environment = argile::render::Environment::Studio;
+    let mut renderer =
+        Renderer::new(&desc, &environment, scene.environment.intensity).expect("a Vulkan device");
+    let validation = renderer.validation_log();
+    renderer.apply(&diff).unwrap();
+    let mut frame = argile::app::build_frame(&scene, &[], true);
+    frame.views = stereo_views(&submitted_views(&log, 24), &recentred(scene.rig.target_m, None));
+    renderer.draw(&frame).unwrap();
+    let expected = renderer.read_back().unwrap();
+    drop(renderer);
+    assert!(validation.take().is_empty());
+
+    for (eye, expected) in [("left", &expected.left), ("right", &expected.right)] {
+        let path = dir.join(format!("runtime/frame-0024-{eye}.png"));
+        let captured = image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgba8();
+        expected.save(dir.join(format!("offscreen-{eye}.png"))).unwrap();
+        // Same device, same pipelines, same views: lavapipe (Mesa 22.3.6) gives the same
+        // bytes; allow a unit of rounding per channel and nothing more.
+        let (max, mean) = difference(&captured, expected);
+        assert!(max <= 1 && mean <= 0.01, "{eye} eye: submitted image differs from the offscreen render (max {max}, mean {mean:.4}); see {}", dir.display());
+        check_against_golden("xr-session", eye, &captured);
+    }
+}
+
+/// Missing pieces each give their sentence, then the desktop station (here headless: no
+/// display) renders the scene.
+fn falls_back(dir: &Path, manifest: &Path, env: &[(&str, &str)], sentence: &str) {
+    let out = run_xr(dir, manifest, &carving_script(), &["--frames", "5"], env);
+    let said = text(&out);
+    assert!(out.status.success(), "the fallback failed:\n{said}");
+    assert!(said.contains("No headset session: ") && said.contains(sentence), "{said}");
+    assert!(said.contains("Using the desktop stereo station."), "{said}");
+    assert!(said.contains("Rendering the xr-session scene headless"), "{said}");
+    assert!(dir.join("argile-out").is_dir(), "the headless station wrote its images: {said}");
+}
+
+#[test]
+fn without_a_runtime_the_station_says_so_and_falls_back_to_the_desktop() {
+    let dir = case_dir("xr-no-runtime");
+    falls_back(&dir, &dir.join("nowhere/runtime.json"), &[], "no runtime is active");
+}
+
+#[test]
+fn without_a_loader_the_station_says_which_package_to_install_and_falls_back() {
+    let dir = case_dir("xr-no-loader");
+    let missing = dir.join("nowhere/libopenxr_loader.so.1");
+    falls_back(
+        &dir,
+        &dir.join("nowhere.json"),
+        &[("ARGILE_XR_LOADER", missing.to_str().unwrap())],
+        "libopenxr-loader1",
+    );
+}
+
+#[test]
+fn a_runtime_without_vulkan_or_headset_is_named_and_the_station_falls_back() {
+    let dir = case_dir("xr-no-vulkan");
+    let manifest = common::xr::test_runtime_manifest(&dir);
+    falls_back(&dir, &manifest, &[("ARGILE_XR_TEST_NO_VULKAN", "1")], "does not offer XR_KHR_vulkan_enable2");
+    let dir = case_dir("xr-no-hmd");
+    falls_back(&dir, &manifest, &[("ARGILE_XR_TEST_NO_HMD", "1")], "finds no headset");
+}
