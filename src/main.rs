@@ -357,10 +357,14 @@ fn station(scene_path: Option<PathBuf>, xr: Option<bool>, options: app::StationO
         match app::run_xr(&scene, &name, &xr_options) {
             Ok(report) => {
                 println!(
-                    "headset session on {} closed after {} frames{}",
+                    "headset session on {} closed after {} frames{}{}",
                     report.runtime,
                     report.frames,
-                    if report.depth { " (with depth)" } else { "" }
+                    if report.depth { " (with depth)" } else { "" },
+                    match report.recreated {
+                        0 => String::new(),
+                        n => format!("; the session was lost and made again {n} time(s)"),
+                    }
                 );
                 if let Some(p) = &report.saved {
                     println!("saved the sculpt to {}", p.display());

@@ -31,13 +31,25 @@ fn case_dir(case: &str) -> PathBuf {
 
 /// `argile run --xr SCENE` with `args`, the runtime's manifest and script, in `dir`.
 fn run_xr(dir: &Path, manifest: &Path, script: &str, args: &[&str], env: &[(&str, &str)]) -> Output {
+    run_scene(SCENE, dir, manifest, script, args, env)
+}
+
+/// `argile run --xr scene` with `args`, the runtime's manifest and script, in `dir`.
+fn run_scene(
+    scene: &str,
+    dir: &Path,
+    manifest: &Path,
+    script: &str,
+    args: &[&str],
+    env: &[(&str, &str)],
+) -> Output {
     let script_path = dir.join("script.toml");
     std::fs::write(&script_path, script).expect("script written");
     let mut c = Command::new(env!("CARGO_BIN_EXE_argile"));
     c.current_dir(dir)
         .arg("run")
         .arg("--xr")
-        .arg(root().join(SCENE))
+        .arg(root().join(scene))
         .args(["--validation", "--save-to"])
         .arg(dir.join("sculpt.argile"))
         .args(args)
@@ -252,4 +264,166 @@ fn a_runtime_without_vulkan_or_headset_is_named_and_the_station_falls_back() {
     falls_back(&dir, &manifest, &[("ARGILE_XR_TEST_NO_VULKAN", "1")], "does not offer XR_KHR_vulkan_enable2");
     let dir = case_dir("xr-no-hmd");
     falls_back(&dir, &manifest, &[("ARGILE_XR_TEST_NO_HMD", "1")], "finds no headset");
+}
+
+/// The clay's density at a scene point of a saved sculpt.
+fn density(field: &argile::field::Field, p: Vec3) -> f32 {
+    argile::field::FieldReader::new(field).density_at(field.transform().world_to_index(p))
+}
+
+/// The two-handed bend (Dewaele–Cani): the left hand's trigger holds the block under the bar
+/// as a support, the right hand's trigger pushes the ball down on the bar's free end; the bar
+/// bends over the block's edge. Scene points sit in the room at `recentred`'s placement
+/// (the scene's target, (0, −0.02, 0), at the work point (0, 1.3, −0.45)).
+#[test]
+fn the_support_hand_holds_and_the_dominant_hand_bends_the_clay() {
+    let dir = case_dir("xr-bend");
+    let manifest = common::xr::test_runtime_manifest(&dir);
+    // Scene → room: +(0, 1.32, −0.45).
+    let script = r#"
+display_hz = 30.0
+recommended_size = [64, 64]
+[[key]]
+frame = 0
+head = { position = [0.0, 1.6, 0.2], orientation = [-0.2898, 0.0, 0.0, 0.9571] }
+left = { grip = { position = [-0.056, 1.296, -0.45], orientation = [0, 0, 0, 1] }, trigger = 1.0 }
+right = { grip = { position = [0.075, 1.348, -0.45], orientation = [0, 0, 0, 1] }, trigger = 0.0 }
+[[key]]
+frame = 3
+right = { trigger = 1.0 }
+[[key]]
+frame = 33
+right = { grip = { position = [0.075, 1.318, -0.45] }, trigger = 1.0 }
+[[key]]
+frame = 36
+left = { trigger = 0.0 }
+right = { trigger = 0.0 }
+"#;
+    let out = run_scene("scenes/tests/xr-bend.toml", &dir, &manifest, script, &["--frames", "40"], &[]);
+    let said = text(&out);
+    assert!(out.status.success(), "argile failed:\n{said}");
+    no_violations(&log(&dir));
+    let bent = argile::app::load_sculpt(&dir.join("sculpt.argile")).expect("the sculpt was saved").field;
+    let scene = Scene::load(&root().join("scenes/tests/xr-bend.toml")).unwrap();
+    let straight = argile::app::Playback::new(&scene).into_field();
+    // The free end went down with the ball (3 cm): clay left the bar's axis there and came
+    // below it; under the support the bar did not move; the matter is kept.
+    let (end, below) = (Vec3::new(0.085, 0.0, 0.0), Vec3::new(0.085, -0.022, 0.0));
+    assert!(density(&straight, end) > 0.5 && density(&straight, below) < 0.5);
+    assert!(density(&bent, end) < 0.5, "the free end moved: {}", density(&bent, end));
+    assert!(density(&bent, below) > 0.5, "the free end came down: {}", density(&bent, below));
+    let held = Vec3::new(-0.056, 0.0, 0.0);
+    assert!(density(&bent, held) > 0.5, "the bar stays on the support");
+}
+
+/// The script's contacts: the right hand's tool (the gouge, radius 1.5 cm) rests against the
+/// slab's front face over frames 10–15 and 20–27 (its trigger held over 22–25) and is 5 cm
+/// away otherwise.
+fn touching_script() -> String {
+    let (away, touch) = ("[0.0, 1.30, -0.38]", "[0.0, 1.30, -0.43]");
+    let mut s = format!(
+        "display_hz = 90.0\nrecommended_size = [64, 64]\n[[key]]\nframe = 0\n{HEAD}\n\
+         left = {{ grip = {{ position = [-0.3, 1.9, 0.6] }} }}\n\
+         right = {{ grip = {{ position = {away}, orientation = [0, 0, 0, 1] }}, trigger = 0.0 }}\n"
+    );
+    for (frame, at, trigger) in [
+        (9, away, 0.0),
+        (10, touch, 0.0),
+        (15, touch, 0.0),
+        (16, away, 0.0),
+        (19, away, 0.0),
+        (20, touch, 0.0),
+        (21, touch, 0.0),
+        (22, touch, 1.0),
+        (25, touch, 1.0),
+        (26, touch, 0.0),
+        (27, touch, 0.0),
+        (28, away, 0.0),
+    ] {
+        s += &format!(
+            "[[key]]\nframe = {frame}\nright = {{ grip = {{ position = {at} }}, trigger = {trigger:.1} }}\n"
+        );
+    }
+    s
+}
+
+#[test]
+fn a_pulse_marks_each_touch_and_the_vibration_follows_the_clay_while_sculpting() {
+    let dir = case_dir("xr-haptics");
+    let manifest = common::xr::test_runtime_manifest(&dir);
+    let out = run_xr(&dir, &manifest, &touching_script(), &["--frames", "32"], &[]);
+    assert!(out.status.success(), "argile failed:\n{}", text(&out));
+    let log = log(&dir);
+    no_violations(&log);
+    let haptics = kind(&log, "haptic");
+    assert!(haptics.iter().all(|h| h["hand"] == "right"), "{haptics:#?}");
+    let frames_of = |duration: i64| -> Vec<u64> {
+        haptics.iter().filter(|h| h["duration_ns"] == duration).filter_map(|h| h["frame"].as_u64()).collect()
+    };
+    let (pulse_amplitude, pulse_ns) = argile::app::TOUCH_PULSE;
+    assert_eq!(frames_of(pulse_ns), [10, 20], "one pulse as each contact begins: {haptics:#?}");
+    let vibration = frames_of(argile::app::CONTACT_NS);
+    assert!(
+        !vibration.is_empty() && vibration.iter().all(|f| (22..=25).contains(f)),
+        "the contact vibrates only while the trigger sculpts: {vibration:?}"
+    );
+    for h in &haptics {
+        let a = h["amplitude"].as_f64().unwrap() as f32;
+        if h["duration_ns"] == pulse_ns {
+            assert!((a - pulse_amplitude).abs() < 1e-6);
+        } else {
+            assert!(a > 0.5 && a <= 1.0, "the vibration follows the density under the tool: {a}");
+        }
+    }
+}
+
+/// The carving script with a runtime event at frame 8, halfway through the stroke.
+fn carving_with(event: &str) -> String {
+    format!("{}\n[[event]]\nframe = 8\nkind = \"{event}\"\n", carving_script())
+}
+
+/// The sculpt saved in `dir` holds the half of the groove carved before frame 8.
+fn half_a_groove_is_saved(dir: &Path) {
+    let field = argile::app::load_sculpt(&dir.join("sculpt.argile")).expect("the sculpt was saved").field;
+    assert!(density(&field, Vec3::new(0.035, 0.03, 0.012)) < 0.5, "the groove's start is kept");
+    assert!(density(&field, Vec3::new(-0.045, 0.03, 0.012)) > 0.5, "the groove was not finished");
+}
+
+#[test]
+fn the_runtime_asking_to_quit_mid_stroke_loses_no_work() {
+    let dir = case_dir("xr-exit");
+    let manifest = common::xr::test_runtime_manifest(&dir);
+    let out = run_xr(&dir, &manifest, &carving_with("exit"), &[], &[]);
+    assert!(out.status.success(), "argile failed:\n{}", text(&out));
+    let log = log(&dir);
+    no_violations(&log);
+    let states: Vec<&str> = kind(&log, "state").iter().filter_map(|s| s["state"].as_str()).collect();
+    assert!(states.ends_with(&["STOPPING", "IDLE", "EXITING"]), "{states:?}");
+    half_a_groove_is_saved(&dir);
+}
+
+#[test]
+fn a_lost_session_mid_stroke_is_saved_and_made_again() {
+    let dir = case_dir("xr-loss");
+    let manifest = common::xr::test_runtime_manifest(&dir);
+    let out = run_xr(&dir, &manifest, &carving_with("session_loss"), &["--frames", "20"], &[]);
+    let said = text(&out);
+    assert!(out.status.success(), "argile failed:\n{said}");
+    assert!(said.contains("made again 1 time"), "{said}");
+    let log = log(&dir);
+    no_violations(&log);
+    let states: Vec<&str> = kind(&log, "state").iter().filter_map(|s| s["state"].as_str()).collect();
+    let lost = states.iter().position(|s| *s == "LOSS_PENDING").expect("the session was lost");
+    assert!(states[lost..].contains(&"FOCUSED"), "a new session ran: {states:?}");
+    assert_eq!(states.last(), Some(&"EXITING"));
+}
+
+#[test]
+fn a_lost_instance_mid_stroke_saves_and_quits() {
+    let dir = case_dir("xr-instance-loss");
+    let manifest = common::xr::test_runtime_manifest(&dir);
+    let out = run_xr(&dir, &manifest, &carving_with("instance_loss"), &[], &[]);
+    assert!(out.status.success(), "argile failed:\n{}", text(&out));
+    no_violations(&log(&dir));
+    half_a_groove_is_saved(&dir);
 }

@@ -45,6 +45,8 @@ const RESIZE_PER_S: f32 = 2.0;
 pub const TOUCH_PULSE: (f32, i64) = (0.8, 20_000_000);
 /// Duration of each contact vibration while sculpting (renewed every frame), nanoseconds.
 pub const CONTACT_NS: i64 = 30_000_000;
+/// How far beyond the tool's half extents the contact is felt, as a factor.
+const CONTACT_REACH: f32 = 1.3;
 /// Density under the tool from which it touches the clay.
 const TOUCH_DENSITY: f32 = 0.5;
 
@@ -298,9 +300,7 @@ impl<'s> XrSculptor<'s> {
         let mut haptics = Vec::new();
         let side = if self.dominant == 0 { Hand::Left } else { Hand::Right };
         if let Some(pose) = tool_pose {
-            let field = self.playback.field();
-            let density =
-                FieldReader::new(field).density_at(field.transform().world_to_index(pose.position_m));
+            let density = contact_density(self.playback.field(), pose, tool.half_extents_m());
             let touching = density >= TOUCH_DENSITY;
             if touching && !self.touching {
                 haptics.push(Haptic { hand: side, amplitude: TOUCH_PULSE.0, duration_ns: TOUCH_PULSE.1 });
@@ -356,6 +356,20 @@ impl<'s> XrSculptor<'s> {
         self.previous = input.hands;
         FrameOutput { frame, placement: self.placement, haptics }
     }
+}
+
+/// The densest clay under a tool at `pose` with half extents `half_m`: sampled at its centre
+/// and just beyond the ends of its three axes (a carving tool clears what it covers, so the
+/// clay it works on lies at its rim).
+pub fn contact_density(field: &crate::field::Field, pose: Pose, half_m: Vec3) -> f32 {
+    let mut reader = FieldReader::new(field);
+    let axes = [Vec3::ZERO, Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z];
+    axes.iter()
+        .map(|a| {
+            let p = pose.position_m + pose.rotation * (*a * half_m * CONTACT_REACH);
+            reader.density_at(field.transform().world_to_index(p))
+        })
+        .fold(0.0, f32::max)
 }
 
 /// Runs the station in the headset on `scene` until the runtime ends the session (or the
