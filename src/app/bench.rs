@@ -52,11 +52,16 @@ pub enum Workload {
     /// Virtual-clay steps per second bending a bar held by a support (Dewaele–Cani §5.1) in
     /// active windows of 32³, 128×32×32 and 128³ cells, with each layer's share of the time.
     ClayBend,
+    /// The headset frame against the OpenXR test runtime (built with
+    /// `cargo build -p argile-xr-test-runtime`): from `xrWaitFrame` returning to `xrEndFrame`
+    /// returning while the right controller carves the default scene, split into the frame's
+    /// start (begin, images, input), simulation, meshing and render submission.
+    FrameXr,
 }
 
 impl Workload {
     /// Every workload, in the order `argile bench` runs them.
-    pub const ALL: [Workload; 12] = [
+    pub const ALL: [Workload; 13] = [
         Workload::Stamp,
         Workload::StampCarve,
         Workload::MeshFull,
@@ -69,6 +74,7 @@ impl Workload {
         Workload::SaveLarge,
         Workload::LoadLarge,
         Workload::ClayBend,
+        Workload::FrameXr,
     ];
 }
 
@@ -150,6 +156,7 @@ pub fn run(workloads: &[Workload], size: BenchSize, mut emit: impl FnMut(Value))
             Workload::SaveLarge => super::bench_io::save_large(size, &mut emit)?,
             Workload::LoadLarge => super::bench_io::load_large(size, &mut emit)?,
             Workload::ClayBend => bench_clay_bend(size, &mut emit),
+            Workload::FrameXr => super::xr_station::bench_frame_xr(size.image_px, size.frames, &mut emit)?,
         }
     }
     Ok(())
@@ -738,6 +745,25 @@ mod tests {
         for w in <Workload as clap::ValueEnum>::value_variants() {
             assert!(Workload::ALL.contains(w), "{w:?} is missing from Workload::ALL");
         }
+    }
+
+    /// Needs the OpenXR test runtime (built with the tests) and a Vulkan device.
+    #[test]
+    fn the_headset_frame_is_split_into_its_parts_against_the_test_runtime() {
+        let mut lines = Vec::new();
+        run(&[Workload::FrameXr], BenchSize::QUICK, |v| lines.push(v)).unwrap();
+        assert_eq!(lines.len(), 1);
+        let l = &lines[0];
+        let part = |k: &str| l[k].as_f64().unwrap_or_else(|| panic!("{k} in {l}"));
+        let parts = [
+            "median_frame_start_ms",
+            "median_simulation_ms",
+            "median_meshing_ms",
+            "median_render_submission_ms",
+        ];
+        assert!(parts.iter().all(|k| part(k) >= 0.0), "{l}");
+        assert!(part("median_render_submission_ms") > 0.0 && part("median_frame_ms") > 0.0, "{l}");
+        assert_eq!(l["frames"], BenchSize::QUICK.frames as u64, "{l}");
     }
 
     #[test]
