@@ -24,8 +24,8 @@ use super::station::{action_cycle, shape_cycle, shape_name};
 use crate::field::FieldReader;
 use crate::io::autosave::AutosaveConfig;
 use crate::math::{Mat4, Pose, Vec3, Vec4};
-use crate::mesh::remesh_dirty;
-use crate::render::{Renderer, ToolGlyph};
+use crate::mesh::{remesh_dirty, MeshDiff};
+use crate::render::ToolGlyph;
 use crate::scene::{Hand, HandState as PlaybackHand, Scene};
 use crate::tool::{Action, Stroke, Tool, ToolShape};
 use crate::xr::{
@@ -269,8 +269,9 @@ impl<'s> XrSculptor<'s> {
     }
 
     /// Runs one headset frame: controls, grabs, the scene's timeline and the dominant hand's
-    /// stroke, meshing into `renderer`; returns the frame to draw and the haptic pulses.
-    pub fn step(&mut self, input: &FrameInput, renderer: &mut Renderer) -> FrameOutput {
+    /// stroke, meshing (the mesh changes go to `apply`); returns the frame to draw and the
+    /// haptic pulses.
+    pub fn step(&mut self, input: &FrameInput, mut apply: impl FnMut(&MeshDiff)) -> FrameOutput {
         let started = std::time::Instant::now();
         let dt_s = input.period_s.clamp(1e-4, 0.1);
         self.controls(input, dt_s);
@@ -341,9 +342,7 @@ impl<'s> XrSculptor<'s> {
         let meshing = std::time::Instant::now();
         let diff = remesh_dirty(self.playback.field_mut());
         if !diff.is_empty() {
-            if let Err(e) = renderer.apply(&diff) {
-                self.messages.push(format!("cannot upload the mesh: {e}"));
-            }
+            apply(&diff);
         }
         self.times = (tools_ms, meshing.elapsed().as_secs_f64() * 1e3);
         let mut frame = build_frame(self.scene, &self.playback.hands(), true);
@@ -398,11 +397,18 @@ pub fn run_xr(scene: &Scene, scene_name: &str, options: &XrRunOptions) -> Result
     };
     let mut exit_asked = false;
     loop {
-        let turn = station.turn(|input, renderer| sculptor.step(input, renderer));
-        let turn = match turn {
+        let mut upload = Ok(());
+        let turn = station.turn(|input, renderer| {
+            sculptor.step(input, |diff| {
+                if upload.is_ok() {
+                    upload = renderer.apply(diff);
+                }
+            })
+        });
+        let turn = match turn.and_then(|t| upload.map(|()| t).map_err(XrError::from)) {
             Ok(t) => t,
             Err(e) => {
-                // No sculpt is lost to a failing runtime: save, then report.
+                // No sculpt is lost to a failing runtime or renderer: save, then report.
                 let saved = sculptor.save();
                 let e = anyhow::Error::new(e);
                 return Err(match saved {
@@ -540,4 +546,128 @@ pub(super) fn bench_frame_xr(
         "budget_ms_at_90_hz": 1000.0 / 90.0,
     }));
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::{Quat, Vec2};
+
+    /// A ball of clay (radius 5 cm) at the scene's origin and a gouge; shown at the work
+    /// point, so its front is at room (0, 1.3, −0.40).
+    fn ball() -> Scene {
+        Scene::parse(
+            "[field]\nvoxel_size_m = 0.004\n[camera]\neye_m = [0.0, 0.0, 0.5]\ntarget_m = [0.0, 0.0, 0.0]\n\
+             [[clay]]\nshape = \"sphere\"\nradius_m = 0.05\n\
+             [[tool]]\nname = \"gouge\"\nradius_m = 0.012\naction = \"remove\"\n",
+            "ball",
+            None,
+        )
+        .unwrap()
+    }
+
+    fn sculptor(scene: &Scene, left_handed: bool) -> XrSculptor<'_> {
+        XrSculptor::new(scene, Playback::new(scene), "unused.argile".into(), left_handed)
+    }
+
+    fn at(x: f32, y: f32, z: f32) -> Option<Pose> {
+        Some(Pose { position_m: Vec3::new(x, y, z), rotation: Quat::IDENTITY })
+    }
+
+    /// One frame of 1/90 s with `hands` (left, right).
+    fn frame(s: &mut XrSculptor<'_>, hands: [HandState; 2]) -> FrameOutput {
+        let input = FrameInput {
+            index: 0,
+            display_time_ns: 0,
+            period_s: 1.0 / 90.0,
+            focused: true,
+            head: None,
+            hands,
+        };
+        s.step(&input, |_| {})
+    }
+
+    fn density(s: &XrSculptor<'_>, p: Vec3) -> f32 {
+        let field = s.field();
+        FieldReader::new(field).density_at(field.transform().world_to_index(p))
+    }
+
+    #[test]
+    fn the_dominant_thumbstick_sizes_and_cycles_and_its_buttons_undo_and_redo() {
+        let scene = ball();
+        let mut s = sculptor(&scene, false);
+        let scale = s.tool().scale;
+        let up = HandState { thumbstick: Vec2::new(0.0, 1.0), ..HandState::default() };
+        for _ in 0..90 {
+            frame(&mut s, [HandState::default(), up]);
+        }
+        assert!(
+            (s.tool().scale / scale - Vec3::splat(RESIZE_PER_S)).abs().max_element() < 0.02,
+            "{}",
+            s.tool().scale
+        );
+        assert_eq!(shape_name(&s.tool().shape), "sphere");
+        let flick = HandState { thumbstick: Vec2::new(1.0, 0.0), ..HandState::default() };
+        frame(&mut s, [HandState::default(), flick]);
+        frame(&mut s, [HandState::default(), flick]);
+        assert_eq!(shape_name(&s.tool().shape), "box", "one flick, one step");
+        let action = s.tool().action;
+        let click = HandState { thumbstick_click: true, ..HandState::default() };
+        frame(&mut s, [HandState::default(), click]);
+        assert_ne!(s.tool().action, action);
+
+        // Carve, undo with A, redo with B.
+        let mut s = sculptor(&scene, false);
+        let inside = Vec3::new(0.0, 0.0, 0.045);
+        assert!(density(&s, inside) > 0.5);
+        let carving = HandState { grip: at(0.0, 1.3, -0.40), trigger: 1.0, ..HandState::default() };
+        for _ in 0..3 {
+            frame(&mut s, [HandState::default(), carving]);
+        }
+        assert!(density(&s, inside) < 0.5, "the trigger carves");
+        let rest = HandState { grip: at(0.0, 1.3, -0.2), ..HandState::default() };
+        frame(&mut s, [HandState::default(), rest]);
+        frame(&mut s, [HandState::default(), HandState { primary: true, ..rest }]);
+        assert!(density(&s, inside) > 0.5, "A undoes the stroke");
+        frame(&mut s, [HandState::default(), rest]);
+        frame(&mut s, [HandState::default(), HandState { secondary: true, ..rest }]);
+        assert!(density(&s, inside) < 0.5, "B redoes it");
+    }
+
+    #[test]
+    fn the_other_hand_grabs_and_both_hands_turn_move_and_scale_the_sculpture() {
+        let scene = ball();
+        let mut s = sculptor(&scene, false);
+        let start = s.placement();
+        let grip = |x: f32, y: f32| HandState { grip: at(x, y, -0.4), squeeze: 1.0, ..HandState::default() };
+        frame(&mut s, [grip(-0.1, 1.3), HandState::default()]);
+        frame(&mut s, [grip(-0.1, 1.4), HandState::default()]);
+        let moved = s.placement().translation_m - start.translation_m;
+        assert!((moved - Vec3::new(0.0, 0.1, 0.0)).length() < 1e-5, "{moved}");
+        // Both grips: pulling the hands apart doubles the sculpture about their midpoint.
+        frame(&mut s, [grip(-0.1, 1.3), grip(0.1, 1.3)]);
+        let before = s.placement();
+        frame(&mut s, [grip(-0.2, 1.3), grip(0.2, 1.3)]);
+        assert!((s.placement().scale / before.scale - 2.0).abs() < 1e-4);
+        // Gripping with the dominant hand while the trigger is held does not sculpt.
+        let whole = density(&s, Vec3::new(0.0, 0.0, 0.045));
+        let pulling = HandState { trigger: 1.0, ..grip(0.2, 1.3) };
+        frame(&mut s, [grip(-0.2, 1.3), pulling]);
+        assert_eq!(density(&s, Vec3::new(0.0, 0.0, 0.045)), whole);
+    }
+
+    #[test]
+    fn left_handed_the_left_trigger_sculpts_and_a_touch_pulses_that_hand() {
+        let scene = ball();
+        let mut s = sculptor(&scene, true);
+        let carving = HandState { grip: at(0.0, 1.3, -0.40), trigger: 1.0, ..HandState::default() };
+        let out = frame(&mut s, [HandState::default(), carving]);
+        assert!(density(&s, Vec3::new(0.0, 0.0, 0.045)) > 0.5, "the right hand does not sculpt");
+        assert!(out.haptics.is_empty());
+        let out = frame(&mut s, [carving, HandState::default()]);
+        assert!(density(&s, Vec3::new(0.0, 0.0, 0.045)) < 0.5, "the left hand does");
+        assert_eq!(out.haptics.len(), 1);
+        assert_eq!(out.haptics[0].hand, Hand::Left);
+        assert_eq!((out.haptics[0].amplitude, out.haptics[0].duration_ns), TOUCH_PULSE);
+    }
 }
