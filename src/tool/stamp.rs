@@ -40,9 +40,15 @@ use crate::math::{IVec3, Vec3};
 /// Mixes the colour of `added` new matter into a sample that held `old_density` of matter.
 ///
 /// Colour is mass-weighted: the old matter keeps its colour, the new matter brings the tool's.
+/// A sample that held no matter takes the tool's colour exactly (an empty sample's colour means
+/// nothing, see `field::Brick::compact`).
 #[inline]
 pub(super) fn mix_in(colour: &mut Colour, old_density: f32, new_density: f32, tool: Colour) {
     if new_density <= old_density || new_density <= 0.0 {
+        return;
+    }
+    if old_density <= 0.0 {
+        *colour = tool;
         return;
     }
     let t = (new_density - old_density) / new_density;
