@@ -345,6 +345,21 @@ impl Field {
         hi: IVec3,
         create: bool,
         reaches: impl Fn(IVec3, IVec3) -> bool,
+        edit: impl FnMut(IVec3, &mut f32, &mut Colour),
+    ) {
+        self.edit_where(lo, hi, create, |a, b, _| reaches(a, b), edit);
+    }
+
+    /// [`Field::edit_region`] for edits that also know which bricks they cannot change from
+    /// the brick's lowest and highest density: `changes(a, b, range)` gets the brick's
+    /// [`Field::density_range`] too (`None`: no brick), so that, say, adding matter skips a
+    /// brick that is already full without copying it.
+    pub fn edit_where(
+        &mut self,
+        lo: IVec3,
+        hi: IVec3,
+        create: bool,
+        changes: impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool,
         mut edit: impl FnMut(IVec3, &mut f32, &mut Colour),
     ) {
         if lo.cmpgt(hi).any() {
@@ -359,7 +374,7 @@ impl Field {
                     let base = key * s;
                     let a = lo.max(base) - base;
                     let b = hi.min(base + s - IVec3::ONE) - base;
-                    if !reaches(base + a, base + b) {
+                    if !changes(base + a, base + b, self.ranges.get(&key).copied()) {
                         continue;
                     }
                     if create || self.bricks.contains_key(&key) {

@@ -81,12 +81,19 @@ pub fn stamp_sphere(
     let reaches =
         |a: IVec3, b: IVec3| centre.clamp(a.as_vec3(), b.as_vec3()).distance_squared(centre) <= reach * reach;
     match action {
-        Action::Add => field.edit_region(lo, hi, true, reaches, |p, d, c| {
-            let tool = solid_density(p.as_vec3().distance(centre) - radius);
-            let new = d.max(tool);
-            mix_in(c, *d, new, colour);
-            *d = new;
-        }),
+        // A full brick stays full, colour and all: adding to it changes nothing.
+        Action::Add => field.edit_where(
+            lo,
+            hi,
+            true,
+            |a, b, range| reaches(a, b) && range.is_none_or(|r| r.0 < 1.0),
+            |p, d, c| {
+                let tool = solid_density(p.as_vec3().distance(centre) - radius);
+                let new = d.max(tool);
+                mix_in(c, *d, new, colour);
+                *d = new;
+            },
+        ),
         Action::Remove => field.edit_region(lo, hi, false, reaches, |p, d, _| {
             let tool = solid_density(p.as_vec3().distance(centre) - radius);
             *d = d.min(1.0 - tool);
