@@ -1027,13 +1027,30 @@ fn depth_layers_focus_changes_and_instance_loss_follow_the_script() {
                 view_count: 2,
                 views: proj.as_ptr(),
             };
-            let layers = [&layer as *const _ as *const xr::sys::CompositionLayerBaseHeader];
+            // A quad (a palette, say) in front of the user, from the left eye's image.
+            let quad = xr::sys::CompositionLayerQuad {
+                ty: xr::sys::CompositionLayerQuad::TYPE,
+                next: std::ptr::null(),
+                layer_flags: xr::CompositionLayerFlags::EMPTY,
+                space: app.stage.as_raw(),
+                eye_visibility: xr::EyeVisibility::BOTH,
+                sub_image: sub(app.swapchain.as_raw(), 0),
+                pose: xr::Posef {
+                    orientation: xr::Quaternionf::IDENTITY,
+                    position: xr::Vector3f { x: 0.0, y: 1.4, z: -0.5 },
+                },
+                size: xr::Extent2Df { width: 0.2, height: 0.2 },
+            };
+            let layers = [
+                &layer as *const _ as *const xr::sys::CompositionLayerBaseHeader,
+                &quad as *const _ as *const xr::sys::CompositionLayerBaseHeader,
+            ];
             let info = xr::sys::FrameEndInfo {
                 ty: xr::sys::FrameEndInfo::TYPE,
                 next: std::ptr::null(),
                 display_time: state.predicted_display_time,
                 environment_blend_mode: xr::EnvironmentBlendMode::OPAQUE,
-                layer_count: 1,
+                layer_count: 2,
                 layers: layers.as_ptr(),
             };
             // SAFETY: valid structures that live across the call.
@@ -1078,5 +1095,5 @@ fn depth_layers_focus_changes_and_instance_loss_follow_the_script() {
     assert!(Case::kinds(&log, "violation").is_empty(), "{:?}", Case::kinds(&log, "violation"));
     let ends = Case::kinds(&log, "end_frame");
     assert_eq!(ends.len(), 7);
-    assert!(ends[1..].iter().all(|e| e["depth"] == true && e["layers"] == 1));
+    assert!(ends[1..].iter().all(|e| e["depth"] == true && e["layers"] == 2));
 }

@@ -1701,6 +1701,32 @@ fn check_sub_image(
     Ok(())
 }
 
+/// Checks a quad layer (accepted and counted, not captured).
+fn check_quad(inst: &Instance, session: u64, q: &xr::CompositionLayerQuad, i: usize) -> Result<(), Refusal> {
+    let what = format!("layer {i} (quad)");
+    let space = inst.space(q.space)?;
+    if space.session != session {
+        return refuse(
+            xr::Result::ERROR_HANDLE_INVALID,
+            format!("{what}: its space belongs to another session"),
+        );
+    }
+    checked_pose(&q.pose, &what)?;
+    if !(q.size.width > 0.0 && q.size.height > 0.0) {
+        return refuse(
+            xr::Result::ERROR_VALIDATION_FAILURE,
+            format!("{what}: size {}×{} is not positive", q.size.width, q.size.height),
+        );
+    }
+    if !(0..=2).contains(&q.eye_visibility.into_raw()) {
+        return refuse(
+            xr::Result::ERROR_VALIDATION_FAILURE,
+            format!("{what}: eyeVisibility {:?}", q.eye_visibility),
+        );
+    }
+    check_sub_image(inst, session, &q.sub_image, &what)
+}
+
 /// Checks the layers of xrEndFrame; returns the projection views of the first projection layer
 /// (in stage space) and whether depth came with them.
 unsafe fn check_layers(
@@ -1730,10 +1756,17 @@ unsafe fn check_layers(
         if layer.is_null() {
             return refuse(xr::Result::ERROR_LAYER_INVALID, format!("layer {i} is null"));
         }
+        if (*layer).ty == xr::StructureType::COMPOSITION_LAYER_QUAD {
+            check_quad(inst, session, &*(layer as *const xr::CompositionLayerQuad), i)?;
+            continue;
+        }
         if (*layer).ty != xr::StructureType::COMPOSITION_LAYER_PROJECTION {
             return refuse(
                 xr::Result::ERROR_LAYER_INVALID,
-                format!("layer {i} has type {:?}; the runtime composes projection layers", (*layer).ty),
+                format!(
+                    "layer {i} has type {:?}; the runtime composes projection and quad layers",
+                    (*layer).ty
+                ),
             );
         }
         let layer = &*(layer as *const xr::CompositionLayerProjection);
