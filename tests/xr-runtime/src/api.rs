@@ -29,9 +29,17 @@ pub const FORMATS: [vk::Format; 3] =
 
 pub type Outcome = Result<xr::Result, Refusal>;
 
-static NEXT_HANDLE: AtomicU64 = AtomicU64::new(0x5a00_0001);
+static NEXT_HANDLE: AtomicU64 = AtomicU64::new(0);
 
+/// A fresh handle value. The loader may unload and reload the runtime between instances, which
+/// restarts this counter, so it starts from the clock: a handle kept from an earlier instance
+/// does not name an object of a later one.
 pub fn new_handle() -> u64 {
+    if NEXT_HANDLE.load(Ordering::Relaxed) == 0 {
+        let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap_or_default();
+        let seed = (now.as_micros() as u64 & 0xffff_ffff_ffff) << 12 | 1;
+        let _ = NEXT_HANDLE.compare_exchange(0, seed, Ordering::Relaxed, Ordering::Relaxed);
+    }
     NEXT_HANDLE.fetch_add(1, Ordering::Relaxed)
 }
 
