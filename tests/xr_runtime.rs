@@ -37,6 +37,16 @@ unsafe extern "system" fn on_validation(
     vk::FALSE
 }
 
+fn app_info() -> xr::ApplicationInfo<'static> {
+    xr::ApplicationInfo {
+        application_name: "argile-xr-runtime-test",
+        application_version: 1,
+        engine_name: "argile",
+        engine_version: 1,
+        api_version: xr::Version::new(1, 0, 0),
+    }
+}
+
 /// A test case's folder with a fresh output folder, the runtime's environment set, and the
 /// loader opened.
 struct Case {
@@ -72,13 +82,7 @@ impl Case {
         let mut exts = xr::ExtensionSet::default();
         exts.khr_vulkan_enable2 = true;
         exts.khr_composition_layer_depth = true;
-        let app = xr::ApplicationInfo {
-            application_name: "argile-xr-runtime-test",
-            application_version: 1,
-            engine_name: "argile",
-            engine_version: 1,
-            api_version: xr::Version::new(1, 0, 0),
-        };
+        let app = app_info();
         self.entry.create_instance(&app, &exts, &[]).expect("the test runtime creates an instance")
     }
 
@@ -883,13 +887,7 @@ fn a_runtime_without_vulkan_or_without_a_headset_says_so() {
     std::env::set_var("ARGILE_XR_TEST_NO_HMD", "1");
     let exts = case.entry.enumerate_extensions().expect("extensions");
     assert!(!exts.khr_vulkan_enable2 && exts.khr_composition_layer_depth);
-    let app = xr::ApplicationInfo {
-        application_name: "argile-xr-runtime-test",
-        application_version: 1,
-        engine_name: "argile",
-        engine_version: 1,
-        api_version: xr::Version::new(1, 0, 0),
-    };
+    let app = app_info();
     let mut vulkan = xr::ExtensionSet::default();
     vulkan.khr_vulkan_enable2 = true;
     assert_eq!(
@@ -1096,4 +1094,17 @@ fn depth_layers_focus_changes_and_instance_loss_follow_the_script() {
     let ends = Case::kinds(&log, "end_frame");
     assert_eq!(ends.len(), 7);
     assert!(ends[1..].iter().all(|e| e["depth"] == true && e["layers"] == 2));
+}
+
+#[test]
+fn a_bad_script_fails_the_instance_with_a_sentence_naming_the_file() {
+    let case = Case::new("bad-script", "[[key]]\nframe = 0\nright = { trigger = 3.0 }\n");
+    let app = app_info();
+    let made = case.entry.create_instance(&app, &xr::ExtensionSet::default(), &[]);
+    assert_eq!(made.err(), Some(xr::sys::Result::ERROR_RUNTIME_FAILURE));
+    let log = case.log();
+    let errors = Case::kinds(&log, "error");
+    assert_eq!(errors.len(), 1, "{log:?}");
+    let why = errors[0]["why"].as_str().unwrap();
+    assert!(why.contains("script.toml") && why.contains("trigger"), "{why}");
 }

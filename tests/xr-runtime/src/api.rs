@@ -360,6 +360,31 @@ pub fn pose_json(p: &Pose) -> serde_json::Value {
 // The instance's helpers.
 
 impl Instance {
+    pub fn new(handle: u64, vulkan: bool, depth: bool, script: Script, log: Log) -> Instance {
+        Instance {
+            handle,
+            vulkan,
+            depth,
+            script,
+            log,
+            paths: Vec::new(),
+            events: VecDeque::new(),
+            lost: false,
+            requirements_queried: false,
+            vk_instances: Vec::new(),
+            vk_devices: Vec::new(),
+            suggested: HashMap::new(),
+            frames_ended: 0,
+            frames_waited: 0,
+            events_fired: 0,
+            session: None,
+            spaces: HashMap::new(),
+            swapchains: HashMap::new(),
+            action_sets: HashMap::new(),
+            actions: HashMap::new(),
+        }
+    }
+
     pub fn check(&self, h: xr::Instance) -> Result<(), Refusal> {
         if h.into_raw() != self.handle {
             return refuse(
@@ -649,28 +674,7 @@ pub(crate) unsafe extern "system" fn create_instance(
         let handle = new_handle();
         log.write(json!({"kind": "instance", "application": get_str(&info.application_info.application_name)?, "vulkan_enable2": vulkan, "depth": depth}));
         rt.orphan_log = None;
-        rt.instance = Some(Instance {
-            handle,
-            vulkan,
-            depth,
-            script,
-            log,
-            paths: Vec::new(),
-            events: VecDeque::new(),
-            lost: false,
-            requirements_queried: false,
-            vk_instances: Vec::new(),
-            vk_devices: Vec::new(),
-            suggested: HashMap::new(),
-            frames_ended: 0,
-            frames_waited: 0,
-            events_fired: 0,
-            session: None,
-            spaces: HashMap::new(),
-            swapchains: HashMap::new(),
-            action_sets: HashMap::new(),
-            actions: HashMap::new(),
-        });
+        rt.instance = Some(Instance::new(handle, vulkan, depth, script, log));
         *out = xr::Instance::from_raw(handle);
         Ok(xr::Result::SUCCESS)
     })
@@ -1904,4 +1908,68 @@ fn capture(inst: &mut Instance, frame: u64, views: &[SubmittedView]) -> Result<(
         inst.log.write(l);
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn instance(script: &str) -> Instance {
+        Instance::new(1, true, true, Script::parse(script).unwrap(), Log::open(None).unwrap())
+    }
+
+    #[test]
+    fn frames_and_display_times_map_both_ways() {
+        let inst = instance("display_hz = 50.0");
+        assert_eq!(inst.frame_time(0.0), T0 + 20_000_000);
+        assert_eq!(inst.frame_time(3.0), T0 + 80_000_000);
+        assert!((inst.time_frame(inst.frame_time(7.5)) - 7.5).abs() < 1e-9);
+    }
+
+    #[test]
+    fn reference_spaces_sit_where_the_specification_puts_them() {
+        // The head starts 1.7 m up, turned 90° left; it then walks 1 m along x.
+        let inst = instance(
+            "[[key]]\nframe = 0\nhead = { position = [0.5, 1.7, 0.0], orientation = [0, 0.70710677, 0, 0.70710677] }\n\
+             [[key]]\nframe = 10\nhead = { position = [1.5, 1.7, 0.0] }",
+        );
+        let space = |kind| Space { session: 0, kind, offset: Pose::IDENTITY };
+        let t = inst.frame_time(10.0);
+        let stage = inst.locate(&space(SpaceKind::Reference(xr::ReferenceSpaceType::STAGE)), t).unwrap();
+        assert_eq!(stage, Pose::IDENTITY);
+        // LOCAL stays where the head started, turned with it about the vertical only.
+        let local = inst.locate(&space(SpaceKind::Reference(xr::ReferenceSpaceType::LOCAL)), t).unwrap();
+        assert!((local.position - Vec3::new(0.5, 1.7, 0.0)).length() < 1e-5);
+        assert!((local.orientation * Vec3::NEG_Z - Vec3::NEG_X).length() < 1e-5);
+        // VIEW follows the head.
+        let view = inst.locate(&space(SpaceKind::Reference(xr::ReferenceSpaceType::VIEW)), t).unwrap();
+        assert!((view.position - Vec3::new(1.5, 1.7, 0.0)).length() < 1e-5);
+        // An offset is applied in the space's own frame.
+        let offset = Space {
+            session: 0,
+            kind: SpaceKind::Reference(xr::ReferenceSpaceType::STAGE),
+            offset: Pose::new(Vec3::new(0.0, 0.0, -1.0), Quat::IDENTITY),
+        };
+        assert!((inst.locate(&offset, t).unwrap().position - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6);
+        // An action space with no session cannot be located.
+        assert!(inst.locate(&space(SpaceKind::Action { action: 9, sub: 0 }), t).is_none());
+    }
+
+    #[test]
+    fn poses_given_by_the_application_must_be_rotations() {
+        let mut p = xr::Posef::IDENTITY;
+        assert!(checked_pose(&p, "pose").is_ok());
+        p.orientation.w = 0.5;
+        assert_eq!(checked_pose(&p, "pose").unwrap_err().result, xr::Result::ERROR_POSE_INVALID);
+    }
+
+    #[test]
+    fn violations_are_the_applications_mistakes_only() {
+        assert!(is_violation(xr::Result::ERROR_CALL_ORDER_INVALID));
+        assert!(is_violation(xr::Result::ERROR_HANDLE_INVALID));
+        assert!(!is_violation(xr::Result::ERROR_SESSION_LOST));
+        assert!(!is_violation(xr::Result::ERROR_FORM_FACTOR_UNAVAILABLE));
+        assert!(!is_violation(xr::Result::SESSION_NOT_FOCUSED));
+        assert_eq!(result_name(xr::Result::ERROR_VALIDATION_FAILURE), "XR_ERROR_VALIDATION_FAILURE");
+    }
 }
