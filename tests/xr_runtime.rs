@@ -575,9 +575,10 @@ fn actions_read_the_scripted_controllers_and_haptics_are_logged() {
         .unwrap_err(),
         xr::sys::Result::ERROR_PATH_UNSUPPORTED
     );
-    app.session.attach_action_sets(&[&set]).expect("attach");
+    // An action space may be made before its set is attached.
     let grip_space =
         grip.create_space(app.session.clone(), hands[1], xr::Posef::IDENTITY).expect("action space");
+    app.session.attach_action_sets(&[&set]).expect("attach");
     app.poll();
     app.session.begin(xr::ViewConfigurationType::PRIMARY_STEREO).expect("begin");
     for _ in 0..5 {

@@ -967,17 +967,19 @@ pub(crate) unsafe extern "system" fn create_vulkan_instance(
         inst.check_system(info.system_id)?;
         out_ptr(vk_instance, "the VkInstance output")?;
         out_ptr(vk_result, "the VkResult output")?;
-        if !inst.requirements_queried {
-            return refuse(
-                xr::Result::ERROR_GRAPHICS_REQUIREMENTS_CALL_MISSING,
-                "xrGetVulkanGraphicsRequirements2KHR was not called first",
-            );
-        }
         let Some(gipa) = info.pfn_get_instance_proc_addr else {
             return refuse(xr::Result::ERROR_VALIDATION_FAILURE, "pfnGetInstanceProcAddr is null");
         };
         if info.vulkan_create_info.is_null() {
             return refuse(xr::Result::ERROR_VALIDATION_FAILURE, "vulkanCreateInfo is null");
+        }
+        if (*(info.vulkan_create_info as *const vk::InstanceCreateInfo)).s_type
+            != vk::StructureType::INSTANCE_CREATE_INFO
+        {
+            return refuse(
+                xr::Result::ERROR_VALIDATION_FAILURE,
+                "vulkanCreateInfo is not a VkInstanceCreateInfo",
+            );
         }
         if info.create_flags != xr::VulkanInstanceCreateFlagsKHR::EMPTY {
             return refuse(xr::Result::ERROR_VALIDATION_FAILURE, "createFlags must be 0");
@@ -1055,6 +1057,14 @@ pub(crate) unsafe extern "system" fn create_vulkan_device(
                 "pfnGetInstanceProcAddr or vulkanCreateInfo is null",
             );
         }
+        if (*(info.vulkan_create_info as *const vk::DeviceCreateInfo)).s_type
+            != vk::StructureType::DEVICE_CREATE_INFO
+        {
+            return refuse(
+                xr::Result::ERROR_VALIDATION_FAILURE,
+                "vulkanCreateInfo is not a VkDeviceCreateInfo",
+            );
+        }
         if info.create_flags != xr::VulkanDeviceCreateFlagsKHR::EMPTY {
             return refuse(xr::Result::ERROR_VALIDATION_FAILURE, "createFlags must be 0");
         }
@@ -1062,7 +1072,7 @@ pub(crate) unsafe extern "system" fn create_vulkan_device(
         let Some(made) = inst.vk_instances.iter().find(|i| i.physical.is_some_and(|p| raw(p) == wanted))
         else {
             return refuse(
-                xr::Result::ERROR_VALIDATION_FAILURE,
+                xr::Result::ERROR_HANDLE_INVALID,
                 "vulkanPhysicalDevice is not the one xrGetVulkanGraphicsDevice2KHR returned",
             );
         };
@@ -1298,6 +1308,7 @@ pub(crate) unsafe extern "system" fn create_action_space(
             info.action,
             info.subaction_path,
             ActionKind::Pose,
+            false,
         )?;
         let offset = checked_pose(&info.pose_in_action_space, "poseInActionSpace")?;
         let handle = new_handle();
