@@ -615,6 +615,35 @@ fn actions_read_the_scripted_controllers_and_haptics_are_logged() {
     )
     .expect("haptic");
     buzz.stop_feedback(&app.session, hands[1]).expect("stop haptic");
+    // The trigger action's bound sources are both triggers, named for people.
+    let info = xr::sys::BoundSourcesForActionEnumerateInfo {
+        ty: xr::sys::BoundSourcesForActionEnumerateInfo::TYPE,
+        next: std::ptr::null(),
+        action: trigger.as_raw(),
+    };
+    let mut sources = [xr::Path::NULL; 4];
+    let mut count = 0;
+    // SAFETY: valid structures and a large enough array.
+    let r = unsafe {
+        (i.fp().enumerate_bound_sources_for_action)(
+            app.session.as_raw(),
+            &info,
+            4,
+            &mut count,
+            sources.as_mut_ptr(),
+        )
+    };
+    assert_eq!((r, count), (xr::sys::Result::SUCCESS, 2));
+    let names: Vec<String> = sources[..2].iter().map(|&p| i.path_to_string(p).expect("path")).collect();
+    assert_eq!(names, ["/user/hand/left/input/trigger/value", "/user/hand/right/input/trigger/value"]);
+    let name = app
+        .session
+        .input_source_localized_name(
+            sources[1],
+            xr::InputSourceLocalizedNameFlags::USER_PATH | xr::InputSourceLocalizedNameFlags::COMPONENT,
+        )
+        .expect("localized name");
+    assert_eq!(name, "Right hand trigger value");
     // Asking a float action for a boolean state is a type mismatch.
     let wrong = xr::sys::ActionStateGetInfo {
         ty: xr::sys::ActionStateGetInfo::TYPE,
