@@ -5,6 +5,8 @@
 
 use std::path::PathBuf;
 
+pub mod xr;
+
 /// Per-pixel error is the largest absolute channel difference (0..=255).
 /// Thresholds set on llvmpipe (Mesa 22.3.6, LLVM 15), which renders bit-identically across
 /// runs: a change that moves any edge by a pixel fails, a blessed image passes exactly.
