@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 
-use super::brick::{split_index, Brick, BrickKey, Colour, BRICK_SIZE, DEFAULT_COLOUR};
+use super::brick::{split_index, Brick, BrickColours, BrickKey, Colour, BRICK_SIZE, DEFAULT_COLOUR};
 use super::history::{History, HistoryConfig, HistoryError, HistoryStats, Step};
 use crate::math::{IVec3, VoxelTransform};
 
@@ -324,8 +324,9 @@ impl Field {
     ///
     /// `edit(point, density, colour)` may change the sample. Where no brick exists, `create`
     /// decides: `true` makes one (for edits that add matter), `false` skips those points (for
-    /// edits that only remove or recolour matter). Bricks left empty are dropped. The bricks
-    /// whose mesh reads the box are marked dirty.
+    /// edits that only remove or recolour matter). Bricks left empty are dropped. The colour
+    /// given to a sample left empty is not kept (an empty sample's colour means nothing; see
+    /// [`Brick::compact`]). The bricks whose mesh reads the box are marked dirty.
     pub fn edit_box(
         &mut self,
         lo: IVec3,
@@ -380,6 +381,9 @@ impl Field {
                     if create || self.bricks.contains_key(&key) {
                         self.history.touch(key, self.bricks.get(&key));
                     }
+                    // A brick made by this edit holds no matter yet: its colour is that of the
+                    // first matter the edit puts in it.
+                    let mut fresh = !self.bricks.contains_key(&key);
                     // Copies the brick if the history or the journal shares it.
                     let brick = if create {
                         Arc::make_mut(self.bricks.entry(key).or_default())
@@ -396,7 +400,15 @@ impl Field {
                                 let i = Brick::linear(local);
                                 let mut colour = brick.colour[i];
                                 edit(base + local, &mut brick.density[i], &mut colour);
-                                brick.colour.set(i, colour);
+                                // An empty sample's colour means nothing: it is not stored.
+                                if brick.density[i] > 0.0 {
+                                    if fresh {
+                                        brick.colour = BrickColours::Uniform(colour);
+                                        fresh = false;
+                                    } else {
+                                        brick.colour.set(i, colour);
+                                    }
+                                }
                             }
                         }
                     }
@@ -522,6 +534,24 @@ mod tests {
         assert_eq!(f.tile_count(), 7);
         let painted = f.brick(IVec3::ZERO).unwrap();
         assert_eq!(painted.heap_bytes(), BRICK_VOLUME * 20, "two colours of matter: per-sample colours");
+    }
+
+    #[test]
+    fn new_matter_of_one_colour_keeps_its_colour_once() {
+        let red = [1.0, 0.0, 0.0, 1.0];
+        let mut f = Field::new(0.001, 0.5);
+        // Matter in a corner of a new brick: the brick's colour is the matter's.
+        f.edit_box(IVec3::splat(5), IVec3::splat(7), true, |_, d, c| {
+            *d = 0.5;
+            *c = red;
+        });
+        let brick = f.brick(IVec3::ZERO).unwrap();
+        assert_eq!((brick.colour.is_uniform(), brick.colour[0]), (true, red));
+        // Painting empty samples blue keeps nothing: they hold no matter to colour.
+        f.edit_box(IVec3::ZERO, IVec3::splat(4), false, |_, _, c| *c = [0.0, 0.0, 1.0, 1.0]);
+        assert!(f.brick(IVec3::ZERO).unwrap().colour.is_uniform());
+        assert_eq!(f.brick(IVec3::ZERO).unwrap().heap_bytes(), BRICK_VOLUME * 4);
+        assert_eq!(f.colour(IVec3::splat(6)), red);
     }
 
     #[test]
