@@ -210,4 +210,5 @@ fn the_station_without_a_display_renders_the_default_scene_headless_and_says_whe
         let image = image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         assert_eq!(image.width(), 1024);
     }
+    std::fs::remove_dir_all(&dir).unwrap();
 }

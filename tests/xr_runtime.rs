@@ -37,6 +37,16 @@ unsafe extern "system" fn on_validation(
     vk::FALSE
 }
 
+fn app_info() -> xr::ApplicationInfo<'static> {
+    xr::ApplicationInfo {
+        application_name: "argile-xr-runtime-test",
+        application_version: 1,
+        engine_name: "argile",
+        engine_version: 1,
+        api_version: xr::Version::new(1, 0, 0),
+    }
+}
+
 /// A test case's folder with a fresh output folder, the runtime's environment set, and the
 /// loader opened.
 struct Case {
@@ -72,13 +82,7 @@ impl Case {
         let mut exts = xr::ExtensionSet::default();
         exts.khr_vulkan_enable2 = true;
         exts.khr_composition_layer_depth = true;
-        let app = xr::ApplicationInfo {
-            application_name: "argile-xr-runtime-test",
-            application_version: 1,
-            engine_name: "argile",
-            engine_version: 1,
-            api_version: xr::Version::new(1, 0, 0),
-        };
+        let app = app_info();
         self.entry.create_instance(&app, &exts, &[]).expect("the test runtime creates an instance")
     }
 
@@ -571,9 +575,10 @@ fn actions_read_the_scripted_controllers_and_haptics_are_logged() {
         .unwrap_err(),
         xr::sys::Result::ERROR_PATH_UNSUPPORTED
     );
-    app.session.attach_action_sets(&[&set]).expect("attach");
+    // An action space may be made before its set is attached.
     let grip_space =
         grip.create_space(app.session.clone(), hands[1], xr::Posef::IDENTITY).expect("action space");
+    app.session.attach_action_sets(&[&set]).expect("attach");
     app.poll();
     app.session.begin(xr::ViewConfigurationType::PRIMARY_STEREO).expect("begin");
     for _ in 0..5 {
@@ -610,6 +615,35 @@ fn actions_read_the_scripted_controllers_and_haptics_are_logged() {
     )
     .expect("haptic");
     buzz.stop_feedback(&app.session, hands[1]).expect("stop haptic");
+    // The trigger action's bound sources are both triggers, named for people.
+    let info = xr::sys::BoundSourcesForActionEnumerateInfo {
+        ty: xr::sys::BoundSourcesForActionEnumerateInfo::TYPE,
+        next: std::ptr::null(),
+        action: trigger.as_raw(),
+    };
+    let mut sources = [xr::Path::NULL; 4];
+    let mut count = 0;
+    // SAFETY: valid structures and a large enough array.
+    let r = unsafe {
+        (i.fp().enumerate_bound_sources_for_action)(
+            app.session.as_raw(),
+            &info,
+            4,
+            &mut count,
+            sources.as_mut_ptr(),
+        )
+    };
+    assert_eq!((r, count), (xr::sys::Result::SUCCESS, 2));
+    let names: Vec<String> = sources[..2].iter().map(|&p| i.path_to_string(p).expect("path")).collect();
+    assert_eq!(names, ["/user/hand/left/input/trigger/value", "/user/hand/right/input/trigger/value"]);
+    let name = app
+        .session
+        .input_source_localized_name(
+            sources[1],
+            xr::InputSourceLocalizedNameFlags::USER_PATH | xr::InputSourceLocalizedNameFlags::COMPONENT,
+        )
+        .expect("localized name");
+    assert_eq!(name, "Right hand trigger value");
     // Asking a float action for a boolean state is a type mismatch.
     let wrong = xr::sys::ActionStateGetInfo {
         ty: xr::sys::ActionStateGetInfo::TYPE,
@@ -883,13 +917,7 @@ fn a_runtime_without_vulkan_or_without_a_headset_says_so() {
     std::env::set_var("ARGILE_XR_TEST_NO_HMD", "1");
     let exts = case.entry.enumerate_extensions().expect("extensions");
     assert!(!exts.khr_vulkan_enable2 && exts.khr_composition_layer_depth);
-    let app = xr::ApplicationInfo {
-        application_name: "argile-xr-runtime-test",
-        application_version: 1,
-        engine_name: "argile",
-        engine_version: 1,
-        api_version: xr::Version::new(1, 0, 0),
-    };
+    let app = app_info();
     let mut vulkan = xr::ExtensionSet::default();
     vulkan.khr_vulkan_enable2 = true;
     assert_eq!(
@@ -1027,13 +1055,30 @@ fn depth_layers_focus_changes_and_instance_loss_follow_the_script() {
                 view_count: 2,
                 views: proj.as_ptr(),
             };
-            let layers = [&layer as *const _ as *const xr::sys::CompositionLayerBaseHeader];
+            // A quad (a palette, say) in front of the user, from the left eye's image.
+            let quad = xr::sys::CompositionLayerQuad {
+                ty: xr::sys::CompositionLayerQuad::TYPE,
+                next: std::ptr::null(),
+                layer_flags: xr::CompositionLayerFlags::EMPTY,
+                space: app.stage.as_raw(),
+                eye_visibility: xr::EyeVisibility::BOTH,
+                sub_image: sub(app.swapchain.as_raw(), 0),
+                pose: xr::Posef {
+                    orientation: xr::Quaternionf::IDENTITY,
+                    position: xr::Vector3f { x: 0.0, y: 1.4, z: -0.5 },
+                },
+                size: xr::Extent2Df { width: 0.2, height: 0.2 },
+            };
+            let layers = [
+                &layer as *const _ as *const xr::sys::CompositionLayerBaseHeader,
+                &quad as *const _ as *const xr::sys::CompositionLayerBaseHeader,
+            ];
             let info = xr::sys::FrameEndInfo {
                 ty: xr::sys::FrameEndInfo::TYPE,
                 next: std::ptr::null(),
                 display_time: state.predicted_display_time,
                 environment_blend_mode: xr::EnvironmentBlendMode::OPAQUE,
-                layer_count: 1,
+                layer_count: 2,
                 layers: layers.as_ptr(),
             };
             // SAFETY: valid structures that live across the call.
@@ -1078,5 +1123,18 @@ fn depth_layers_focus_changes_and_instance_loss_follow_the_script() {
     assert!(Case::kinds(&log, "violation").is_empty(), "{:?}", Case::kinds(&log, "violation"));
     let ends = Case::kinds(&log, "end_frame");
     assert_eq!(ends.len(), 7);
-    assert!(ends[1..].iter().all(|e| e["depth"] == true && e["layers"] == 1));
+    assert!(ends[1..].iter().all(|e| e["depth"] == true && e["layers"] == 2));
+}
+
+#[test]
+fn a_bad_script_fails_the_instance_with_a_sentence_naming_the_file() {
+    let case = Case::new("bad-script", "[[key]]\nframe = 0\nright = { trigger = 3.0 }\n");
+    let app = app_info();
+    let made = case.entry.create_instance(&app, &xr::ExtensionSet::default(), &[]);
+    assert_eq!(made.err(), Some(xr::sys::Result::ERROR_RUNTIME_FAILURE));
+    let log = case.log();
+    let errors = Case::kinds(&log, "error");
+    assert_eq!(errors.len(), 1, "{log:?}");
+    let why = errors[0]["why"].as_str().unwrap();
+    assert!(why.contains("script.toml") && why.contains("trigger"), "{why}");
 }

@@ -29,18 +29,115 @@ pub type Colour = [f32; 4];
 /// The colour of samples nothing has painted: neutral clay grey.
 pub const DEFAULT_COLOUR: Colour = [0.6, 0.6, 0.6, 1.0];
 
-/// A dense block of samples: density in [0, 1] and linear RGBA colour.
+/// A dense block of densities, with colours stored once when the brick's matter has one colour.
+///
+/// Memory is what bounds a sculpt's size, so a brick stores what it must and no more:
+///
+/// - **Densities** are always per sample (`f32`, 2 KiB a brick).
+/// - **Colours** ([`BrickColours`]) are one colour for the whole brick while every sample that
+///   holds matter has the same colour (unpainted clay: almost every brick), and per sample
+///   (8 KiB more) only once paint or matter of another colour arrives. The colour of an empty
+///   sample means nothing (the mesher weighs colours by density and new matter brings its own
+///   colour, see [`Brick::compact`]), so it does not keep a brick from being uniform.
+/// - **Uniform bricks** (every sample the same density and colour: the inside of solid clay)
+///   are constant tiles: the field shares one brick per distinct value among every key that
+///   holds it (see `Field`), so a solid interior costs a map entry per brick, not its samples.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Brick {
     /// Density per sample, linear index `x + S·(y + S·z)`.
     pub density: Box<[f32; BRICK_VOLUME]>,
     /// Colour per sample, same indexing.
-    pub colour: Box<[Colour; BRICK_VOLUME]>,
+    pub colour: BrickColours,
+}
+
+/// A brick's colours: one for all samples, or one per sample.
+///
+/// Indexing reads a sample's colour either way; writing through `IndexMut` stores one colour
+/// per sample from then on. The field's edits avoid that when the colour does not change (see
+/// [`BrickColours::set`]) and [`Brick::compact`] folds per-sample colours back to one.
+/// Equality compares the samples' colours, whichever way they are stored.
+#[derive(Clone, Debug)]
+pub enum BrickColours {
+    /// Every sample has this colour.
+    Uniform(Colour),
+    /// One colour per sample.
+    PerSample(Box<[Colour; BRICK_VOLUME]>),
+}
+
+impl PartialEq for BrickColours {
+    fn eq(&self, other: &Self) -> bool {
+        match (self, other) {
+            (BrickColours::Uniform(a), BrickColours::Uniform(b)) => a == b,
+            _ => self.iter().eq(other.iter()),
+        }
+    }
+}
+
+impl BrickColours {
+    /// The colours of `BRICK_VOLUME` samples in linear order, stored once if they are all the
+    /// same (exactly: empty samples are not treated apart, unlike [`Brick::compact`]).
+    pub fn from_samples(mut colour: impl FnMut(usize) -> Colour) -> Self {
+        let first = colour(0);
+        let mut colours = BrickColours::Uniform(first);
+        for i in 1..BRICK_VOLUME {
+            colours.set(i, colour(i));
+        }
+        colours
+    }
+
+    /// Sets sample `i`'s colour, storing per-sample colours only if it differs.
+    #[inline]
+    pub fn set(&mut self, i: usize, colour: Colour) {
+        match self {
+            BrickColours::Uniform(c) if *c == colour => {}
+            _ => self[i] = colour,
+        }
+    }
+
+    /// The colours of every sample, in linear order.
+    pub fn iter(&self) -> impl Iterator<Item = &Colour> + '_ {
+        let (uniform, per_sample) = match self {
+            BrickColours::Uniform(c) => (Some(std::iter::repeat_n(c, BRICK_VOLUME)), None),
+            BrickColours::PerSample(v) => (None, Some(v.iter())),
+        };
+        uniform.into_iter().flatten().chain(per_sample.into_iter().flatten())
+    }
+
+    /// Whether one colour serves every sample.
+    pub fn is_uniform(&self) -> bool {
+        matches!(self, BrickColours::Uniform(_))
+    }
+}
+
+impl std::ops::Index<usize> for BrickColours {
+    type Output = Colour;
+
+    #[inline]
+    fn index(&self, i: usize) -> &Colour {
+        match self {
+            BrickColours::Uniform(c) => c,
+            BrickColours::PerSample(v) => &v[i],
+        }
+    }
+}
+
+impl std::ops::IndexMut<usize> for BrickColours {
+    /// The sample's own colour, storing one colour per sample from now on.
+    #[inline]
+    fn index_mut(&mut self, i: usize) -> &mut Colour {
+        if let BrickColours::Uniform(c) = *self {
+            *self = BrickColours::PerSample(Box::new([c; BRICK_VOLUME]));
+        }
+        match self {
+            BrickColours::PerSample(v) => &mut v[i],
+            BrickColours::Uniform(_) => unreachable!("made per-sample above"),
+        }
+    }
 }
 
 impl Default for Brick {
     fn default() -> Self {
-        Self { density: Box::new([0.0; BRICK_VOLUME]), colour: Box::new([DEFAULT_COLOUR; BRICK_VOLUME]) }
+        Self { density: Box::new([0.0; BRICK_VOLUME]), colour: BrickColours::Uniform(DEFAULT_COLOUR) }
     }
 }
 
@@ -57,9 +154,38 @@ impl Brick {
         self.density.iter().all(|&d| d == 0.0)
     }
 
-    /// Total density (matter) in the brick, in sample units.
+    /// Total matter in the brick, in sample units.
     pub fn mass(&self) -> f64 {
         self.density.iter().map(|&d| f64::from(d)).sum()
+    }
+
+    /// Folds per-sample colours back to one when every sample holding matter has the same
+    /// colour (empty samples take it too: their colour means nothing). Idempotent; a brick
+    /// with no matter keeps its colours.
+    pub fn compact(&mut self) {
+        let BrickColours::PerSample(colours) = &self.colour else { return };
+        let mut held = self.density.iter().zip(colours.iter()).filter(|(&d, _)| d > 0.0).map(|(_, c)| c);
+        let Some(&first) = held.next() else { return };
+        if held.all(|c| *c == first) {
+            self.colour = BrickColours::Uniform(first);
+        }
+    }
+
+    /// The value every sample holds, if they all hold the same density and colour: a constant
+    /// tile.
+    pub fn uniform_value(&self) -> Option<(f32, Colour)> {
+        let BrickColours::Uniform(colour) = self.colour else { return None };
+        let first = self.density[0];
+        self.density.iter().all(|d| d.to_bits() == first.to_bits()).then_some((first, colour))
+    }
+
+    /// Heap bytes the brick's samples take.
+    pub fn heap_bytes(&self) -> usize {
+        std::mem::size_of::<[f32; BRICK_VOLUME]>()
+            + match self.colour {
+                BrickColours::Uniform(_) => 0,
+                BrickColours::PerSample(_) => std::mem::size_of::<[Colour; BRICK_VOLUME]>(),
+            }
     }
 }
 
@@ -86,5 +212,51 @@ mod tests {
         assert_eq!(Brick::linear(IVec3::new(0, 1, 0)), 8);
         assert_eq!(Brick::linear(IVec3::new(0, 0, 1)), 64);
         assert_eq!(Brick::linear(IVec3::splat(7)), BRICK_VOLUME - 1);
+    }
+
+    #[test]
+    fn colours_stay_one_until_a_sample_differs() {
+        let mut b = Brick::default();
+        b.colour.set(3, DEFAULT_COLOUR);
+        assert!(b.colour.is_uniform());
+        b.colour.set(3, [1.0, 0.0, 0.0, 1.0]);
+        assert!(!b.colour.is_uniform());
+        assert_eq!(b.colour[3], [1.0, 0.0, 0.0, 1.0]);
+        assert_eq!(b.colour[4], DEFAULT_COLOUR);
+        assert_eq!(b.colour.iter().count(), BRICK_VOLUME);
+        assert_eq!(b.heap_bytes(), BRICK_VOLUME * 20);
+        // Stored either way, the same colours are equal.
+        let expanded = BrickColours::PerSample(Box::new([DEFAULT_COLOUR; BRICK_VOLUME]));
+        assert_eq!(expanded, BrickColours::Uniform(DEFAULT_COLOUR));
+        assert_ne!(b.colour, BrickColours::Uniform(DEFAULT_COLOUR));
+        assert_eq!(BrickColours::from_samples(|i| b.colour[i]), b.colour);
+        assert!(BrickColours::from_samples(|_| [0.5; 4]).is_uniform());
+    }
+
+    #[test]
+    fn compaction_ignores_the_colour_of_empty_samples() {
+        let red = [1.0, 0.0, 0.0, 1.0];
+        let mut b = Brick::default();
+        b.density[3] = 0.5;
+        b.colour[3] = red;
+        b.compact();
+        assert_eq!(b.colour, BrickColours::Uniform(red));
+        assert_eq!(b.heap_bytes(), BRICK_VOLUME * 4);
+        // Two colours of matter stay per sample.
+        b.density[4] = 1.0;
+        b.colour[4] = DEFAULT_COLOUR;
+        b.compact();
+        assert!(!b.colour.is_uniform());
+        assert_eq!((b.colour[3], b.colour[4]), (red, DEFAULT_COLOUR));
+    }
+
+    #[test]
+    fn a_brick_of_one_value_is_a_tile() {
+        let mut b = Brick::default();
+        assert_eq!(b.uniform_value(), Some((0.0, DEFAULT_COLOUR)));
+        b.density.fill(1.0);
+        assert_eq!(b.uniform_value(), Some((1.0, DEFAULT_COLOUR)));
+        b.density[9] = 0.99;
+        assert_eq!(b.uniform_value(), None);
     }
 }

@@ -26,10 +26,17 @@ use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use super::brick::{Brick, BrickKey, BRICK_VOLUME};
+use super::brick::{Brick, BrickColours, BrickKey, BRICK_VOLUME};
 
-/// Bytes one saved brick takes: densities and RGBA colours as `f32`.
+/// Bytes one brick's samples take written out in full (spill files, sculpt files, the
+/// journal): densities and RGBA colours as `f32`. In memory a brick takes
+/// [`Brick::heap_bytes`], less when its colours are uniform.
 pub const BRICK_BYTES: usize = BRICK_VOLUME * (4 + 16);
+
+/// Bytes the history counts for one saved entry: its key and flag, and the brick's samples.
+fn entry_bytes(brick: &Option<Arc<Brick>>) -> usize {
+    12 + brick.as_ref().map_or(0, |b| b.heap_bytes())
+}
 
 /// Limits and place of the undo history.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -84,7 +91,7 @@ pub(crate) struct Step {
 
 impl Step {
     fn bytes(&self) -> usize {
-        self.bricks.iter().map(|(_, b)| 12 + b.as_ref().map_or(0, |_| BRICK_BYTES)).sum()
+        self.bricks.iter().map(|(_, b)| entry_bytes(b)).sum()
     }
 }
 
@@ -199,7 +206,7 @@ impl History {
         if let Some((step, seen)) = &mut self.open {
             if seen.insert(key) {
                 let saved = current.cloned();
-                self.memory_bytes += 12 + saved.as_ref().map_or(0, |_| BRICK_BYTES);
+                self.memory_bytes += entry_bytes(&saved);
                 step.bricks.push((key, saved));
             }
         }
@@ -359,7 +366,7 @@ const MAGIC: &[u8; 4] = b"ARGH";
 const VERSION: u32 = 1;
 
 fn encode_step(step: &Step) -> Vec<u8> {
-    let mut out = Vec::with_capacity(16 + step.bytes() + 4);
+    let mut out = Vec::with_capacity(16 + step.bricks.len() * (13 + BRICK_BYTES) + 4);
     out.extend_from_slice(MAGIC);
     out.extend_from_slice(&VERSION.to_le_bytes());
     out.extend_from_slice(&(step.bricks.len() as u64).to_le_bytes());
@@ -446,8 +453,8 @@ fn decode_step(bytes: &[u8]) -> Result<Step, String> {
                 let mut b = Brick::default();
                 for i in 0..BRICK_VOLUME {
                     b.density[i] = f32_at(d, i);
-                    b.colour[i] = std::array::from_fn(|j| f32_at(c, 4 * i + j));
                 }
+                b.colour = BrickColours::from_samples(|i| std::array::from_fn(|j| f32_at(c, 4 * i + j)));
                 Some(Arc::new(b))
             }
             flag => return Err(format!("brick {key} has an unknown presence flag {flag}")),

@@ -9,6 +9,9 @@
 //!   a surface sits between samples with sub-voxel precision;
 //! - colour is linear RGBA per sample;
 //! - a lattice point without a brick is empty (density 0);
+//! - a brick's colours are stored once while its matter has one colour, per sample otherwise;
+//!   a brick of one value throughout (solid inside) is a constant tile shared by every key that
+//!   holds it (see [`Brick`] and [`Field`]);
 //! - after every edit, the dirty set holds every brick whose mesh reads a changed sample.
 
 mod brick;
@@ -16,7 +19,9 @@ mod history;
 mod sample;
 mod tree;
 
-pub use brick::{split_index, Brick, BrickKey, Colour, BRICK_SIZE, BRICK_VOLUME, DEFAULT_COLOUR};
+pub use brick::{
+    split_index, Brick, BrickColours, BrickKey, Colour, BRICK_SIZE, BRICK_VOLUME, DEFAULT_COLOUR,
+};
 pub use history::{HistoryConfig, HistoryError, HistoryStats, BRICK_BYTES};
 pub use sample::FieldReader;
 pub use tree::{bricks_reading, DirtySet, Field, HistoryStep};

@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 
-use super::brick::{split_index, Brick, BrickKey, Colour, BRICK_SIZE, DEFAULT_COLOUR};
+use super::brick::{split_index, Brick, BrickColours, BrickKey, Colour, BRICK_SIZE, DEFAULT_COLOUR};
 use super::history::{History, HistoryConfig, HistoryError, HistoryStats, Step};
 use crate::math::{IVec3, VoxelTransform};
 
@@ -43,6 +43,11 @@ pub type HistoryStep = Vec<(BrickKey, Option<Arc<Brick>>)>;
 /// the bricks a stroke replaced or made by taking a reference, and the first edit of a shared
 /// brick copies it, so each stroke copies each brick it touches once, as before.
 ///
+/// Constant tiles: a brick whose samples all hold one density and colour (the inside of solid
+/// clay) is shared, one `Arc` per distinct value, among every key that holds it; the first
+/// edit of such a key copies the tile into a brick of its own (copy-on-write), and an edit
+/// that leaves a brick uniform shares the tile again. Readers see bricks either way.
+///
 /// This first version has a single resolution level; its API (lattice points, bricks, dirty
 /// set, world sampling) is the one the multi-level field keeps.
 #[derive(Debug)]
@@ -50,6 +55,8 @@ pub struct Field {
     transform: VoxelTransform,
     iso: f32,
     bricks: HashMap<BrickKey, Arc<Brick>>,
+    /// The shared constant tiles, by the bits of their density and colour.
+    tiles: HashMap<TileValue, Arc<Brick>>,
     /// Lowest and highest density of each stored brick, kept with every edit, so that whole
     /// bricks can be classified (inside, outside, crossing the surface) without reading them.
     ranges: HashMap<BrickKey, (f32, f32)>,
@@ -64,6 +71,7 @@ impl Clone for Field {
             transform: self.transform,
             iso: self.iso,
             bricks: self.bricks.clone(),
+            tiles: self.tiles.clone(),
             ranges: self.ranges.clone(),
             dirty: self.dirty.clone(),
             history: History::new(self.history.config().clone()),
@@ -79,6 +87,7 @@ impl Field {
             transform: VoxelTransform::new(voxel_size_m),
             iso,
             bricks: HashMap::default(),
+            tiles: HashMap::default(),
             ranges: HashMap::default(),
             dirty: DirtySet::default(),
             history: History::new(HistoryConfig::default()),
@@ -150,10 +159,7 @@ impl Field {
         let mut replaced = Step { bricks: Vec::with_capacity(step.bricks.len()) };
         for (key, brick) in step.bricks {
             let old = match brick {
-                Some(b) => {
-                    self.ranges.insert(key, density_range(&b));
-                    self.bricks.insert(key, b)
-                }
+                Some(b) => self.store(key, b),
                 None => {
                     self.ranges.remove(&key);
                     self.bricks.remove(&key)
@@ -218,14 +224,13 @@ impl Field {
 
     /// Puts `brick` at `key`, replacing what was there (an all-empty brick removes it), and
     /// marks what it changes dirty. For loading stored sculpts; not journaled.
-    pub fn insert_brick(&mut self, key: BrickKey, brick: Brick) {
-        let range = density_range(&brick);
-        if range.1 == 0.0 {
+    pub fn insert_brick(&mut self, key: BrickKey, mut brick: Brick) {
+        brick.compact();
+        if brick.is_empty() {
             self.bricks.remove(&key);
             self.ranges.remove(&key);
         } else {
-            self.bricks.insert(key, Arc::new(brick));
-            self.ranges.insert(key, range);
+            self.store(key, Arc::new(brick));
         }
         let base = key * BRICK_SIZE;
         self.mark_dirty(base, base + IVec3::splat(BRICK_SIZE - 1));
@@ -253,15 +258,55 @@ impl Field {
         self.bricks.get(&key).map_or(DEFAULT_COLOUR, |b| b.colour[Brick::linear(local)])
     }
 
-    /// Bytes the samples take in memory: the bricks' densities and colours plus the per-brick
-    /// bookkeeping (map entries and density ranges), not counting the undo history.
+    /// Bytes the samples take in memory: each distinct brick's samples once (a constant tile
+    /// shared by many keys counts once) plus the per-key bookkeeping (map entries and density
+    /// ranges), not counting the undo history.
     pub fn memory_bytes(&self) -> usize {
-        let per_brick = super::history::BRICK_BYTES
-            + std::mem::size_of::<(BrickKey, Arc<Brick>)>()
-            + std::mem::size_of::<Brick>()
-            + 2 * std::mem::size_of::<usize>()
-            + std::mem::size_of::<(BrickKey, (f32, f32))>();
-        self.bricks.len() * per_brick
+        let per_key =
+            std::mem::size_of::<(BrickKey, Arc<Brick>)>() + std::mem::size_of::<(BrickKey, (f32, f32))>();
+        let per_brick = std::mem::size_of::<Brick>() + 2 * std::mem::size_of::<usize>();
+        let mut seen = HashSet::<*const Brick>::default();
+        let samples: usize = self
+            .bricks
+            .values()
+            .chain(self.tiles.values())
+            .filter(|b| seen.insert(Arc::as_ptr(b)))
+            .map(|b| per_brick + b.heap_bytes())
+            .sum();
+        self.bricks.len() * per_key + self.tiles.len() * (per_key + 4) + samples
+    }
+
+    /// Number of stored keys that share a constant tile.
+    pub fn tile_count(&self) -> usize {
+        self.bricks.values().filter(|b| self.tiles.values().any(|t| Arc::ptr_eq(b, t))).count()
+    }
+
+    /// Puts `brick` at `key` (sharing the constant tile of its value, if it is uniform) and
+    /// records its density range; returns what was there. `brick` holds matter.
+    fn store(&mut self, key: BrickKey, brick: Arc<Brick>) -> Option<Arc<Brick>> {
+        self.ranges.insert(key, density_range(&brick));
+        let brick = match brick.uniform_value() {
+            Some(value) => self.tile(value, brick),
+            None => brick,
+        };
+        self.bricks.insert(key, brick)
+    }
+
+    /// The shared tile of `value`, made from `brick` (which holds it) if there is none yet.
+    fn tile(&mut self, value: (f32, Colour), brick: Arc<Brick>) -> Arc<Brick> {
+        if self.tiles.len() >= MAX_UNUSED_TILES {
+            // Tiles no key shares any more (values that no longer occur).
+            self.tiles.retain(|_, t| Arc::strong_count(t) > 1);
+        }
+        let (density, colour) = value;
+        let bits = [
+            density.to_bits(),
+            colour[0].to_bits(),
+            colour[1].to_bits(),
+            colour[2].to_bits(),
+            colour[3].to_bits(),
+        ];
+        self.tiles.entry(bits).or_insert(brick).clone()
     }
 
     /// Samples strictly between empty and full: the band around the surface (what a narrow-band
@@ -279,8 +324,9 @@ impl Field {
     ///
     /// `edit(point, density, colour)` may change the sample. Where no brick exists, `create`
     /// decides: `true` makes one (for edits that add matter), `false` skips those points (for
-    /// edits that only remove or recolour matter). Bricks left empty are dropped. The bricks
-    /// whose mesh reads the box are marked dirty.
+    /// edits that only remove or recolour matter). Bricks left empty are dropped. The colour
+    /// given to a sample left empty is not kept (an empty sample's colour means nothing; see
+    /// [`Brick::compact`]). The bricks whose mesh reads the box are marked dirty.
     pub fn edit_box(
         &mut self,
         lo: IVec3,
@@ -300,6 +346,21 @@ impl Field {
         hi: IVec3,
         create: bool,
         reaches: impl Fn(IVec3, IVec3) -> bool,
+        edit: impl FnMut(IVec3, &mut f32, &mut Colour),
+    ) {
+        self.edit_where(lo, hi, create, |a, b, _| reaches(a, b), edit);
+    }
+
+    /// [`Field::edit_region`] for edits that also know which bricks they cannot change from
+    /// the brick's lowest and highest density: `changes(a, b, range)` gets the brick's
+    /// [`Field::density_range`] too (`None`: no brick), so that, say, adding matter skips a
+    /// brick that is already full without copying it.
+    pub fn edit_where(
+        &mut self,
+        lo: IVec3,
+        hi: IVec3,
+        create: bool,
+        changes: impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool,
         mut edit: impl FnMut(IVec3, &mut f32, &mut Colour),
     ) {
         if lo.cmpgt(hi).any() {
@@ -314,12 +375,15 @@ impl Field {
                     let base = key * s;
                     let a = lo.max(base) - base;
                     let b = hi.min(base + s - IVec3::ONE) - base;
-                    if !reaches(base + a, base + b) {
+                    if !changes(base + a, base + b, self.ranges.get(&key).copied()) {
                         continue;
                     }
                     if create || self.bricks.contains_key(&key) {
                         self.history.touch(key, self.bricks.get(&key));
                     }
+                    // A brick made by this edit holds no matter yet: its colour is that of the
+                    // first matter the edit puts in it.
+                    let mut fresh = !self.bricks.contains_key(&key);
                     // Copies the brick if the history or the journal shares it.
                     let brick = if create {
                         Arc::make_mut(self.bricks.entry(key).or_default())
@@ -334,14 +398,30 @@ impl Field {
                             for x in a.x..=b.x {
                                 let local = IVec3::new(x, y, z);
                                 let i = Brick::linear(local);
-                                edit(base + local, &mut brick.density[i], &mut brick.colour[i]);
+                                let mut colour = brick.colour[i];
+                                edit(base + local, &mut brick.density[i], &mut colour);
+                                // An empty sample's colour means nothing: it is not stored.
+                                if brick.density[i] > 0.0 {
+                                    if fresh {
+                                        brick.colour = BrickColours::Uniform(colour);
+                                        fresh = false;
+                                    } else {
+                                        brick.colour.set(i, colour);
+                                    }
+                                }
                             }
                         }
                     }
+                    brick.compact();
                     let range = density_range(brick);
                     if range.1 == 0.0 {
                         self.bricks.remove(&key);
                         self.ranges.remove(&key);
+                    } else if let Some(value) = brick.uniform_value() {
+                        let edited = self.bricks[&key].clone();
+                        let tile = self.tile(value, edited);
+                        self.bricks.insert(key, tile);
+                        self.ranges.insert(key, range);
                     } else {
                         self.ranges.insert(key, range);
                     }
@@ -374,6 +454,12 @@ impl Field {
     }
 }
 
+/// The bits of a constant tile's density and RGBA colour.
+type TileValue = [u32; 5];
+
+/// Distinct tile values kept before those no key shares are forgotten.
+const MAX_UNUSED_TILES: usize = 64;
+
 /// Lowest and highest density of a brick, in one pass.
 fn density_range(brick: &Brick) -> (f32, f32) {
     brick.density.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &d| (lo.min(d), hi.max(d)))
@@ -382,6 +468,7 @@ fn density_range(brick: &Brick) -> (f32, f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::field::BRICK_VOLUME;
 
     #[test]
     fn absent_points_are_empty() {
@@ -402,6 +489,69 @@ mod tests {
         f.edit_box(IVec3::splat(-3), IVec3::splat(2), false, |_, d, _| *d = 0.0);
         assert_eq!(f.brick_count(), 0);
         assert_eq!(f.density_range(IVec3::splat(-1)), None);
+    }
+
+    #[test]
+    fn solid_interiors_share_constant_tiles() {
+        let mut f = Field::new(0.001, 0.5);
+        f.edit_box(IVec3::splat(0), IVec3::splat(31), true, |_, d, _| *d = 1.0);
+        assert_eq!((f.brick_count(), f.tile_count()), (64, 64));
+        // 64 keys, one shared brick of samples: far less than 64 bricks' samples.
+        assert!(f.memory_bytes() < 64 * 256 + 2 * BRICK_VOLUME * 4, "{}", f.memory_bytes());
+        let solid = f.clone();
+
+        // Editing one key copies the tile for it alone.
+        f.begin_stroke();
+        f.edit_box(IVec3::splat(3), IVec3::splat(3), false, |_, d, _| *d = 0.25);
+        f.end_stroke();
+        assert_eq!(f.tile_count(), 63);
+        assert_eq!(f.density(IVec3::splat(3)), 0.25);
+        assert_eq!(f.density(IVec3::splat(11)), 1.0);
+        assert_eq!(f.density(IVec3::new(3, 3, 2)), 1.0);
+
+        // Filling it again shares the tile again; undo restores exactly.
+        f.begin_stroke();
+        f.edit_box(IVec3::splat(3), IVec3::splat(3), false, |_, d, _| *d = 1.0);
+        f.end_stroke();
+        assert_eq!(f.tile_count(), 64);
+        assert!(f.undo().unwrap() && f.undo().unwrap());
+        assert!(f.same_samples(&solid));
+        assert_eq!(f.tile_count(), 64);
+    }
+
+    #[test]
+    fn a_painted_tile_keeps_its_neighbours_colour() {
+        let red = [1.0, 0.0, 0.0, 1.0];
+        let mut f = Field::new(0.001, 0.5);
+        f.edit_box(IVec3::ZERO, IVec3::splat(15), true, |_, d, _| *d = 1.0);
+        f.edit_box(IVec3::ZERO, IVec3::splat(7), false, |_, _, c| *c = red);
+        // The painted brick is a tile of its own value; the others keep sharing the grey one.
+        assert_eq!(f.tile_count(), 8);
+        assert_eq!(f.colour(IVec3::splat(7)), red);
+        assert_eq!(f.colour(IVec3::splat(8)), DEFAULT_COLOUR);
+        f.edit_box(IVec3::ZERO, IVec3::ZERO, false, |_, _, c| *c = DEFAULT_COLOUR);
+        assert_eq!((f.colour(IVec3::ZERO), f.colour(IVec3::ONE)), (DEFAULT_COLOUR, red));
+        assert_eq!(f.tile_count(), 7);
+        let painted = f.brick(IVec3::ZERO).unwrap();
+        assert_eq!(painted.heap_bytes(), BRICK_VOLUME * 20, "two colours of matter: per-sample colours");
+    }
+
+    #[test]
+    fn new_matter_of_one_colour_keeps_its_colour_once() {
+        let red = [1.0, 0.0, 0.0, 1.0];
+        let mut f = Field::new(0.001, 0.5);
+        // Matter in a corner of a new brick: the brick's colour is the matter's.
+        f.edit_box(IVec3::splat(5), IVec3::splat(7), true, |_, d, c| {
+            *d = 0.5;
+            *c = red;
+        });
+        let brick = f.brick(IVec3::ZERO).unwrap();
+        assert_eq!((brick.colour.is_uniform(), brick.colour[0]), (true, red));
+        // Painting empty samples blue keeps nothing: they hold no matter to colour.
+        f.edit_box(IVec3::ZERO, IVec3::splat(4), false, |_, _, c| *c = [0.0, 0.0, 1.0, 1.0]);
+        assert!(f.brick(IVec3::ZERO).unwrap().colour.is_uniform());
+        assert_eq!(f.brick(IVec3::ZERO).unwrap().heap_bytes(), BRICK_VOLUME * 4);
+        assert_eq!(f.colour(IVec3::splat(6)), red);
     }
 
     #[test]

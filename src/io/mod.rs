@@ -74,7 +74,7 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use crate::field::{Brick, BrickKey, Field, HistoryStep, BRICK_SIZE, BRICK_VOLUME};
+use crate::field::{Brick, BrickColours, BrickKey, Colour, Field, HistoryStep, BRICK_SIZE, BRICK_VOLUME};
 use crate::math::IVec3;
 
 mod atomic;
@@ -332,12 +332,12 @@ pub(crate) fn read_brick(record: &[u8]) -> Result<(BrickKey, Brick), String> {
             return Err(format!("brick {key} holds density {d}, outside [0, 1]"));
         }
         brick.density[i] = d;
-        let c = std::array::from_fn(|j| f(12 + 4 * BRICK_VOLUME + 16 * i + 4 * j));
-        if c.iter().any(|v: &f32| !v.is_finite()) {
-            return Err(format!("brick {key} holds a colour that is not a number"));
-        }
-        brick.colour[i] = c;
     }
+    let colour = |i: usize| -> Colour { std::array::from_fn(|j| f(12 + 4 * BRICK_VOLUME + 16 * i + 4 * j)) };
+    if (0..BRICK_VOLUME).any(|i| colour(i).iter().any(|v| !v.is_finite())) {
+        return Err(format!("brick {key} holds a colour that is not a number"));
+    }
+    brick.colour = BrickColours::from_samples(colour);
     Ok((key, brick))
 }
 

@@ -40,9 +40,15 @@ use crate::math::{IVec3, Vec3};
 /// Mixes the colour of `added` new matter into a sample that held `old_density` of matter.
 ///
 /// Colour is mass-weighted: the old matter keeps its colour, the new matter brings the tool's.
+/// A sample that held no matter takes the tool's colour exactly (an empty sample's colour means
+/// nothing, see `field::Brick::compact`).
 #[inline]
 pub(super) fn mix_in(colour: &mut Colour, old_density: f32, new_density: f32, tool: Colour) {
     if new_density <= old_density || new_density <= 0.0 {
+        return;
+    }
+    if old_density <= 0.0 {
+        *colour = tool;
         return;
     }
     let t = (new_density - old_density) / new_density;
@@ -72,18 +78,40 @@ pub fn stamp_sphere(
     let hi = (centre + Vec3::splat(reach)).floor().as_ivec3();
     // A brick's share of the box matters only if its nearest point is within the tool's reach
     // (the corners of the box lie outside the sphere).
+    let reach2 = reach * reach;
     let reaches =
-        |a: IVec3, b: IVec3| centre.clamp(a.as_vec3(), b.as_vec3()).distance_squared(centre) <= reach * reach;
+        |a: IVec3, b: IVec3| centre.clamp(a.as_vec3(), b.as_vec3()).distance_squared(centre) <= reach2;
+    // The tool's density from the squared distance: a square root only on the ramp (outside
+    // the reach it is 0, inside the core 1), the same values as `solid_density` of the distance.
+    let core = radius - 0.5 * SOLID_BAND_VOXELS;
+    let core2 = if core > 0.0 { core * core } else { -1.0 };
+    let tool_at = move |p: IVec3| -> f32 {
+        let d2 = p.as_vec3().distance_squared(centre);
+        if d2 >= reach2 {
+            0.0
+        } else if d2 <= core2 {
+            1.0
+        } else {
+            solid_density(d2.sqrt() - radius)
+        }
+    };
     match action {
-        Action::Add => field.edit_region(lo, hi, true, reaches, |p, d, c| {
-            let tool = solid_density(p.as_vec3().distance(centre) - radius);
-            let new = d.max(tool);
-            mix_in(c, *d, new, colour);
-            *d = new;
-        }),
+        // A full brick stays full, colour and all: adding to it changes nothing.
+        Action::Add => field.edit_where(
+            lo,
+            hi,
+            true,
+            |a, b, range| reaches(a, b) && range.is_none_or(|r| r.0 < 1.0),
+            |p, d, c| {
+                let tool = tool_at(p);
+                if tool > *d {
+                    mix_in(c, *d, tool, colour);
+                    *d = tool;
+                }
+            },
+        ),
         Action::Remove => field.edit_region(lo, hi, false, reaches, |p, d, _| {
-            let tool = solid_density(p.as_vec3().distance(centre) - radius);
-            *d = d.min(1.0 - tool);
+            *d = d.min(1.0 - tool_at(p));
         }),
         other => {
             let tool = super::Tool::new(super::ToolShape::sphere(radius_m), other, colour);
@@ -159,6 +187,29 @@ mod tests {
             let v = f.density(IVec3::new(x, 0, 0));
             assert!(v <= last, "monotone at x = {x}");
             last = v;
+        }
+    }
+
+    #[test]
+    fn the_stamp_kernel_is_the_ramp_of_the_distance_at_every_point() {
+        // Small radii (no saturated core), a core, sub-voxel centres: the kernel's shortcuts
+        // (nothing beyond the reach, 1 inside the core) give the ramp's values everywhere.
+        for (radius_voxels, centre) in
+            [(0.7, Vec3::new(0.3, -0.2, 0.45)), (1.9, Vec3::ZERO), (6.3, Vec3::splat(0.5))]
+        {
+            let mut f = Field::new(0.001, 0.5);
+            stamp_sphere(&mut f, centre * 0.001, radius_voxels * 0.001, Action::Add, [1.0; 4]);
+            let n = (radius_voxels + 4.0) as i32;
+            for z in -n..=n {
+                for y in -n..=n {
+                    for x in -n..=n {
+                        let p = IVec3::new(x, y, z);
+                        let want = solid_density(p.as_vec3().distance(centre) - radius_voxels);
+                        let got = f.density(p);
+                        assert!((got - want).abs() < 1e-5, "r {radius_voxels} at {p}: {got} against {want}");
+                    }
+                }
+            }
         }
     }
 

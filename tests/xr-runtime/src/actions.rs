@@ -493,10 +493,13 @@ pub fn check_action_of_kind(
     a: xr::Action,
     sub: xr::Path,
     kind: ActionKind,
+    needs_attached: bool,
 ) -> Result<(), Refusal> {
     let act = action(inst, a)?;
     let attached = inst.session.as_ref().and_then(|s| s.actions.attached.as_ref());
-    if !attached.is_some_and(|sets| sets.contains(&act.set)) {
+    // An action space may be made before its set is attached (it locates once the set is
+    // attached and synced); states and haptics need the set attached.
+    if needs_attached && !attached.is_some_and(|sets| sets.contains(&act.set)) {
         return refuse(
             xr::Result::ERROR_ACTIONSET_NOT_ATTACHED,
             format!("action {:?}'s set is not attached to XrSession {:#x}", act.name, session.into_raw()),
@@ -528,7 +531,7 @@ unsafe fn state(
 ) -> Result<Synced, Refusal> {
     inst.session(session)?;
     let info = input(info, xr::StructureType::ACTION_STATE_GET_INFO, "XrActionStateGetInfo")?;
-    check_action_of_kind(inst, session, info.action, info.subaction_path, kind)?;
+    check_action_of_kind(inst, session, info.action, info.subaction_path, kind, true)?;
     let s = inst.session.as_ref().expect("checked");
     Ok(s.actions
         .synced
@@ -620,7 +623,7 @@ pub(crate) unsafe extern "system" fn enumerate_bound_sources_for_action(
             "XrBoundSourcesForActionEnumerateInfo",
         )?;
         let kind = action(inst, info.action)?.kind;
-        check_action_of_kind(inst, session, info.action, xr::Path::NULL, kind)?;
+        check_action_of_kind(inst, session, info.action, xr::Path::NULL, kind, true)?;
         let s = inst.session.as_ref().expect("checked");
         let Some(profile) = s.actions.profile else { return enumerate_values(capacity, count, sources, &[]) };
         let bound: Vec<Source> = s.actions.sources(info.action.into_raw(), 0).collect();
@@ -684,7 +687,7 @@ unsafe fn haptic_hands(
     let s = inst.session(session)?;
     let focused = s.lifecycle.focused();
     let info = input(info, xr::StructureType::HAPTIC_ACTION_INFO, "XrHapticActionInfo")?;
-    check_action_of_kind(inst, session, info.action, info.subaction_path, ActionKind::Vibration)?;
+    check_action_of_kind(inst, session, info.action, info.subaction_path, ActionKind::Vibration, true)?;
     if !focused {
         return Ok(None);
     }

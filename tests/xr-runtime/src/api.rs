@@ -29,9 +29,17 @@ pub const FORMATS: [vk::Format; 3] =
 
 pub type Outcome = Result<xr::Result, Refusal>;
 
-static NEXT_HANDLE: AtomicU64 = AtomicU64::new(0x5a00_0001);
+static NEXT_HANDLE: AtomicU64 = AtomicU64::new(0);
 
+/// A fresh handle value. The loader may unload and reload the runtime between instances, which
+/// restarts this counter, so it starts from the clock: a handle kept from an earlier instance
+/// does not name an object of a later one.
 pub fn new_handle() -> u64 {
+    if NEXT_HANDLE.load(Ordering::Relaxed) == 0 {
+        let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap_or_default();
+        let seed = (now.as_micros() as u64 & 0xffff_ffff_ffff) << 12 | 1;
+        let _ = NEXT_HANDLE.compare_exchange(0, seed, Ordering::Relaxed, Ordering::Relaxed);
+    }
     NEXT_HANDLE.fetch_add(1, Ordering::Relaxed)
 }
 
@@ -352,6 +360,31 @@ pub fn pose_json(p: &Pose) -> serde_json::Value {
 // The instance's helpers.
 
 impl Instance {
+    pub fn new(handle: u64, vulkan: bool, depth: bool, script: Script, log: Log) -> Instance {
+        Instance {
+            handle,
+            vulkan,
+            depth,
+            script,
+            log,
+            paths: Vec::new(),
+            events: VecDeque::new(),
+            lost: false,
+            requirements_queried: false,
+            vk_instances: Vec::new(),
+            vk_devices: Vec::new(),
+            suggested: HashMap::new(),
+            frames_ended: 0,
+            frames_waited: 0,
+            events_fired: 0,
+            session: None,
+            spaces: HashMap::new(),
+            swapchains: HashMap::new(),
+            action_sets: HashMap::new(),
+            actions: HashMap::new(),
+        }
+    }
+
     pub fn check(&self, h: xr::Instance) -> Result<(), Refusal> {
         if h.into_raw() != self.handle {
             return refuse(
@@ -641,28 +674,7 @@ pub(crate) unsafe extern "system" fn create_instance(
         let handle = new_handle();
         log.write(json!({"kind": "instance", "application": get_str(&info.application_info.application_name)?, "vulkan_enable2": vulkan, "depth": depth}));
         rt.orphan_log = None;
-        rt.instance = Some(Instance {
-            handle,
-            vulkan,
-            depth,
-            script,
-            log,
-            paths: Vec::new(),
-            events: VecDeque::new(),
-            lost: false,
-            requirements_queried: false,
-            vk_instances: Vec::new(),
-            vk_devices: Vec::new(),
-            suggested: HashMap::new(),
-            frames_ended: 0,
-            frames_waited: 0,
-            events_fired: 0,
-            session: None,
-            spaces: HashMap::new(),
-            swapchains: HashMap::new(),
-            action_sets: HashMap::new(),
-            actions: HashMap::new(),
-        });
+        rt.instance = Some(Instance::new(handle, vulkan, depth, script, log));
         *out = xr::Instance::from_raw(handle);
         Ok(xr::Result::SUCCESS)
     })
@@ -955,17 +967,19 @@ pub(crate) unsafe extern "system" fn create_vulkan_instance(
         inst.check_system(info.system_id)?;
         out_ptr(vk_instance, "the VkInstance output")?;
         out_ptr(vk_result, "the VkResult output")?;
-        if !inst.requirements_queried {
-            return refuse(
-                xr::Result::ERROR_GRAPHICS_REQUIREMENTS_CALL_MISSING,
-                "xrGetVulkanGraphicsRequirements2KHR was not called first",
-            );
-        }
         let Some(gipa) = info.pfn_get_instance_proc_addr else {
             return refuse(xr::Result::ERROR_VALIDATION_FAILURE, "pfnGetInstanceProcAddr is null");
         };
         if info.vulkan_create_info.is_null() {
             return refuse(xr::Result::ERROR_VALIDATION_FAILURE, "vulkanCreateInfo is null");
+        }
+        if (*(info.vulkan_create_info as *const vk::InstanceCreateInfo)).s_type
+            != vk::StructureType::INSTANCE_CREATE_INFO
+        {
+            return refuse(
+                xr::Result::ERROR_VALIDATION_FAILURE,
+                "vulkanCreateInfo is not a VkInstanceCreateInfo",
+            );
         }
         if info.create_flags != xr::VulkanInstanceCreateFlagsKHR::EMPTY {
             return refuse(xr::Result::ERROR_VALIDATION_FAILURE, "createFlags must be 0");
@@ -1043,6 +1057,14 @@ pub(crate) unsafe extern "system" fn create_vulkan_device(
                 "pfnGetInstanceProcAddr or vulkanCreateInfo is null",
             );
         }
+        if (*(info.vulkan_create_info as *const vk::DeviceCreateInfo)).s_type
+            != vk::StructureType::DEVICE_CREATE_INFO
+        {
+            return refuse(
+                xr::Result::ERROR_VALIDATION_FAILURE,
+                "vulkanCreateInfo is not a VkDeviceCreateInfo",
+            );
+        }
         if info.create_flags != xr::VulkanDeviceCreateFlagsKHR::EMPTY {
             return refuse(xr::Result::ERROR_VALIDATION_FAILURE, "createFlags must be 0");
         }
@@ -1050,7 +1072,7 @@ pub(crate) unsafe extern "system" fn create_vulkan_device(
         let Some(made) = inst.vk_instances.iter().find(|i| i.physical.is_some_and(|p| raw(p) == wanted))
         else {
             return refuse(
-                xr::Result::ERROR_VALIDATION_FAILURE,
+                xr::Result::ERROR_HANDLE_INVALID,
                 "vulkanPhysicalDevice is not the one xrGetVulkanGraphicsDevice2KHR returned",
             );
         };
@@ -1286,6 +1308,7 @@ pub(crate) unsafe extern "system" fn create_action_space(
             info.action,
             info.subaction_path,
             ActionKind::Pose,
+            false,
         )?;
         let offset = checked_pose(&info.pose_in_action_space, "poseInActionSpace")?;
         let handle = new_handle();
@@ -1701,6 +1724,32 @@ fn check_sub_image(
     Ok(())
 }
 
+/// Checks a quad layer (accepted and counted, not captured).
+fn check_quad(inst: &Instance, session: u64, q: &xr::CompositionLayerQuad, i: usize) -> Result<(), Refusal> {
+    let what = format!("layer {i} (quad)");
+    let space = inst.space(q.space)?;
+    if space.session != session {
+        return refuse(
+            xr::Result::ERROR_HANDLE_INVALID,
+            format!("{what}: its space belongs to another session"),
+        );
+    }
+    checked_pose(&q.pose, &what)?;
+    if !(q.size.width > 0.0 && q.size.height > 0.0) {
+        return refuse(
+            xr::Result::ERROR_VALIDATION_FAILURE,
+            format!("{what}: size {}×{} is not positive", q.size.width, q.size.height),
+        );
+    }
+    if !(0..=2).contains(&q.eye_visibility.into_raw()) {
+        return refuse(
+            xr::Result::ERROR_VALIDATION_FAILURE,
+            format!("{what}: eyeVisibility {:?}", q.eye_visibility),
+        );
+    }
+    check_sub_image(inst, session, &q.sub_image, &what)
+}
+
 /// Checks the layers of xrEndFrame; returns the projection views of the first projection layer
 /// (in stage space) and whether depth came with them.
 unsafe fn check_layers(
@@ -1730,10 +1779,17 @@ unsafe fn check_layers(
         if layer.is_null() {
             return refuse(xr::Result::ERROR_LAYER_INVALID, format!("layer {i} is null"));
         }
+        if (*layer).ty == xr::StructureType::COMPOSITION_LAYER_QUAD {
+            check_quad(inst, session, &*(layer as *const xr::CompositionLayerQuad), i)?;
+            continue;
+        }
         if (*layer).ty != xr::StructureType::COMPOSITION_LAYER_PROJECTION {
             return refuse(
                 xr::Result::ERROR_LAYER_INVALID,
-                format!("layer {i} has type {:?}; the runtime composes projection layers", (*layer).ty),
+                format!(
+                    "layer {i} has type {:?}; the runtime composes projection and quad layers",
+                    (*layer).ty
+                ),
             );
         }
         let layer = &*(layer as *const xr::CompositionLayerProjection);
@@ -1863,4 +1919,68 @@ fn capture(inst: &mut Instance, frame: u64, views: &[SubmittedView]) -> Result<(
         inst.log.write(l);
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn instance(script: &str) -> Instance {
+        Instance::new(1, true, true, Script::parse(script).unwrap(), Log::open(None).unwrap())
+    }
+
+    #[test]
+    fn frames_and_display_times_map_both_ways() {
+        let inst = instance("display_hz = 50.0");
+        assert_eq!(inst.frame_time(0.0), T0 + 20_000_000);
+        assert_eq!(inst.frame_time(3.0), T0 + 80_000_000);
+        assert!((inst.time_frame(inst.frame_time(7.5)) - 7.5).abs() < 1e-9);
+    }
+
+    #[test]
+    fn reference_spaces_sit_where_the_specification_puts_them() {
+        // The head starts 1.7 m up, turned 90° left; it then walks 1 m along x.
+        let inst = instance(
+            "[[key]]\nframe = 0\nhead = { position = [0.5, 1.7, 0.0], orientation = [0, 0.70710677, 0, 0.70710677] }\n\
+             [[key]]\nframe = 10\nhead = { position = [1.5, 1.7, 0.0] }",
+        );
+        let space = |kind| Space { session: 0, kind, offset: Pose::IDENTITY };
+        let t = inst.frame_time(10.0);
+        let stage = inst.locate(&space(SpaceKind::Reference(xr::ReferenceSpaceType::STAGE)), t).unwrap();
+        assert_eq!(stage, Pose::IDENTITY);
+        // LOCAL stays where the head started, turned with it about the vertical only.
+        let local = inst.locate(&space(SpaceKind::Reference(xr::ReferenceSpaceType::LOCAL)), t).unwrap();
+        assert!((local.position - Vec3::new(0.5, 1.7, 0.0)).length() < 1e-5);
+        assert!((local.orientation * Vec3::NEG_Z - Vec3::NEG_X).length() < 1e-5);
+        // VIEW follows the head.
+        let view = inst.locate(&space(SpaceKind::Reference(xr::ReferenceSpaceType::VIEW)), t).unwrap();
+        assert!((view.position - Vec3::new(1.5, 1.7, 0.0)).length() < 1e-5);
+        // An offset is applied in the space's own frame.
+        let offset = Space {
+            session: 0,
+            kind: SpaceKind::Reference(xr::ReferenceSpaceType::STAGE),
+            offset: Pose::new(Vec3::new(0.0, 0.0, -1.0), Quat::IDENTITY),
+        };
+        assert!((inst.locate(&offset, t).unwrap().position - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6);
+        // An action space with no session cannot be located.
+        assert!(inst.locate(&space(SpaceKind::Action { action: 9, sub: 0 }), t).is_none());
+    }
+
+    #[test]
+    fn poses_given_by_the_application_must_be_rotations() {
+        let mut p = xr::Posef::IDENTITY;
+        assert!(checked_pose(&p, "pose").is_ok());
+        p.orientation.w = 0.5;
+        assert_eq!(checked_pose(&p, "pose").unwrap_err().result, xr::Result::ERROR_POSE_INVALID);
+    }
+
+    #[test]
+    fn violations_are_the_applications_mistakes_only() {
+        assert!(is_violation(xr::Result::ERROR_CALL_ORDER_INVALID));
+        assert!(is_violation(xr::Result::ERROR_HANDLE_INVALID));
+        assert!(!is_violation(xr::Result::ERROR_SESSION_LOST));
+        assert!(!is_violation(xr::Result::ERROR_FORM_FACTOR_UNAVAILABLE));
+        assert!(!is_violation(xr::Result::SESSION_NOT_FOCUSED));
+        assert_eq!(result_name(xr::Result::ERROR_VALIDATION_FAILURE), "XR_ERROR_VALIDATION_FAILURE");
+    }
 }
