@@ -14,8 +14,9 @@ use clap::{Parser, Subcommand};
 
 /// Argile: sculpt virtual clay in stereo and VR.
 ///
-/// With no command, starts the station on the default scene: in a window when there is a
-/// display, else headless (it renders the default scene and says where the stereo pair is).
+/// With no command, starts the station on the default scene: in a headset when an OpenXR
+/// runtime with a headset is ready, else in a window when there is a display, else headless
+/// (it renders the default scene and says where the stereo pair is).
 #[derive(Parser)]
 #[command(version, about, long_about)]
 struct Cli {
@@ -233,7 +234,11 @@ fn main() -> ExitCode {
         .init();
     let cli = Cli::parse();
     let result = match cli.command {
-        None => station(None, None, app::StationOptions::default()),
+        // A headset when one is ready, else the desktop station.
+        None => {
+            let xr = (argile::xr::runtime_configured() && argile::xr::probe().ready()).then_some(false);
+            station(None, xr, app::StationOptions::default())
+        }
         Some(Command::Run {
             scene,
             frames,

@@ -427,3 +427,30 @@ fn a_lost_instance_mid_stroke_saves_and_quits() {
     no_violations(&log(&dir));
     half_a_groove_is_saved(&dir);
 }
+
+#[test]
+fn with_no_command_a_ready_headset_is_chosen() {
+    let dir = case_dir("xr-automatic");
+    let manifest = common::xr::test_runtime_manifest(&dir);
+    let script = dir.join("script.toml");
+    let text_ = format!(
+        "recommended_size = [64, 64]\n[[key]]\nframe = 0\n{HEAD}\n[[event]]\nframe = 6\nkind = \"exit\"\n"
+    );
+    std::fs::write(&script, text_).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_argile"))
+        .current_dir(&dir)
+        .env("XR_RUNTIME_JSON", &manifest)
+        .env("ARGILE_XR_TEST_SCRIPT", &script)
+        .env("ARGILE_XR_TEST_OUT", dir.join("runtime"))
+        .env("XDG_STATE_HOME", dir.join("state"))
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env("RUST_LOG", "warn")
+        .output()
+        .expect("argile runs");
+    let said = text(&out);
+    assert!(out.status.success(), "{said}");
+    assert!(said.contains("headset session on Argile XR test runtime"), "{said}");
+    assert!(dir.join("default.argile").is_file(), "the sculpt is saved where the station saves it: {said}");
+    no_violations(&log(&dir));
+}

@@ -158,6 +158,32 @@ impl std::fmt::Display for XrState {
     }
 }
 
+impl XrState {
+    /// Whether a headset session can start: a runtime with `XR_KHR_vulkan_enable2` and a
+    /// headset.
+    pub fn ready(&self) -> bool {
+        matches!(self, XrState::Runtime { vulkan_enable2: true, headset: Ok(_), .. })
+    }
+}
+
+/// Whether an OpenXR runtime is configured at all (`XR_RUNTIME_JSON`, or an active runtime
+/// manifest where the loader looks on Linux), so that starting without one probes nothing
+/// (the loader would print its errors).
+pub fn runtime_configured() -> bool {
+    if std::env::var_os("XR_RUNTIME_JSON").is_some() {
+        return true;
+    }
+    let config_home = std::env::var_os("XDG_CONFIG_HOME")
+        .map(std::path::PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| std::path::Path::new(&h).join(".config")));
+    let config_dirs = std::env::var("XDG_CONFIG_DIRS").unwrap_or_else(|_| "/etc/xdg".into());
+    config_home
+        .into_iter()
+        .chain(config_dirs.split(':').filter(|d| !d.is_empty()).map(std::path::PathBuf::from))
+        .chain([std::path::PathBuf::from("/etc")])
+        .any(|d| d.join("openxr/1/active_runtime.json").is_file())
+}
+
 /// Looks for the OpenXR loader, a runtime and a headset, without creating a session.
 pub fn probe() -> XrState {
     let entry = match load_entry(None) {
@@ -221,6 +247,20 @@ mod tests {
         };
         assert!(h.is_absent() && h.to_string().contains("no headset"));
         assert!(!XrError::Unsupported("x".into()).is_absent());
+    }
+
+    #[test]
+    fn only_a_runtime_with_vulkan_and_a_headset_is_ready() {
+        let runtime = |vulkan_enable2, headset: Result<&str, &str>| XrState::Runtime {
+            name: "Test".into(),
+            version: "1".into(),
+            vulkan_enable2,
+            headset: headset.map(Into::into).map_err(Into::into),
+        };
+        assert!(runtime(true, Ok("HMD")).ready());
+        assert!(!runtime(false, Ok("HMD")).ready());
+        assert!(!runtime(true, Err("XR_ERROR_FORM_FACTOR_UNAVAILABLE")).ready());
+        assert!(!XrState::NoRuntime { reason: String::new() }.ready());
     }
 
     #[test]
