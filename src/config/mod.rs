@@ -73,6 +73,8 @@ pub enum StationAction {
     PointerAway,
     /// Held: move the desk tool towards the viewer.
     PointerToward,
+    /// Open a sculpt file: the newest in the open folder, then each older one in turn.
+    Open,
 }
 
 /// Every action with its name in the bindings file.
@@ -102,6 +104,7 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("pointer-down", StationAction::PointerDown),
     ("pointer-away", StationAction::PointerAway),
     ("pointer-toward", StationAction::PointerToward),
+    ("open", StationAction::Open),
 ];
 
 impl StationAction {
