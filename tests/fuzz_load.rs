@@ -8,7 +8,7 @@
 //! In the test suite it runs two seconds. For a longer run (the figure in `src/io/mod.rs`):
 //!
 //! ```sh
-//! ARGILE_FUZZ_SECONDS=120 cargo test --release --test fuzz_load -- --nocapture
+//! ARGILE_FUZZ_SECONDS=120 cargo test --test fuzz_load -- --nocapture
 //! ```
 //!
 //! `ARGILE_FUZZ_SEED` picks the mutation stream (default 1). An input that panics is written
