@@ -30,6 +30,7 @@ use super::environment::load_environment;
 use super::frame::build_frame;
 use super::playback::Playback;
 use crate::config::{Chord, KeyBindings, Modifiers, StationAction};
+use crate::input::clutch::{Clutch, ClutchGains};
 use crate::input::desk::{DeskInput, FrameInput};
 use crate::input::gamepad::{Contact, ContactFeedback, GamepadMotion, Gamepads, Rumble};
 use crate::input::motion::{ActionEvent, DeviceClass, InputAction, Rates, Target, TargetPoses};
@@ -405,6 +406,12 @@ pub struct Station<'s> {
     mailbox: Option<Arc<Mailbox>>,
     /// A device's stroke button is down.
     device_apply: bool,
+    /// A device's clutch button is down.
+    device_clutch: bool,
+    /// The 3D cursor's clutch (relative) mode, from the first time the clutch is lifted in
+    /// cursor mode until the mouse mode changes or the view is reset; absent: the tool is
+    /// placed under the pointer.
+    cursor_clutch: Option<Clutch>,
     /// Where the targets start (and `reset-view` puts them back).
     home: TargetPoses,
     /// The trackball's turn for a mouse that drives another target than the scene, world
@@ -504,6 +511,8 @@ impl<'s> Station<'s> {
             desk,
             mailbox: None,
             device_apply: false,
+            device_clutch: false,
+            cursor_clutch: None,
             home,
             mouse_turn: Quat::IDENTITY,
             feedback: ContactFeedback::default(),
@@ -569,6 +578,38 @@ impl<'s> Station<'s> {
         }
     }
 
+    /// The 3D cursor's clutch (Galyean–Hughes §2.2.2) after a mouse event that moved the tool
+    /// from `tool_before`, `placed` under the pointer or not (the wheel moves it in depth):
+    /// while the clutch is held the tool stays; once it has been held, the tool follows the
+    /// pointer's motion from where it is, scaled by the mouse's clutch gain, instead of jumping
+    /// under the pointer.
+    fn clutch_cursor(&mut self, tool_before: Vec3, placed: bool) {
+        if self.mouse.mode != MouseMode::Cursor {
+            return;
+        }
+        let held = self.device_clutch || self.holding(StationAction::Clutch);
+        let gains = ClutchGains { translation: self.mouse.settings.clutch_gain, rotation: 1.0 };
+        let at = |position_m: Vec3| Pose { position_m, rotation: Quat::IDENTITY };
+        let clutch = match &mut self.cursor_clutch {
+            Some(c) => c,
+            None if held => self.cursor_clutch.insert(Clutch::new(at(tool_before), gains)),
+            None => return,
+        };
+        if !placed {
+            // Not a pointer sample: the tool stays where the event put it.
+            if clutch.tool().position_m != self.mouse.tool_position_m {
+                clutch.set_tool(at(self.mouse.tool_position_m));
+            }
+            return;
+        }
+        if clutch.tool().position_m != tool_before {
+            // Another device moved the tool since: carry on from there.
+            clutch.set_tool(at(tool_before));
+        }
+        clutch.set_gains(gains);
+        self.mouse.tool_position_m = clutch.update(at(self.mouse.tool_position_m), held).position_m;
+    }
+
     /// The rumble contact feedback asked for since the last call, if any (see
     /// [`ContactFeedback`]): the window plays it on the pads that have force feedback.
     pub fn take_rumble(&mut self) -> Option<Rumble> {
@@ -626,7 +667,14 @@ impl<'s> Station<'s> {
         let eye = &views.eyes[0];
         let inverse = (eye.projection * eye.view).inverse();
         let before = self.mouse.scene_rotation;
+        let tool_before = self.mouse.tool_position_m;
         self.mouse.handle(event, &inverse, self.view.rig.forward());
+        let placed = match event {
+            MouseEvent::Press(MouseButton::Left, _) => true,
+            MouseEvent::Move(_) => self.mouse.left_held(),
+            _ => false,
+        };
+        self.clutch_cursor(tool_before, placed);
         if self.mouse.mode == MouseMode::Scene
             && self.desk.mapping.target(DeviceClass::Mouse) != Target::Scene
         {
@@ -681,7 +729,11 @@ impl<'s> Station<'s> {
                 InputAction::Redo => Some(StationAction::Redo),
                 InputAction::ResetView => Some(StationAction::ResetView),
                 InputAction::NextTool => Some(StationAction::NextTool),
-                InputAction::Clutch | InputAction::CycleTarget | InputAction::None => None,
+                InputAction::Clutch => {
+                    self.device_clutch = a.pressed;
+                    None
+                }
+                InputAction::CycleTarget | InputAction::None => None,
             };
             if let (Some(action), true) = (station_action, a.pressed) {
                 self.act(action);
@@ -768,6 +820,7 @@ impl<'s> Station<'s> {
             StationAction::InteraxialWider => self.view.rig.interaxial_m *= STEREO_STEP,
             StationAction::InteraxialNarrower => self.view.rig.interaxial_m /= STEREO_STEP,
             StationAction::ToggleMouseMode => {
+                self.cursor_clutch = None;
                 self.mouse.mode = match self.mouse.mode {
                     MouseMode::Scene => MouseMode::Cursor,
                     MouseMode::Cursor => MouseMode::Scene,
@@ -790,6 +843,7 @@ impl<'s> Station<'s> {
                 self.mouse.distance_m = distance;
                 self.mouse.tool_position_m = self.scene.rig.target_m;
                 self.desk.poses = self.home;
+                self.cursor_clutch = None;
                 self.view.rig = self.scene.rig;
                 self.convergence_factor = self.scene.rig.convergence_m / distance.max(1e-6);
             }
@@ -803,6 +857,7 @@ impl<'s> Station<'s> {
                 }
             }
             StationAction::Apply
+            | StationAction::Clutch
             | StationAction::PointerLeft
             | StationAction::PointerRight
             | StationAction::PointerUp
@@ -2075,5 +2130,57 @@ mod tests {
         let (_, _, said) = open(&mut station);
         assert!(said[0].starts_with("no sculpt (.argile) in") && said[0].contains("--open-dir"), "{said:?}");
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn the_clutch_holds_the_cursor_tool_then_it_follows_the_pointer_scaled_by_the_gain() {
+        let scene = Scene::default_scene();
+        let drag = |station: &mut Station<'_>, from: f32, to: f32| {
+            station.script(&ScriptEvent::Drag {
+                button: MouseButton::Left,
+                from_px: Vec2::new(from, 32.0),
+                to_px: Vec2::new(to, 32.0),
+                steps: 4,
+            });
+            station.mouse.tool_position_m
+        };
+        let cursor = |station: &mut Station<'_>| {
+            station.key(KeyCode::Tab, true);
+            station.key(KeyCode::Tab, false);
+        };
+        // Plain cursor: the tool lands under the pointer.
+        let mut plain = small_station(&scene);
+        cursor(&mut plain);
+        let a = drag(&mut plain, 32.0, 32.0);
+        let b = drag(&mut plain, 32.0, 48.0);
+        let reach = b - a;
+        assert!(reach.length() > 1e-3);
+
+        let mut settings = InputSettings::shipped();
+        settings.mouse.0.clutch_gain = 0.25;
+        let mut station = small_station(&scene);
+        station.set_input_settings(&settings);
+        cursor(&mut station);
+        let start = drag(&mut station, 32.0, 32.0);
+        assert!((start - a).length() < 1e-6, "not clutched yet: under the pointer");
+        // Clutch held: the pointer goes right, the tool stays.
+        station.key(KeyCode::KeyX, true);
+        let held = drag(&mut station, 32.0, 48.0);
+        assert!((held - start).length() < 1e-6, "held: {held} vs {start}");
+        station.key(KeyCode::KeyX, false);
+        // Released: the same drag again moves the tool a quarter as far, from where it was.
+        let after = drag(&mut station, 32.0, 48.0);
+        assert!(((after - start) - reach * 0.25).length() < 1e-4, "{} vs {}", after - start, reach * 0.25);
+        // A gamepad's clutch button lifts it too.
+        let clutch = |pressed| {
+            vec![ActionEvent { action: InputAction::Clutch, pressed, device: DeviceClass::Gamepad }]
+        };
+        station.devices(SCRIPTED_STEP_S, &[], clutch(true));
+        assert!((drag(&mut station, 48.0, 16.0) - after).length() < 1e-6);
+        station.devices(SCRIPTED_STEP_S, &[], clutch(false));
+        // Tab twice: back to the plain cursor.
+        cursor(&mut station);
+        cursor(&mut station);
+        assert!((drag(&mut station, 32.0, 48.0) - b).length() < 1e-3, "under the pointer again");
     }
 }

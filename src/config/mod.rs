@@ -75,6 +75,9 @@ pub enum StationAction {
     PointerToward,
     /// Open a sculpt file: the newest in the open folder, then each older one in turn.
     Open,
+    /// Held: the clutch is lifted: the mouse's 3D cursor moves without the tool; released, the
+    /// tool follows the pointer's motion from where it is, scaled by the mouse's clutch gain.
+    Clutch,
 }
 
 /// Every action with its name in the bindings file.
@@ -105,6 +108,7 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("pointer-away", StationAction::PointerAway),
     ("pointer-toward", StationAction::PointerToward),
     ("open", StationAction::Open),
+    ("clutch", StationAction::Clutch),
 ];
 
 impl StationAction {

@@ -192,6 +192,8 @@ pub struct MouseSettings {
     pub invert_wheel: bool,
     /// The 3D cursor's plane.
     pub cursor_plane: CursorPlane,
+    /// Tool motion per pointer motion in the cursor's clutch (relative) mode.
+    pub clutch_gain: f32,
     /// Distance factor per wheel step (distance × factor^steps; below 1: the wheel away brings
     /// the scene nearer).
     pub wheel_factor: f32,
@@ -214,6 +216,7 @@ impl Default for MouseSettings {
             invert_trackball: false,
             invert_wheel: false,
             cursor_plane: CursorPlane::View,
+            clutch_gain: 1.0,
             wheel_factor: 0.9,
             drag_factor_per_px: 1.005,
             min_distance_m: 0.05,
@@ -236,6 +239,7 @@ struct MouseFile {
     max_distance_m: Option<Spanned<f32>>,
     cursor_plane: Option<CursorPlane>,
     cursor_depth_step_m: Option<Spanned<f32>>,
+    clutch_gain: Option<Spanned<f32>>,
 }
 
 impl MouseSettings {
@@ -313,6 +317,12 @@ impl MouseSettings {
             )?,
             invert_wheel: layer.value(file.invert_wheel, "invert_wheel", base.map(|b| b.invert_wheel))?,
             cursor_plane,
+            clutch_gain: layer.number(
+                file.clutch_gain,
+                "clutch_gain",
+                0.05..=4.0,
+                base.map(|b| b.clutch_gain),
+            )?,
             wheel_factor: 1.0 - wheel_zoom_step,
             drag_factor_per_px: 1.0 + drag_zoom_per_px,
             min_distance_m,
@@ -433,6 +443,11 @@ impl MouseNavigator {
                 }
             }
         }
+    }
+
+    /// Whether the left button is down (in cursor mode, the tool is being carried).
+    pub fn left_held(&self) -> bool {
+        self.left
     }
 
     /// Where the pointer was last seen, pixels (the viewport's centre before any).
