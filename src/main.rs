@@ -443,7 +443,8 @@ fn info(input_settings: Option<&std::path::Path>) -> Result<()> {
         println!("  none found (no SpaceMouse, no gamepad)");
     }
     use argile::input::settings::InputSettings;
-    let settings = InputSettings::load(input_settings, InputSettings::user_config_dir().as_deref())?;
+    let layers: Vec<&std::path::Path> = input_settings.into_iter().collect();
+    let settings = InputSettings::load(&layers, InputSettings::user_config_dir().as_deref())?;
     let mapping = settings.mapping;
     for d in &input.devices {
         println!(
@@ -464,10 +465,10 @@ fn info(input_settings: Option<&std::path::Path>) -> Result<()> {
     for p in &input.problems {
         println!("  {p}");
     }
-    println!(
-        "\nDesk input settings ({}):",
-        settings.file.as_ref().map_or("shipped".into(), |p| p.display().to_string())
-    );
+    let files: Vec<String> = settings.files.iter().map(|p| p.display().to_string()).collect();
+    let files =
+        if files.is_empty() { "shipped".to_owned() } else { format!("shipped < {}", files.join(" < ")) };
+    println!("\nDesk input settings ({files}):");
     for line in settings.describe(&mapping) {
         println!("  {line}");
     }

@@ -1253,7 +1253,10 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
         bail!("cannot open the station window: {reason}");
     }
     let (bindings, _) = KeyBindings::load(options.keys.as_deref())?;
-    let input = InputSettings::load(options.input.as_deref(), InputSettings::user_config_dir().as_deref())?;
+    // The scene's input settings, then the command line's, over the user's.
+    let layers: Vec<&Path> =
+        scene.input_settings.iter().chain(&options.input).map(PathBuf::as_path).collect();
+    let input = InputSettings::load(&layers, InputSettings::user_config_dir().as_deref())?;
     let calibration = options.calibration.as_deref().map(ScreenCalibration::load).transpose()?;
     let script = options.script.as_deref().map(InputScript::load).transpose()?;
     let event_loop = EventLoop::new().context("cannot connect to the display server")?;

@@ -3,11 +3,12 @@
 //!
 //! ```text
 //!  calibration/input.toml (shipped, embedded)
-//!    < the user's input.toml (`--input FILE`, else $XDG_CONFIG_HOME/argile/input.toml)
+//!    < $XDG_CONFIG_HOME/argile/input.toml (the user's, when it exists)
+//!    < the scene's `[input] settings` file < `--input FILE`      (each names only what it changes)
 //!  per device (spacemouse, gamepad, mouse):
 //!    calibration/DEVICE.toml (shipped)
-//!      < the file the settings' [calibration] names (relative to the settings file's folder)
-//!        else $XDG_CONFIG_HOME/argile/DEVICE.toml when it exists
+//!      < the file the last settings layer naming one gives in [calibration] (relative to
+//!        that file's folder), else $XDG_CONFIG_HOME/argile/DEVICE.toml when it exists
 //! ```
 //!
 //! Every file refuses unknown keys and reports errors with file, line and column. The settings
@@ -109,8 +110,8 @@ pub struct InputSettings {
     pub gamepad: (GamepadCalibration, CalibrationSource),
     /// The mouse settings, and where they came from.
     pub mouse: (MouseSettings, CalibrationSource),
-    /// The settings file read over the shipped one, if any.
-    pub file: Option<PathBuf>,
+    /// The settings files read over the shipped one, in order.
+    pub files: Vec<PathBuf>,
 }
 
 impl InputSettings {
@@ -128,7 +129,7 @@ impl InputSettings {
             ),
             gamepad: (GamepadCalibration::shipped(), CalibrationSource::Shipped("calibration/gamepad.toml")),
             mouse: (MouseSettings::shipped(), CalibrationSource::Shipped("calibration/mouse.toml")),
-            file: None,
+            files: Vec::new(),
         }
     }
 
@@ -154,22 +155,27 @@ impl InputSettings {
         ))
     }
 
-    /// The settings: the shipped ones, with `explicit` read over them if given (it must
-    /// exist), else `input.toml` in `config_dir` (the user's `$XDG_CONFIG_HOME/argile`) if it
-    /// exists; then each device's calibration as the module docs say.
-    pub fn load(explicit: Option<&Path>, config_dir: Option<&Path>) -> Result<Self, CalibrationError> {
+    /// The settings: the shipped ones, with `input.toml` in `config_dir` (the user's
+    /// `$XDG_CONFIG_HOME/argile`) read over them if it exists, then each of `layers` in order
+    /// (they must exist: a scene's, then the command line's); then each device's calibration as
+    /// the module docs say.
+    pub fn load(layers: &[&Path], config_dir: Option<&Path>) -> Result<Self, CalibrationError> {
         let mut settings = Self::shipped();
         let user_file = |name: &str| config_dir.map(|d| d.join(name)).filter(|p| p.is_file());
-        let path = explicit.map(Path::to_owned).or_else(|| user_file("input.toml"));
+        let paths = user_file("input.toml").into_iter().chain(layers.iter().map(|p| p.to_path_buf()));
         let mut named: [Option<PathBuf>; 3] = [None, None, None];
-        if let Some(path) = &path {
-            let text = read_text(path, "input settings")?;
-            let (mapping, via, paths) =
+        for path in paths {
+            let text = read_text(&path, "input settings")?;
+            let (mapping, via, given) =
                 Self::parse_over(&text, &path.display().to_string(), settings.mapping, path.parent())?;
             settings.mapping = mapping;
             settings.spacemouse_via = via.unwrap_or(settings.spacemouse_via);
-            named = paths;
-            settings.file = Some(path.clone());
+            for (slot, file) in named.iter_mut().zip(given) {
+                if file.is_some() {
+                    *slot = file;
+                }
+            }
+            settings.files.push(path);
         }
         let [spacemouse, gamepad, mouse] = named;
         if let Some(p) = spacemouse.or_else(|| user_file("spacemouse.toml")) {
@@ -269,13 +275,15 @@ mod tests {
         .unwrap();
         std::fs::write(mine.join("sm.toml"), "dead_zone = 0.4\n").unwrap();
         std::fs::write(config.join("mouse.toml"), "trackball = \"bell\"\n").unwrap();
-        // The user's own input.toml in the config folder is ignored when one is named.
-        std::fs::write(config.join("input.toml"), "[targets]\ngamepad = \"light\"\n").unwrap();
+        // The user's own input.toml in the config folder comes first; a named file over it.
+        std::fs::write(config.join("input.toml"), "[targets]\ngamepad = \"light\"\nmouse = \"light\"\n")
+            .unwrap();
 
-        let s = InputSettings::load(Some(&mine.join("input.toml")), Some(&config)).unwrap();
+        let s = InputSettings::load(&[&mine.join("input.toml")], Some(&config)).unwrap();
         assert_eq!(s.mapping.target(DeviceClass::SpaceMouse), Target::Scene);
-        assert_eq!(s.mapping.target(DeviceClass::Mouse), Target::Tool);
-        assert_eq!(s.mapping.target(DeviceClass::Gamepad), Target::SecondTool);
+        assert_eq!(s.mapping.target(DeviceClass::Mouse), Target::Tool, "the named file wins");
+        assert_eq!(s.mapping.target(DeviceClass::Gamepad), Target::Light, "the user's file fills in");
+        assert_eq!(s.files, [config.join("input.toml"), mine.join("input.toml")]);
         assert_eq!(s.spacemouse_via, SpaceMouseVia::Hid);
         assert_eq!(s.spacemouse.0.dead_zone, 0.4);
         assert_eq!(s.spacemouse.1, CalibrationSource::File(mine.join("sm.toml")));
@@ -288,10 +296,16 @@ mod tests {
                 && lines[0].contains("sm.toml")
         );
 
-        // Without a named file, the config folder's input.toml is read.
-        let s = InputSettings::load(None, Some(&config)).unwrap();
+        // Without a named file, the config folder's input.toml alone.
+        let s = InputSettings::load(&[], Some(&config)).unwrap();
         assert_eq!(s.mapping.target(DeviceClass::Gamepad), Target::Light);
-        assert_eq!(s.file, Some(config.join("input.toml")));
+        assert_eq!(s.files, [config.join("input.toml")]);
+        // A later layer's calibration file replaces an earlier one's, device by device.
+        std::fs::write(mine.join("later.toml"), "[calibration]\nspacemouse = \"sm2.toml\"\n").unwrap();
+        std::fs::write(mine.join("sm2.toml"), "dead_zone = 0.2\n").unwrap();
+        let s = InputSettings::load(&[&mine.join("input.toml"), &mine.join("later.toml")], None).unwrap();
+        assert_eq!(s.spacemouse.0.dead_zone, 0.2);
+        assert_eq!(s.mapping.target(DeviceClass::SpaceMouse), Target::Scene, "earlier targets stay");
     }
 
     #[test]
@@ -299,16 +313,16 @@ mod tests {
         let dir = Scratch::new("mistakes");
         let path = dir.path().join("input.toml");
         std::fs::write(&path, "[targets]\nspacemouse = \"tool\"\ngamepad = \"lamp\"\n").unwrap();
-        let e = InputSettings::load(Some(&path), None).unwrap_err().to_string();
+        let e = InputSettings::load(&[&path], None).unwrap_err().to_string();
         assert!(e.starts_with(&format!("{}:3:11:", path.display())) && e.contains("lamp"), "{e}");
         std::fs::write(&path, "[calibration]\nmouse = \"missing.toml\"\n").unwrap();
-        let e = InputSettings::load(Some(&path), None).unwrap_err().to_string();
+        let e = InputSettings::load(&[&path], None).unwrap_err().to_string();
         assert!(e.contains("missing.toml"), "{e}");
         std::fs::write(&path, "[calibration]\nmouse = \"m.toml\"\n").unwrap();
         std::fs::write(dir.path().join("m.toml"), "\n\ninvert_wheel = 3\n").unwrap();
-        let e = InputSettings::load(Some(&path), None).unwrap_err().to_string();
+        let e = InputSettings::load(&[&path], None).unwrap_err().to_string();
         assert!(e.contains("m.toml:3:16:"), "{e}");
-        let e = InputSettings::load(Some(&dir.path().join("absent.toml")), None).unwrap_err().to_string();
+        let e = InputSettings::load(&[&dir.path().join("absent.toml")], None).unwrap_err().to_string();
         assert!(e.contains("absent.toml"), "{e}");
     }
 }
