@@ -291,6 +291,21 @@ fn render_and_save_take_a_sculpt_file_where_they_take_a_scene() {
             |d: &std::path::Path| image::open(d.join(format!("parallax-{eye}.png"))).unwrap().to_rgba8();
         assert_eq!(read(&from_scene), read(&from_sculpt), "{eye} eye");
     }
+    // The station without a display renders the sculpt headless, at the scene's size.
+    let out = argile()
+        .arg("run")
+        .arg(&copy)
+        .current_dir(&dir)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env("XDG_STATE_HOME", dir.join("state"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("Rendering the copy scene headless"), "{stdout}");
+    let left = image::open(dir.join("argile-out/parallax-left.png")).unwrap();
+    assert_eq!((left.width(), left.height()), (256, 192));
     let missing = dir.join("missing.argile");
     let out = argile().args(["render"]).arg(&missing).args(["--out"]).arg(&dir).output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);

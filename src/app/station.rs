@@ -2000,6 +2000,13 @@ mod tests {
         // Reset puts the light back.
         station.key(KeyCode::Home, true);
         assert_eq!(station.step(SCRIPTED_STEP_S, |_| {}).lights[0], before.lights[0]);
+
+        // A mouse set to drive the tool starts as its 3D cursor.
+        let mut station = small_station(&scene);
+        assert_eq!(station.mouse.mode, MouseMode::Scene);
+        settings.mapping.set(DeviceClass::Mouse, Target::Tool);
+        station.set_input_settings(&settings);
+        assert_eq!(station.mouse.mode, MouseMode::Cursor);
     }
 
     #[test]
