@@ -417,8 +417,9 @@ pub struct Station<'s> {
     /// The trackball's turn for a mouse that drives another target than the scene, world
     /// frame, until the next [`Station::devices`].
     mouse_turn: Quat,
-    /// Contact feedback for the pads, and the rumble it asked for last.
-    feedback: ContactFeedback,
+    /// Contact feedback for the pads (`None` before the first frame, whose contact is taken
+    /// silently: a tool that starts in the clay does not tap), and the rumble it asked for last.
+    feedback: Option<ContactFeedback>,
     rumble: Option<Rumble>,
     /// Seconds since the station started (the devices' filters run on it).
     clock_s: f64,
@@ -515,7 +516,7 @@ impl<'s> Station<'s> {
             cursor_clutch: None,
             home,
             mouse_turn: Quat::IDENTITY,
-            feedback: ContactFeedback::default(),
+            feedback: None,
             rumble: None,
             clock_s: 0.0,
             modifiers: Modifiers::default(),
@@ -1240,7 +1241,12 @@ impl<'s> Station<'s> {
                 contact_under(self.playback.field(), pose, self.desk_tool.half_extents_m());
             Contact { touching, density, stroking }
         });
-        if let Some(r) = self.feedback.update(contact, dt_s) {
+        let feedback = self.feedback.get_or_insert_with(|| {
+            let mut silent = ContactFeedback::default();
+            let _ = silent.update(Contact { stroking: false, ..contact }, 0.0);
+            silent
+        });
+        if let Some(r) = feedback.update(contact, dt_s) {
             self.rumble = Some(r);
         }
     }
@@ -1946,6 +1952,20 @@ mod tests {
         station.devices(SCRIPTED_STEP_S, &[], stroke(true));
         station.step(SCRIPTED_STEP_S, |_| {});
         assert_eq!(station.take_rumble(), None);
+
+        // A tool that starts in the clay does not tap at the first frame; it taps when it
+        // comes back after leaving.
+        let mut station = small_station(&scene);
+        gamepad_drives(&mut station, Target::Tool);
+        station.desk.poses.get_mut(Target::Tool).position_m = Vec3::new(0.12, 0.0, 0.0);
+        station.mouse.tool_position_m = Vec3::new(0.12, 0.0, 0.0);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert_eq!(station.take_rumble(), None, "no tap at start");
+        station.mouse.tool_position_m = Vec3::ZERO;
+        station.step(SCRIPTED_STEP_S, |_| {});
+        station.mouse.tool_position_m = Vec3::new(0.12, 0.0, 0.0);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert_eq!(station.take_rumble(), Some(ContactFeedback::TAP));
     }
 
     #[test]
