@@ -29,7 +29,8 @@ enum Command {
     /// Opens the station window on a scene (the default scene when none is named) and sculpts
     /// at the display's rate; without a display, says so and renders the scene headless.
     Run {
-        /// The scene file (TOML, see scenes/README.md).
+        /// The scene file (TOML, see scenes/README.md), or a sculpt file (`.argile`) to go on
+        /// sculpting (saving writes back to it).
         scene: Option<PathBuf>,
         /// Close after this many frames, with a fixed 1/60 s time step (scripted runs, tests).
         #[arg(long)]
@@ -72,11 +73,20 @@ enum Command {
         /// In the headset, the left hand holds the tool (the right one grabs).
         #[arg(long, requires = "xr")]
         left_handed: bool,
+        /// Desk input settings (see calibration/input.toml): what each device drives and its
+        /// calibration file; else ~/.config/argile/input.toml if there is one.
+        #[arg(long)]
+        input: Option<PathBuf>,
+        /// The folder the open key (Ctrl+O) takes sculpts from, newest first (default: the
+        /// folder of the save file).
+        #[arg(long)]
+        open_dir: Option<PathBuf>,
     },
     /// Plays a scene's timeline offscreen and writes every capture as NAME-left.png and
     /// NAME-right.png.
     Render {
-        /// The scene file (TOML, see scenes/README.md).
+        /// The scene file (TOML, see scenes/README.md), or a sculpt file (`.argile`), shown in
+        /// the scene stored in it.
         scene: PathBuf,
         /// Folder for the images (created if missing).
         #[arg(long, short)]
@@ -97,7 +107,7 @@ enum Command {
     },
     /// Plays a scene to the end of its timeline and saves its clay as a sculpt (`.argile`).
     Save {
-        /// The scene file (TOML, see scenes/README.md).
+        /// The scene file (TOML, see scenes/README.md), or a sculpt file (`.argile`) to copy.
         scene: PathBuf,
         /// The sculpt file to write (`.argile`).
         #[arg(long, short)]
@@ -146,8 +156,14 @@ enum Command {
         #[arg(long)]
         force: bool,
     },
-    /// Lists the Vulkan devices, the OpenXR state and the input devices Argile sees.
-    Info,
+    /// Lists the Vulkan devices, the OpenXR state, the input devices Argile sees, what each
+    /// drives and where its calibration comes from.
+    Info {
+        /// Desk input settings (see calibration/input.toml); else ~/.config/argile/input.toml
+        /// if there is one.
+        #[arg(long)]
+        input: Option<PathBuf>,
+    },
     /// Runs the standard benchmark workloads.
     Bench {
         /// One JSON object per line.
@@ -253,6 +269,8 @@ fn main() -> ExitCode {
             validation,
             xr,
             left_handed,
+            input,
+            open_dir,
         }) => station(
             scene,
             xr.then_some(left_handed),
@@ -269,6 +287,9 @@ fn main() -> ExitCode {
                 calibration,
                 autosave: None,
                 scene_toml: None,
+                input,
+                open: None,
+                open_dir,
             },
         ),
         Some(Command::Render { scene, out, display_mode, size, validation, autosave }) => {
@@ -285,8 +306,13 @@ fn main() -> ExitCode {
                 )
             }),
         Some(Command::Save { scene, out, force, autosave }) => {
-            app::save_scene_sculpt(&scene, &out, force, autosave.start())
-                .map(|s| println!("wrote {} ({} bricks, {} bytes)", s.path.display(), s.bricks, s.bytes))
+            let saved = if app::is_sculpt(&scene) {
+                let options = argile::io::EncodeOptions { version: argile::io::VERSION, history: true };
+                app::convert_sculpt(&scene, &out, options, force)
+            } else {
+                app::save_scene_sculpt(&scene, &out, force, autosave.start())
+            };
+            saved.map(|s| println!("wrote {} ({} bricks, {} bytes)", s.path.display(), s.bricks, s.bytes))
         }
         Some(Command::Convert { input, out, format_version, no_history, force }) => {
             let options = argile::io::EncodeOptions { version: format_version, history: !no_history };
@@ -305,7 +331,7 @@ fn main() -> ExitCode {
             }
             Ok(())
         }
-        Some(Command::Info) => info(),
+        Some(Command::Info { input }) => info(input.as_deref()),
         Some(Command::Bench { json, quick, workloads }) => run_bench(json, quick, &workloads),
         Some(Command::Calibrate { calibration, out, width }) => {
             let options =
@@ -337,7 +363,14 @@ fn print_written(written: &[app::WrittenCapture]) {
 /// Runs the station: in the headset when `xr` is set (`Some(left_handed)`) and one is
 /// there, else in a window, else headless.
 fn station(scene_path: Option<PathBuf>, xr: Option<bool>, options: app::StationOptions) -> Result<()> {
+    let mut sculpt = None;
     let (scene, scene_text) = match &scene_path {
+        Some(p) if app::is_sculpt(p) => {
+            let (scene, opened) = app::open_sculpt(p)?;
+            let text = opened.scene_toml.clone();
+            sculpt = Some(opened);
+            (scene, text)
+        }
         Some(p) => {
             let text = std::fs::read_to_string(p)
                 .with_context(|| format!("cannot read scene file {}", p.display()))?;
@@ -359,7 +392,14 @@ fn station(scene_path: Option<PathBuf>, xr: Option<bool>, options: app::StationO
             scene_toml: scene_text.clone(),
             left_handed,
         };
-        match app::run_xr(&scene, &name, &xr_options) {
+        // The headset sculpts an opened file's clay; it is saved to the file it came from
+        // unless --save-to says otherwise.
+        let opened = sculpt.take().map(|s| s.field);
+        let xr_options = app::XrRunOptions {
+            save_to: xr_options.save_to.or_else(|| opened.is_some().then(|| scene_path.clone()).flatten()),
+            ..xr_options
+        };
+        match app::run_xr(&scene, opened, &name, &xr_options) {
             Ok(report) => {
                 println!(
                     "headset session on {} closed after {} frames{}{}",
@@ -391,17 +431,26 @@ fn station(scene_path: Option<PathBuf>, xr: Option<bool>, options: app::StationO
             validation: options.validation,
             size_px: None,
         };
-        let written = app::render_scene_autosaved(
-            &scene,
-            &options,
-            Some(AutosaveConfig::default()),
-            scene_text.as_deref(),
-        )?;
+        let written = match sculpt {
+            Some(s) => app::render_sculpt(&scene, s.field, &options)?,
+            None => app::render_scene_autosaved(
+                &scene,
+                &options,
+                Some(AutosaveConfig::default()),
+                scene_text.as_deref(),
+            )?,
+        };
         print_written(&written);
         return Ok(());
     }
-    let options =
-        app::StationOptions { autosave: Some(AutosaveConfig::default()), scene_toml: scene_text, ..options };
+    // A sculpt file is opened by the station itself, so that saving writes back to it.
+    let open = sculpt.is_some().then(|| scene_path.clone()).flatten();
+    let options = app::StationOptions {
+        autosave: Some(AutosaveConfig::default()),
+        scene_toml: scene_text,
+        open,
+        ..options
+    };
     let report = app::run_station(&scene, &name, &options)?;
     println!("station closed after {} frames", report.frames);
     if let Some(p) = &report.screenshot {
@@ -421,16 +470,22 @@ fn render(
     validation: bool,
     autosave: &AutosaveArgs,
 ) -> Result<()> {
+    let options = RenderOptions { out_dir: out, display_modes, progress: true, validation, size_px: size };
+    if app::is_sculpt(scene) {
+        // Nothing is sculpted while rendering a sculpt: there is nothing to autosave.
+        let (scene, sculpt) = app::open_sculpt(scene)?;
+        print_written(&app::render_sculpt(&scene, sculpt.field, &options)?);
+        return Ok(());
+    }
     let text = std::fs::read_to_string(scene)
         .with_context(|| format!("cannot read scene file {}", scene.display()))?;
     let scene = Scene::parse(&text, &scene.display().to_string(), scene.parent())?;
-    let options = RenderOptions { out_dir: out, display_modes, progress: true, validation, size_px: size };
     let written = app::render_scene_autosaved(&scene, &options, autosave.start(), Some(&text))?;
     print_written(&written);
     Ok(())
 }
 
-fn info() -> Result<()> {
+fn info(input_settings: Option<&std::path::Path>) -> Result<()> {
     println!("Argile {}", env!("CARGO_PKG_VERSION"));
     println!("\nVulkan:");
     match argile::render::probe_devices() {
@@ -443,15 +498,44 @@ fn info() -> Result<()> {
     if input.devices.is_empty() {
         println!("  none found (no SpaceMouse, no gamepad)");
     }
-    let mapping = argile::input::motion::MappingTable::default();
+    use argile::input::settings::InputSettings;
+    let layers: Vec<&std::path::Path> = input_settings.into_iter().collect();
+    let settings = InputSettings::load(&layers, InputSettings::user_config_dir().as_deref())?;
+    let mapping = settings.mapping;
     for d in &input.devices {
-        println!("  {}: {} ({}), drives the {}", d.kind, d.name, d.location, mapping.target(d.class).name());
+        println!(
+            "  {}: {} ({}), drives the {} (calibration: {})",
+            d.kind,
+            d.name,
+            d.location,
+            mapping.target(d.class).name(),
+            settings.source(d.class)
+        );
     }
     let mouse = argile::input::motion::DeviceClass::Mouse;
-    println!("  mouse: the window's pointer, drives the {}", mapping.target(mouse).name());
+    println!(
+        "  mouse: the window's pointer, drives the {} (settings: {})",
+        mapping.target(mouse).name(),
+        settings.source(mouse)
+    );
     for p in &input.problems {
         println!("  {p}");
     }
+    let files: Vec<String> = settings.files.iter().map(|p| p.display().to_string()).collect();
+    let files =
+        if files.is_empty() { "shipped".to_owned() } else { format!("shipped < {}", files.join(" < ")) };
+    println!("\nDesk input settings ({files}):");
+    for line in settings.describe(&mapping) {
+        println!("  {line}");
+    }
+    println!(
+        "  SpaceMice are read {}",
+        match settings.spacemouse_via {
+            argile::input::settings::SpaceMouseVia::Auto => "through spacenavd when it runs, else over HID",
+            argile::input::settings::SpaceMouseVia::Hid => "over HID",
+            argile::input::settings::SpaceMouseVia::Spacenavd => "through spacenavd",
+        }
+    );
     Ok(())
 }
 

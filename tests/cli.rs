@@ -212,3 +212,104 @@ fn the_station_without_a_display_renders_the_default_scene_headless_and_says_whe
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn info_says_what_each_device_drives_and_where_its_calibration_comes_from() {
+    let dir = temp_dir("input-settings");
+    let config = dir.join("config");
+    std::fs::create_dir_all(&config).unwrap();
+    std::fs::write(
+        dir.join("input.toml"),
+        "[targets]\nmouse = \"light\"\n[calibration]\nmouse = \"m.toml\"\n",
+    )
+    .unwrap();
+    std::fs::write(dir.join("m.toml"), "trackball = \"bell\"\n").unwrap();
+    let out = argile()
+        .args(["info", "--input"])
+        .arg(dir.join("input.toml"))
+        .env("XDG_CONFIG_HOME", &config)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
+    let m = dir.join("m.toml");
+    assert!(
+        text.contains(&format!("mouse: the window's pointer, drives the light (settings: {}", m.display())),
+        "{text}"
+    );
+    assert!(
+        text.contains("spacemouse drives the tool; calibration: shipped calibration/spacemouse.toml"),
+        "{text}"
+    );
+    assert!(
+        text.contains("gamepad drives the second_tool; calibration: shipped calibration/gamepad.toml"),
+        "{text}"
+    );
+    assert!(text
+        .contains(&format!("mouse drives the light; calibration: {} (over the shipped file)", m.display())));
+
+    std::fs::write(dir.join("input.toml"), "[targets]\nmouse = \"lamp\"\n").unwrap();
+    let out = argile().args(["info", "--input"]).arg(dir.join("input.toml")).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("input.toml:2:9:") && err.contains("lamp"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn render_and_save_take_a_sculpt_file_where_they_take_a_scene() {
+    let dir = temp_dir("sculpt-as-scene");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/tests/parallax.toml");
+    let sculpt = dir.join("parallax.argile");
+    let run = |args: &[&std::ffi::OsStr]| {
+        let out = argile().args(args).output().unwrap();
+        let text = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(out.status.success(), "{text}\n{}", String::from_utf8_lossy(&out.stderr));
+        text
+    };
+    let os = |s: &str| std::ffi::OsString::from(s);
+    run(&[&os("save"), &os(scene), &os("--out"), sculpt.as_os_str()]);
+    let copy = dir.join("copy.argile");
+    run(&[&os("save"), sculpt.as_os_str(), &os("--out"), copy.as_os_str()]);
+    let (a, b) = (argile::app::load_sculpt(&sculpt).unwrap(), argile::app::load_sculpt(&copy).unwrap());
+    assert!(a.field.same_samples(&b.field) && a.scene_toml == b.scene_toml, "saving a sculpt copies it");
+
+    // The sculpt, rendered in the scene stored in it, looks as the scene itself does.
+    let (from_scene, from_sculpt) = (dir.join("scene"), dir.join("sculpt"));
+    run(&[&os("render"), &os(scene), &os("--out"), from_scene.as_os_str(), &os("--size"), &os("64x48")]);
+    let text = run(&[
+        &os("render"),
+        copy.as_os_str(),
+        &os("--out"),
+        from_sculpt.as_os_str(),
+        &os("--size"),
+        &os("64x48"),
+    ]);
+    assert!(text.contains("parallax-left.png"), "{text}");
+    for eye in ["left", "right"] {
+        let read =
+            |d: &std::path::Path| image::open(d.join(format!("parallax-{eye}.png"))).unwrap().to_rgba8();
+        assert_eq!(read(&from_scene), read(&from_sculpt), "{eye} eye");
+    }
+    // The station without a display renders the sculpt headless, at the scene's size.
+    let out = argile()
+        .arg("run")
+        .arg(&copy)
+        .current_dir(&dir)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env("XDG_STATE_HOME", dir.join("state"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("Rendering the copy scene headless"), "{stdout}");
+    let left = image::open(dir.join("argile-out/parallax-left.png")).unwrap();
+    assert_eq!((left.width(), left.height()), (256, 192));
+    let missing = dir.join("missing.argile");
+    let out = argile().args(["render"]).arg(&missing).args(["--out"]).arg(&dir).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("missing.argile"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -6,9 +6,7 @@
 //! `serde-serialize` feature both deserialize (the code's layout is the Linux one: an evdev
 //! kind and code), which is how these tests name them.
 
-use std::time::Duration;
-
-use argile::input::gamepad::{contact_strength, GamepadCalibration, GamepadMapper, Gamepads, Source};
+use argile::input::gamepad::{ContactFeedback, GamepadCalibration, GamepadMapper, Gamepads, Rumble, Source};
 use argile::input::motion::{ActionEvent, DeviceClass, InputAction};
 use gilrs::ev::Code;
 use gilrs::{Axis, Button, Event, EventType, GamepadId};
@@ -116,13 +114,15 @@ fn pure_mapping_dead_zone_curve_dpad_and_edges() {
 #[test]
 fn rumble_is_a_no_op_without_a_force_feedback_pad() {
     let mut pads = gamepads();
-    assert!(!pads.rumble(pad(0), contact_strength(0.002, 0.004), Duration::from_millis(80)));
-    assert!(!pads.rumble(pad(7), 1.0, Duration::from_millis(80)));
-    assert_eq!(contact_strength(-0.001, 0.004), 0.0, "outside the clay");
-    assert_eq!(contact_strength(0.002, 0.004), 0.5);
-    assert_eq!(contact_strength(1.0, 0.004), 1.0);
-    assert_eq!(contact_strength(f32::NAN, 0.004), 0.0);
-    assert_eq!(contact_strength(0.001, 0.0), 0.0);
+    // A pad known only from inserted events is not connected to gilrs: nothing plays.
+    pads.gilrs_mut().insert_event(Event::new(pad(0), EventType::Connected));
+    let mut actions = Vec::new();
+    pads.poll(&mut actions);
+    assert_eq!(pads.pad_ids().collect::<Vec<_>>(), [pad(0)]);
+    assert!(!pads.play(pad(0), ContactFeedback::TAP));
+    assert!(!pads.play(pad(7), Rumble { strong: 1.0, weak: 1.0, duration_ms: 80 }));
+    assert!(!pads.play(pad(0), Rumble::STOP), "a stop starts nothing");
+    assert!(!pads.play(pad(0), Rumble { strong: f32::NAN, weak: 0.5, duration_ms: 80 }));
 }
 
 #[test]

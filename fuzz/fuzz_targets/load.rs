@@ -5,10 +5,6 @@
 
 use libfuzzer_sys::fuzz_target;
 
-fuzz_target!(|data: &[u8]| {
-    let Ok(sculpt) = argile::io::decode(data, "fuzz.argile", &mut |_| {}) else { return };
-    let again = argile::io::encode(&sculpt.field, sculpt.scene_toml.as_deref(), &mut |_| {});
-    let back = argile::io::decode(&again, "again.argile", &mut |_| {}).expect("a loaded sculpt stores and loads again");
-    assert!(back.field.same_samples(&sculpt.field));
-    assert_eq!(back.scene_toml, sculpt.scene_toml);
-});
+mod load_body;
+
+fuzz_target!(|data: &[u8]| load_body::check(data));

@@ -9,6 +9,7 @@ use super::autosave::start_autosave;
 use super::environment::load_environment;
 use super::frame::build_frame;
 use super::playback::Playback;
+use crate::field::Field;
 use crate::io::autosave::AutosaveConfig;
 use crate::io::write_atomically;
 use crate::mesh::{mesh_all, remesh_dirty};
@@ -82,6 +83,23 @@ pub fn render_scene_autosaved(
     autosave: Option<AutosaveConfig>,
     scene_toml: Option<&str>,
 ) -> Result<Vec<WrittenCapture>> {
+    render_over(scene, None, options, autosave, scene_toml)
+}
+
+/// Renders every capture of `scene` over `field`, the clay of a sculpt opened from a file (see
+/// [`super::open_sculpt`]), instead of the scene's initial clay.
+pub fn render_sculpt(scene: &Scene, field: Field, options: &RenderOptions) -> Result<Vec<WrittenCapture>> {
+    render_over(scene, Some(field), options, None, None)
+}
+
+/// Renders the captures of `scene` over `field` when given, else over its initial clay.
+fn render_over(
+    scene: &Scene,
+    field: Option<Field>,
+    options: &RenderOptions,
+    autosave: Option<AutosaveConfig>,
+    scene_toml: Option<&str>,
+) -> Result<Vec<WrittenCapture>> {
     std::fs::create_dir_all(&options.out_dir)
         .with_context(|| format!("cannot create the output folder {}", options.out_dir.display()))?;
     let mut scene = scene.clone();
@@ -107,9 +125,13 @@ pub fn render_scene_autosaved(
     }
     let mut renderer = renderer_for(&scene, None, options.validation, None)?;
     tracing::info!("rendering {} on {}", scene.source, renderer.device_name());
-    let mut playback = Playback::new_autosaved(&scene, |field| {
+    let start = |field: &mut Field| {
         autosave.and_then(|config| start_autosave(field, scene_toml, &scene.source, config))
-    });
+    };
+    let mut playback = match field {
+        Some(field) => Playback::on_field(&scene, field, start),
+        None => Playback::new_autosaved(&scene, start),
+    };
     let initial = mesh_all(playback.field());
     playback.field_mut().take_dirty();
     let clay = initial.upserted.iter().fold(crate::math::Aabb::EMPTY, |b, (_, c)| b.union(&c.bounds()));

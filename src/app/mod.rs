@@ -22,7 +22,8 @@ pub use autosave::{
 };
 pub use calibrate::{calibrate, describe, test_pattern, CalibrateOptions, Calibrated, Marker, TestPattern};
 pub use capture::{
-    render_scene, render_scene_autosaved, renderer_for, save_png_atomically, RenderOptions, WrittenCapture,
+    render_scene, render_scene_autosaved, render_sculpt, renderer_for, save_png_atomically, RenderOptions,
+    WrittenCapture,
 };
 pub use comfort::{apply_parallax_budget, judge_parallax_budget, BudgetVerdict};
 pub use environment::{load_environment, EnvironmentError};
@@ -30,8 +31,8 @@ pub use export::{export, final_field, final_mesh, welded_surface, ExportSummary}
 pub use frame::{build_frame, world_lights};
 pub use playback::Playback;
 pub use sculpt::{
-    convert_sculpt, is_sculpt, load_sculpt, load_sculpt_with_progress, save_scene_sculpt, SavedSculpt,
-    SCULPT_EXTENSION,
+    convert_sculpt, is_sculpt, load_sculpt, load_sculpt_with_progress, open_sculpt, save_scene_sculpt,
+    SavedSculpt, SCULPT_EXTENSION,
 };
 pub use station::{
     no_display_reason, run_station, InputScript, ScriptEvent, Station, StationOptions, StationReport,

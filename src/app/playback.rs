@@ -67,6 +67,16 @@ impl<'s> Playback<'s> {
         for primitive in &scene.clay {
             rasterize_solid(&mut field, &primitive.solid, primitive.op, primitive.colour);
         }
+        Self::on_field(scene, field, start)
+    }
+
+    /// The scene at time 0 over `field` (a sculpt opened from a file) instead of its initial
+    /// clay, with autosave started by `start` on it.
+    pub fn on_field(
+        scene: &'s Scene,
+        mut field: Field,
+        start: impl FnOnce(&mut Field) -> Option<Autosave>,
+    ) -> Self {
         let tools = scene.tools.iter().map(|t| build_tool(t, &field)).collect();
         let autosave = start(&mut field);
         let mut playback = Self {
@@ -83,6 +93,30 @@ impl<'s> Playback<'s> {
         // Keys at time 0 with their action on stamp at once.
         playback.step_to(0.0);
         playback
+    }
+
+    /// Puts `field` (a sculpt opened from a file) in place of the clay: the hands' strokes end,
+    /// every brick of the old and the new clay is marked dirty so the next re-mesh redraws it
+    /// all, and autosave starts again with `start` on the new clay. Returns the old autosave
+    /// session: the caller closes it, or drops it to leave it for recovery.
+    pub fn replace_field(
+        &mut self,
+        mut field: Field,
+        start: impl FnOnce(&mut Field) -> Option<Autosave>,
+    ) -> Option<Autosave> {
+        use crate::field::BRICK_SIZE;
+        self.strokes = [None, None];
+        self.owns_stroke = false;
+        self.push = None;
+        let keys: Vec<_> = self.field.brick_keys().chain(field.brick_keys()).collect();
+        for key in keys {
+            let lo = key * BRICK_SIZE;
+            field.mark_dirty(lo, lo + crate::math::IVec3::splat(BRICK_SIZE - 1));
+        }
+        self.field = field;
+        let old = self.autosave.take();
+        self.autosave = start(&mut self.field);
+        old
     }
 
     /// The clay.

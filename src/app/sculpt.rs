@@ -87,6 +87,26 @@ pub fn load_sculpt_with_progress(path: &Path, progress: bool) -> Result<Sculpt> 
     Ok(sculpt?)
 }
 
+/// Opens a sculpt file for viewing or sculpting: its clay, and the scene to show it in — the
+/// scene it was made in (its text is stored in the file), else the default scene — with that
+/// scene's initial clay and timeline left out (the file's clay is their result); its camera,
+/// lights, environment, tools and captures stay.
+pub fn open_sculpt(path: &Path) -> Result<(Scene, Sculpt)> {
+    let sculpt = load_sculpt_with_progress(path, true)?;
+    let mut scene = match &sculpt.scene_toml {
+        Some(text) => {
+            let name = format!("{} (the scene stored in it)", path.display());
+            Scene::parse(text, &name, path.parent())?
+        }
+        None => Scene::default_scene(),
+    };
+    scene.source = path.display().to_string();
+    scene.clay.clear();
+    scene.timeline = crate::scene::Timeline::new(Vec::new(), scene.timeline.step_s())
+        .expect("an empty timeline has no two keys at one time");
+    Ok((scene, sculpt))
+}
+
 /// Rewrites the sculpt file `input` (any version this build reads) as `options` say, to `out`
 /// (atomically; an existing file only when `overwrite`). `input` may also be a scene file,
 /// whose clay at the end of its timeline is stored, with the scene's text.

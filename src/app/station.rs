@@ -30,15 +30,17 @@ use super::environment::load_environment;
 use super::frame::build_frame;
 use super::playback::Playback;
 use crate::config::{Chord, KeyBindings, Modifiers, StationAction};
-use crate::input::calibration::SpaceMouseCalibration;
+use crate::input::clutch::{Clutch, ClutchGains};
 use crate::input::desk::{DeskInput, FrameInput};
-use crate::input::gamepad::{GamepadCalibration, GamepadMotion, Gamepads};
-use crate::input::motion::{ActionEvent, InputAction, MappingTable, Rates, Target};
-use crate::input::mouse::{MouseButton, MouseEvent, MouseMode, MouseNavigator, MouseSettings};
+use crate::input::gamepad::{Contact, ContactFeedback, GamepadMotion, Gamepads, Rumble};
+use crate::input::motion::{ActionEvent, DeviceClass, InputAction, Rates, Target, TargetPoses};
+use crate::input::mouse::{MouseButton, MouseEvent, MouseMode, MouseNavigator};
 use crate::input::opentrack::OpentrackHead;
 use crate::input::reader::{HidSource, Mailbox, ReaderConfig, ReaderHandle};
+use crate::input::settings::InputSettings;
+use crate::input::spacenav::{Protocol, SpacenavSource, DEFAULT_SOCKET};
 use crate::io::autosave::{Autosave, AutosaveConfig};
-use crate::math::{Mat4, Quat, Vec2, Vec3, Vec4};
+use crate::math::{Mat4, Pose, Quat, Vec2, Vec3, Vec4};
 use crate::mesh::remesh_dirty;
 use crate::render::{Light, Presented, Renderer, RendererDesc, ToolGlyph, ValidationLog};
 use crate::scene::ScreenCalibration;
@@ -86,6 +88,15 @@ pub struct StationOptions {
     pub autosave: Option<AutosaveConfig>,
     /// The scene's text, kept in the autosave snapshots.
     pub scene_toml: Option<String>,
+    /// The desk input settings (targets, calibration files), read over the shipped
+    /// `calibration/input.toml`; the user's `input.toml` in the configuration folder when
+    /// absent.
+    pub input: Option<PathBuf>,
+    /// A sculpt file (`.argile`) to open at start: its clay replaces the scene's, and saving
+    /// writes back to it.
+    pub open: Option<PathBuf>,
+    /// The folder the open key looks for sculpts in (the save file's folder when absent).
+    pub open_dir: Option<PathBuf>,
 }
 
 /// How a station run ended.
@@ -284,6 +295,62 @@ fn clay_bounds(field: &crate::field::Field) -> crate::math::Aabb {
     )
 }
 
+/// The sculpt files (`.argile`) in `dir`, newest first (by modification time, then name).
+fn sculpts_in(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir(dir)? {
+        let entry = entry?;
+        let path = entry.path();
+        if super::is_sculpt(&path) && entry.file_type().is_ok_and(|t| t.is_file()) {
+            let modified = entry.metadata().and_then(|m| m.modified()).unwrap_or(std::time::UNIX_EPOCH);
+            found.push((modified, path));
+        }
+    }
+    found.sort_by(|a, b| b.0.cmp(&a.0).then_with(|| a.1.cmp(&b.1)));
+    Ok(found.into_iter().map(|(_, p)| p).collect())
+}
+
+/// The sculpt the open key opens: the one after `last` in `list`, wrapping round; the first
+/// when `last` is not in it.
+fn next_sculpt<'l>(list: &'l [PathBuf], last: Option<&Path>) -> Option<&'l Path> {
+    let next = last.and_then(|l| list.iter().position(|p| p == l)).map_or(0, |i| (i + 1) % list.len().max(1));
+    list.get(next).map(PathBuf::as_path)
+}
+
+/// Where the targets start: the desk tool at the scene's target, the second tool 5 cm to
+/// its left, the light and the scene where [`TargetPoses::default`] puts them.
+fn home_poses(target_m: Vec3) -> TargetPoses {
+    let mut poses = TargetPoses::default();
+    poses.get_mut(Target::Tool).position_m = target_m;
+    poses.get_mut(Target::SecondTool).position_m = target_m - Vec3::X * 0.05;
+    poses
+}
+
+/// Whether a tool at `pose` of `half_extents_m` touches the clay of `field`, and the mean
+/// density under it: the field sampled at the tool's centre and at both ends of its three
+/// axes; it touches where a sample reaches the iso-level.
+fn contact_under(field: &crate::field::Field, pose: Pose, half_extents_m: Vec3) -> (bool, f32) {
+    let mut reader = crate::field::FieldReader::new(field);
+    let transform = field.transform();
+    let h = half_extents_m;
+    let points = [
+        Vec3::ZERO,
+        Vec3::X * h.x,
+        Vec3::X * -h.x,
+        Vec3::Y * h.y,
+        Vec3::Y * -h.y,
+        Vec3::Z * h.z,
+        Vec3::Z * -h.z,
+    ];
+    let (mut sum, mut max) = (0.0f32, 0.0f32);
+    for p in points {
+        let d = reader.density_at(transform.world_to_index(pose.position_m + pose.rotation * p));
+        sum += d;
+        max = max.max(d);
+    }
+    (max >= field.iso(), sum / points.len() as f32)
+}
+
 /// The shapes the desk tool cycles through with `next-shape`, all of size `s` (their smallest
 /// half extent), and their names.
 pub(super) fn shape_cycle(s: f32) -> [(ToolShape, &'static str); 5] {
@@ -339,6 +406,21 @@ pub struct Station<'s> {
     mailbox: Option<Arc<Mailbox>>,
     /// A device's stroke button is down.
     device_apply: bool,
+    /// A device's clutch button is down.
+    device_clutch: bool,
+    /// The 3D cursor's clutch (relative) mode, from the first time the clutch is lifted in
+    /// cursor mode until the mouse mode changes or the view is reset; absent: the tool is
+    /// placed under the pointer.
+    cursor_clutch: Option<Clutch>,
+    /// Where the targets start (and `reset-view` puts them back).
+    home: TargetPoses,
+    /// The trackball's turn for a mouse that drives another target than the scene, world
+    /// frame, until the next [`Station::devices`].
+    mouse_turn: Quat,
+    /// Contact feedback for the pads (`None` before the first frame, whose contact is taken
+    /// silently: a tool that starts in the clay does not tap), and the rumble it asked for last.
+    feedback: Option<ContactFeedback>,
+    rumble: Option<Rumble>,
     /// Seconds since the station started (the devices' filters run on it).
     clock_s: f64,
     modifiers: Modifiers,
@@ -371,6 +453,15 @@ pub struct Station<'s> {
     window_px: (u32, u32),
     save_to: PathBuf,
     saved: Option<PathBuf>,
+    /// Strokes (and undos, redos) since the last save or open.
+    unsaved_strokes: u64,
+    /// Where the open key looks for sculpts, the sculpt it opened last, and the sculpt it
+    /// will open at the next press despite unsaved strokes (the user was warned).
+    open_dir: PathBuf,
+    opened: Option<PathBuf>,
+    confirm_open: Option<PathBuf>,
+    /// How autosave starts again on an opened sculpt, with the scene text its snapshots carry.
+    autosave_restart: Option<(AutosaveConfig, Option<String>)>,
     quit: bool,
     frame_ms: f32,
     times: StepTimes,
@@ -396,15 +487,16 @@ impl<'s> Station<'s> {
         let playback = Playback::new_autosaved(scene, start);
         let rig = scene.rig;
         let distance = (rig.eye_m - rig.target_m).length();
+        let settings = InputSettings::shipped();
         let mut mouse = MouseNavigator::new(
-            MouseSettings::default(),
+            settings.mouse.0,
             Vec2::new(window_px.0 as f32, window_px.1 as f32),
             distance,
         );
         mouse.tool_position_m = rig.target_m;
-        let mut desk =
-            DeskInput::new(SpaceMouseCalibration::shipped(), MappingTable::default(), Rates::default());
-        desk.poses.get_mut(Target::Tool).position_m = rig.target_m;
+        let home = home_poses(rig.target_m);
+        let mut desk = DeskInput::new(settings.spacemouse.0, settings.mapping, Rates::default());
+        desk.poses = home;
         let desk_tool = playback
             .tools()
             .first()
@@ -420,6 +512,12 @@ impl<'s> Station<'s> {
             desk,
             mailbox: None,
             device_apply: false,
+            device_clutch: false,
+            cursor_clutch: None,
+            home,
+            mouse_turn: Quat::IDENTITY,
+            feedback: None,
+            rumble: None,
             clock_s: 0.0,
             modifiers: Modifiers::default(),
             held: HashSet::new(),
@@ -438,8 +536,16 @@ impl<'s> Station<'s> {
             quad_buffer: false,
             window_origin: (0, 0),
             window_px,
+            open_dir: save_to
+                .parent()
+                .filter(|p| !p.as_os_str().is_empty())
+                .map_or_else(|| PathBuf::from("."), Path::to_owned),
             save_to,
             saved: None,
+            unsaved_strokes: 0,
+            opened: None,
+            confirm_open: None,
+            autosave_restart: None,
             quit: false,
             frame_ms: 0.0,
             times: StepTimes::default(),
@@ -457,6 +563,58 @@ impl<'s> Station<'s> {
         self.display_mode =
             self.scene.display.mode.or(calibration.display.mode).unwrap_or(DisplayMode::Anaglyph);
         self.fit_views();
+    }
+
+    /// Uses the desk input settings: the targets each device family drives, the SpaceMouse
+    /// calibration and the mouse settings (the gamepads' mapping goes to [`Gamepads`]). A mouse
+    /// that drives the tool starts as its 3D cursor.
+    pub fn set_input_settings(&mut self, settings: &InputSettings) {
+        self.desk.mapping = settings.mapping;
+        self.desk.calibration = settings.spacemouse.0;
+        let mouse = settings.mouse.0;
+        self.mouse.settings = mouse;
+        self.mouse.distance_m = self.mouse.distance_m.clamp(mouse.min_distance_m, mouse.max_distance_m);
+        if settings.mapping.target(DeviceClass::Mouse) == Target::Tool {
+            self.mouse.mode = MouseMode::Cursor;
+        }
+    }
+
+    /// The 3D cursor's clutch (Galyean–Hughes §2.2.2) after a mouse event that moved the tool
+    /// from `tool_before`, `placed` under the pointer or not (the wheel moves it in depth):
+    /// while the clutch is held the tool stays; once it has been held, the tool follows the
+    /// pointer's motion from where it is, scaled by the mouse's clutch gain, instead of jumping
+    /// under the pointer.
+    fn clutch_cursor(&mut self, tool_before: Vec3, placed: bool) {
+        if self.mouse.mode != MouseMode::Cursor {
+            return;
+        }
+        let held = self.device_clutch || self.holding(StationAction::Clutch);
+        let gains = ClutchGains { translation: self.mouse.settings.clutch_gain, rotation: 1.0 };
+        let at = |position_m: Vec3| Pose { position_m, rotation: Quat::IDENTITY };
+        let clutch = match &mut self.cursor_clutch {
+            Some(c) => c,
+            None if held => self.cursor_clutch.insert(Clutch::new(at(tool_before), gains)),
+            None => return,
+        };
+        if !placed {
+            // Not a pointer sample: the tool stays where the event put it.
+            if clutch.tool().position_m != self.mouse.tool_position_m {
+                clutch.set_tool(at(self.mouse.tool_position_m));
+            }
+            return;
+        }
+        if clutch.tool().position_m != tool_before {
+            // Another device moved the tool since: carry on from there.
+            clutch.set_tool(at(tool_before));
+        }
+        clutch.set_gains(gains);
+        self.mouse.tool_position_m = clutch.update(at(self.mouse.tool_position_m), held).position_m;
+    }
+
+    /// The rumble contact feedback asked for since the last call, if any (see
+    /// [`ContactFeedback`]): the window plays it on the pads that have force feedback.
+    pub fn take_rumble(&mut self) -> Option<Rumble> {
+        self.rumble.take()
     }
 
     /// The clay.
@@ -509,7 +667,25 @@ impl<'s> Station<'s> {
         let views = self.view.rig.views(aspect);
         let eye = &views.eyes[0];
         let inverse = (eye.projection * eye.view).inverse();
+        let before = self.mouse.scene_rotation;
+        let tool_before = self.mouse.tool_position_m;
         self.mouse.handle(event, &inverse, self.view.rig.forward());
+        let placed = match event {
+            MouseEvent::Press(MouseButton::Left, _) => true,
+            MouseEvent::Move(_) => self.mouse.left_held(),
+            _ => false,
+        };
+        self.clutch_cursor(tool_before, placed);
+        if self.mouse.mode == MouseMode::Scene
+            && self.desk.mapping.target(DeviceClass::Mouse) != Target::Scene
+        {
+            // The trackball turns the mouse's own target instead: its turn, from the view's
+            // frame to the world's, goes to the desk with the other devices' motion.
+            let turn = self.mouse.scene_rotation * before.inverse();
+            self.mouse.scene_rotation = before;
+            let view = Quat::from_mat4(&self.view.rig.centre_view().inverse());
+            self.mouse_turn = (view * turn * view.inverse() * self.mouse_turn).normalize();
+        }
         self.desk.poses.get_mut(Target::Tool).position_m = self.mouse.tool_position_m;
     }
 
@@ -535,8 +711,8 @@ impl<'s> Station<'s> {
     pub fn devices(&mut self, dt_s: f32, gamepads: &[GamepadMotion], mut actions: Vec<ActionEvent>) {
         self.clock_s += f64::from(dt_s);
         let view_rotation = Quat::from_mat4(&self.view.rig.centre_view().inverse());
-        let input =
-            FrameInput { t_s: self.clock_s, dt_s, view_rotation, gamepads, mouse_turn: Quat::IDENTITY };
+        let mouse_turn = std::mem::replace(&mut self.mouse_turn, Quat::IDENTITY);
+        let input = FrameInput { t_s: self.clock_s, dt_s, view_rotation, gamepads, mouse_turn };
         let first_new = actions.len();
         self.desk.update(self.mailbox.as_deref(), &input, &mut actions);
         for (i, a) in actions.iter().enumerate() {
@@ -554,7 +730,11 @@ impl<'s> Station<'s> {
                 InputAction::Redo => Some(StationAction::Redo),
                 InputAction::ResetView => Some(StationAction::ResetView),
                 InputAction::NextTool => Some(StationAction::NextTool),
-                InputAction::Clutch | InputAction::CycleTarget | InputAction::None => None,
+                InputAction::Clutch => {
+                    self.device_clutch = a.pressed;
+                    None
+                }
+                InputAction::CycleTarget | InputAction::None => None,
             };
             if let (Some(action), true) = (station_action, a.pressed) {
                 self.act(action);
@@ -593,7 +773,10 @@ impl<'s> Station<'s> {
             StationAction::Undo => {
                 self.stroke = None;
                 match field.undo() {
-                    Ok(true) => self.playback.journal(),
+                    Ok(true) => {
+                        self.playback.journal();
+                        self.unsaved_strokes += 1;
+                    }
                     Ok(false) => self.messages.push("nothing to undo".into()),
                     Err(e) => self.messages.push(format!("undo failed: {e}")),
                 }
@@ -601,10 +784,12 @@ impl<'s> Station<'s> {
             StationAction::Redo => {
                 if field.redo() {
                     self.playback.journal();
+                    self.unsaved_strokes += 1;
                 } else {
                     self.messages.push("nothing to redo".into());
                 }
             }
+            StationAction::Open => self.open_next(),
             StationAction::Save => match self.save() {
                 Ok(path) => self.messages.push(format!("saved the sculpt to {}", path.display())),
                 Err(e) => self.messages.push(format!("{e:#}")),
@@ -636,6 +821,7 @@ impl<'s> Station<'s> {
             StationAction::InteraxialWider => self.view.rig.interaxial_m *= STEREO_STEP,
             StationAction::InteraxialNarrower => self.view.rig.interaxial_m /= STEREO_STEP,
             StationAction::ToggleMouseMode => {
+                self.cursor_clutch = None;
                 self.mouse.mode = match self.mouse.mode {
                     MouseMode::Scene => MouseMode::Cursor,
                     MouseMode::Cursor => MouseMode::Scene,
@@ -657,8 +843,8 @@ impl<'s> Station<'s> {
                 self.mouse.scene_rotation = Quat::IDENTITY;
                 self.mouse.distance_m = distance;
                 self.mouse.tool_position_m = self.scene.rig.target_m;
-                self.desk.poses = Default::default();
-                self.desk.poses.get_mut(Target::Tool).position_m = self.scene.rig.target_m;
+                self.desk.poses = self.home;
+                self.cursor_clutch = None;
                 self.view.rig = self.scene.rig;
                 self.convergence_factor = self.scene.rig.convergence_m / distance.max(1e-6);
             }
@@ -672,6 +858,7 @@ impl<'s> Station<'s> {
                 }
             }
             StationAction::Apply
+            | StationAction::Clutch
             | StationAction::PointerLeft
             | StationAction::PointerRight
             | StationAction::PointerUp
@@ -795,7 +982,98 @@ impl<'s> Station<'s> {
         let path = self.save_to.clone();
         super::sculpt::save_field(self.playback.field(), &path)?;
         self.saved = Some(path.clone());
+        self.unsaved_strokes = 0;
         Ok(path)
+    }
+
+    /// The open key looks for sculpts in `dir`.
+    pub fn set_open_dir(&mut self, dir: PathBuf) {
+        self.open_dir = dir;
+    }
+
+    /// Autosave starts again with `config` on a sculpt opened later; its snapshots carry
+    /// `scene_toml`.
+    pub fn set_autosave_restart(&mut self, config: AutosaveConfig, scene_toml: Option<String>) {
+        self.autosave_restart = Some((config, scene_toml));
+    }
+
+    /// Opens the sculpt file at `path`: its clay replaces the station's (the scene's tools,
+    /// lights and view stay), a stroke in progress ends, and saving writes back to it. The
+    /// autosave session of the clay it replaces is closed, or left for recovery at the next
+    /// start when it holds unsaved strokes. A file that cannot be read changes nothing and the
+    /// error names it.
+    pub fn open(&mut self, path: &Path) -> Result<()> {
+        let sculpt = crate::io::read_file(path, &mut |_| {})?;
+        self.stroke = None;
+        let restart = self.autosave_restart.clone();
+        let source = path.display().to_string();
+        let old = self.playback.replace_field(sculpt.field, |field| {
+            restart.and_then(|(config, toml)| {
+                super::autosave::start_autosave(field, toml.as_deref(), &source, config)
+            })
+        });
+        if let Some(session) = old {
+            if self.unsaved_strokes == 0 {
+                if let Err(e) = session.close() {
+                    self.messages.push(format!("{e:#}"));
+                }
+            }
+            // Else dropped unclosed: the next start recovers its strokes.
+        }
+        self.save_to = path.to_owned();
+        self.opened = Some(path.to_owned());
+        self.unsaved_strokes = 0;
+        self.clay_bounds = crate::math::Aabb::EMPTY;
+        Ok(())
+    }
+
+    /// The open key: the sculpt after the one opened last in the open folder, newest first.
+    fn open_next(&mut self) {
+        let dir = self.open_dir.clone();
+        let list = match sculpts_in(&dir) {
+            Ok(list) => list,
+            Err(e) => {
+                self.messages.push(format!("cannot list the sculpts in {}: {e}", dir.display()));
+                return;
+            }
+        };
+        let Some(path) = next_sculpt(&list, self.opened.as_deref()).map(Path::to_owned) else {
+            self.messages.push(format!(
+                "no sculpt (.argile) in {} to open: the save key writes one there, and \
+                 `argile run --open-dir DIR` names another folder",
+                dir.display()
+            ));
+            return;
+        };
+        if self.unsaved_strokes > 0 && self.confirm_open.as_ref() != Some(&path) {
+            let fate = if self.playback.autosave().is_some() {
+                "they are kept for recovery at the next start"
+            } else {
+                "they will be lost"
+            };
+            self.messages.push(format!(
+                "{} unsaved stroke(s): the save key writes them to {}; the open key again opens {} \
+                 anyway ({fate})",
+                self.unsaved_strokes,
+                self.save_to.display(),
+                path.display()
+            ));
+            self.confirm_open = Some(path);
+            return;
+        }
+        self.confirm_open = None;
+        match self.open(&path) {
+            Ok(()) => self.messages.push(format!(
+                "opened {} (the open key again: the next older sculpt in {})",
+                path.display(),
+                dir.display()
+            )),
+            Err(e) => {
+                // Skipped at the next press.
+                self.opened = Some(path);
+                self.messages.push(format!("{e:#}"));
+            }
+        }
     }
 
     fn holding(&self, action: StationAction) -> bool {
@@ -861,9 +1139,12 @@ impl<'s> Station<'s> {
         } else if self.stroke.take().is_some() {
             field.end_stroke();
             self.playback.journal();
+            self.unsaved_strokes += 1;
+            self.confirm_open = None;
         }
 
         self.times.tools_ms = ms_since(tools_started);
+        self.feel_contact(pose, dt_s);
 
         // Field → mesh → renderer.
         let mesh_started = Instant::now();
@@ -909,12 +1190,62 @@ impl<'s> Station<'s> {
             };
             frame.views = tracked.views(&head);
         }
+        self.place_key_light(&mut frame.lights);
         frame.hud = self.hud_lines();
         frame.tools.push(ToolGlyph {
             model: pose.to_matrix() * Mat4::from_scale(self.desk_tool.half_extents_m()),
             colour: Vec4::from(self.desk_tool.colour).truncate().extend(0.35),
         });
+        let second = self.desk.poses.get(Target::SecondTool);
+        if second != self.home.get(Target::SecondTool) {
+            // The second tool, once a device has moved it: the desk tool's size, in blue.
+            frame.tools.push(ToolGlyph {
+                model: second.to_matrix() * Mat4::from_scale(self.desk_tool.half_extents_m()),
+                colour: Vec4::new(0.3, 0.5, 1.0, 0.35),
+            });
+        }
         frame
+    }
+
+    /// The key light (the scene's first), turned and moved as far as the devices driving the
+    /// light have moved its target from home; as the scene has it while they have not.
+    fn place_key_light(&self, lights: &mut [Light]) {
+        let (light, home) = (self.desk.poses.get(Target::Light), self.home.get(Target::Light));
+        if light == home {
+            return;
+        }
+        let turn = (light.rotation * home.rotation.inverse()).normalize();
+        let pivot = self.scene.rig.target_m;
+        match lights.first_mut() {
+            Some(Light::Directional { direction, .. }) => *direction = turn * *direction,
+            Some(Light::Point { position_m, .. }) => {
+                *position_m = pivot + turn * (*position_m - pivot) + (light.position_m - home.position_m);
+            }
+            None => {}
+        }
+    }
+
+    /// Contact feedback for the pads: the tool the gamepads drive (the desk tool at `tool`, or
+    /// the second tool) against the clay this frame.
+    fn feel_contact(&mut self, tool: Pose, dt_s: f32) {
+        let driven = match self.desk.mapping.target(DeviceClass::Gamepad) {
+            Target::Tool => Some((tool, self.stroke.is_some())),
+            Target::SecondTool => Some((self.desk.poses.get(Target::SecondTool), false)),
+            Target::Scene | Target::Light => None,
+        };
+        let contact = driven.map_or(Contact::default(), |(pose, stroking)| {
+            let (touching, density) =
+                contact_under(self.playback.field(), pose, self.desk_tool.half_extents_m());
+            Contact { touching, density, stroking }
+        });
+        let feedback = self.feedback.get_or_insert_with(|| {
+            let mut silent = ContactFeedback::default();
+            let _ = silent.update(Contact { stroking: false, ..contact }, 0.0);
+            silent
+        });
+        if let Some(r) = feedback.update(contact, dt_s) {
+            self.rumble = Some(r);
+        }
     }
 }
 
@@ -925,6 +1256,10 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
         bail!("cannot open the station window: {reason}");
     }
     let (bindings, _) = KeyBindings::load(options.keys.as_deref())?;
+    // The scene's input settings, then the command line's, over the user's.
+    let layers: Vec<&Path> =
+        scene.input_settings.iter().chain(&options.input).map(PathBuf::as_path).collect();
+    let input = InputSettings::load(&layers, InputSettings::user_config_dir().as_deref())?;
     let calibration = options.calibration.as_deref().map(ScreenCalibration::load).transpose()?;
     let script = options.script.as_deref().map(InputScript::load).transpose()?;
     let event_loop = EventLoop::new().context("cannot connect to the display server")?;
@@ -943,8 +1278,19 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
             if let Some(c) = calibration {
                 station.set_calibration(c);
             }
+            station.set_input_settings(&input);
+            if let Some(config) = &options.autosave {
+                station.set_autosave_restart(config.clone(), options.scene_toml.clone());
+            }
+            if let Some(dir) = &options.open_dir {
+                station.set_open_dir(dir.clone());
+            }
+            if let Some(path) = &options.open {
+                station.open(path)?;
+            }
             station
         },
+        input,
         options,
         script: script.unwrap_or_default(),
         scene_name,
@@ -1018,6 +1364,8 @@ struct WindowApp<'s, 'o> {
     /// The SpaceMouse reader thread (stopped on drop) and the gamepads, when available.
     spacemice: Option<ReaderHandle>,
     gamepads: Option<Gamepads>,
+    /// The desk input settings (how SpaceMice are read, the gamepads' mapping).
+    input: InputSettings,
     validation: Option<ValidationLog>,
     frames: u64,
     last: Option<Instant>,
@@ -1071,14 +1419,25 @@ impl WindowApp<'_, '_> {
         }
         // The 6-DoF devices, unless the run is scripted (its input is the script alone).
         if self.options.frames.is_none() {
-            match ReaderHandle::spawn(HidSource::new, ReaderConfig::default()) {
+            let socket = PathBuf::from(DEFAULT_SOCKET);
+            let spacenavd = self.input.spacemouse_via.use_spacenavd(SpacenavSource::socket_present(&socket));
+            let reader = if spacenavd {
+                println!("SpaceMouse: reading spacenavd's socket {}", socket.display());
+                ReaderHandle::spawn(
+                    move || Ok(SpacenavSource::new(socket, Protocol::V0)),
+                    ReaderConfig::default(),
+                )
+            } else {
+                ReaderHandle::spawn(HidSource::new, ReaderConfig::default())
+            };
+            match reader {
                 Ok(reader) => {
                     self.station.attach_spacemice(reader.mailbox().clone());
                     self.spacemice = Some(reader);
                 }
                 Err(e) => tracing::warn!("no SpaceMouse reader: {e}"),
             }
-            match Gamepads::new(GamepadCalibration::shipped()) {
+            match Gamepads::new(self.input.gamepad.0) {
                 Ok(g) => self.gamepads = Some(g),
                 Err(e) => tracing::warn!("no gamepads: {e}"),
             }
@@ -1121,6 +1480,12 @@ impl WindowApp<'_, '_> {
         });
         if let Some(e) = failed {
             return Err(e.into());
+        }
+        if let (Some(rumble), Some(pads)) = (self.station.take_rumble(), &mut self.gamepads) {
+            let ids: Vec<_> = pads.pad_ids().collect();
+            for id in ids {
+                pads.play(id, rumble);
+            }
         }
         for m in self.station.messages.drain(..) {
             println!("{m}");
@@ -1511,5 +1876,338 @@ mod tests {
             "{:?}",
             station.hud_lines()
         );
+    }
+
+    /// The ball scene with a ball of clay (5 cm radius) 12 cm right of the desk tool's start.
+    fn clay_ball_scene() -> Scene {
+        let text = "[[clay]]\nshape = \"sphere\"\nradius_m = 0.05\nposition_m = [0.12, 0, 0]\n\
+                    [[tool]]\nname = \"ball\"\nshape = \"sphere\"\nradius_m = 0.02\naction = \"add\"\n";
+        Scene::parse(text, "clay ball", None).unwrap()
+    }
+
+    fn gamepad_drives(station: &mut Station<'_>, target: Target) {
+        let mut settings = InputSettings::shipped();
+        settings.mapping.set(DeviceClass::Gamepad, target);
+        station.set_input_settings(&settings);
+    }
+
+    #[test]
+    fn a_gamepad_on_the_tool_feels_the_clay_a_tap_at_contact_then_the_density_while_stroking() {
+        use crate::input::calibration::SixDof;
+        let scene = clay_ball_scene();
+        let mut station = small_station(&scene);
+        gamepad_drives(&mut station, Target::Tool);
+        let right = GamepadMotion {
+            six: SixDof { translation: Vec3::X * 0.5, rotation: Vec3::ZERO },
+            size_rate: 0.0,
+        };
+        let stroke = |pressed| {
+            vec![ActionEvent { action: InputAction::Stroke, pressed, device: DeviceClass::Gamepad }]
+        };
+        // The injected sequence: push the stick right until the tool meets the ball, press
+        // the stroke button for a quarter second while pushing on, release.
+        let mut felt = Vec::new();
+        let frame = |station: &mut Station<'_>, motion: &[GamepadMotion], actions, felt: &mut Vec<_>| {
+            station.devices(SCRIPTED_STEP_S, motion, actions);
+            station.step(SCRIPTED_STEP_S, |_| {});
+            let (touching, density) = contact_under(
+                station.field(),
+                station.desk.poses.get(Target::Tool),
+                station.desk_tool.half_extents_m(),
+            );
+            felt.push((station.take_rumble(), touching, density));
+        };
+        let mut frames_to_contact = 0;
+        while !felt.last().is_some_and(|f: &(Option<Rumble>, bool, f32)| f.1) {
+            frame(&mut station, &[right], Vec::new(), &mut felt);
+            frames_to_contact += 1;
+            assert!(frames_to_contact < 120, "the tool reaches the ball");
+        }
+        assert!(felt[..felt.len() - 1].iter().all(|f| f.0.is_none()), "nothing in the air");
+        assert_eq!(felt.last().unwrap().0, Some(ContactFeedback::TAP), "a tap at contact");
+        frame(&mut station, &[right], stroke(true), &mut felt);
+        for _ in 0..15 {
+            frame(&mut station, &[right], Vec::new(), &mut felt);
+        }
+        let stroking = &felt[frames_to_contact..];
+        let played: Vec<Rumble> = stroking.iter().filter_map(|f| f.0).collect();
+        assert!(played.len() >= 3 && played.iter().all(|r| !r.is_stop()), "{played:?}");
+        for (rumble, _, density) in stroking.iter().filter(|f| f.0.is_some()) {
+            let expected = ContactFeedback::stroke_strength(*density);
+            assert!((rumble.unwrap().strong - expected).abs() < 1e-5, "strength follows the density");
+        }
+        let densities: Vec<f32> = stroking.iter().map(|f| f.2).collect();
+        assert!(densities.last() > densities.first(), "deeper into the clay: {densities:?}");
+        frame(&mut station, &[], stroke(false), &mut felt);
+        assert_eq!(felt.last().unwrap().0, Some(Rumble::STOP), "the stroke ends: the rumble stops");
+
+        // A gamepad that turns the scene feels nothing, whatever the desk tool touches.
+        let mut station = small_station(&scene);
+        gamepad_drives(&mut station, Target::Scene);
+        station.desk.poses.get_mut(Target::Tool).position_m = Vec3::new(0.12, 0.0, 0.0);
+        station.mouse.tool_position_m = Vec3::new(0.12, 0.0, 0.0);
+        station.devices(SCRIPTED_STEP_S, &[], stroke(true));
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert_eq!(station.take_rumble(), None);
+
+        // A tool that starts in the clay does not tap at the first frame; it taps when it
+        // comes back after leaving.
+        let mut station = small_station(&scene);
+        gamepad_drives(&mut station, Target::Tool);
+        station.desk.poses.get_mut(Target::Tool).position_m = Vec3::new(0.12, 0.0, 0.0);
+        station.mouse.tool_position_m = Vec3::new(0.12, 0.0, 0.0);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert_eq!(station.take_rumble(), None, "no tap at start");
+        station.mouse.tool_position_m = Vec3::ZERO;
+        station.step(SCRIPTED_STEP_S, |_| {});
+        station.mouse.tool_position_m = Vec3::new(0.12, 0.0, 0.0);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert_eq!(station.take_rumble(), Some(ContactFeedback::TAP));
+    }
+
+    #[test]
+    fn devices_drive_the_light_and_the_second_tool_and_a_mouse_can_turn_the_light() {
+        use crate::input::calibration::SixDof;
+        let scene = Scene::default_scene();
+        let mut station = small_station(&scene);
+        let before = station.step(SCRIPTED_STEP_S, |_| {});
+        let glyphs = before.tools.len();
+        gamepad_drives(&mut station, Target::Light);
+        let twist = GamepadMotion {
+            six: SixDof { translation: Vec3::ZERO, rotation: Vec3::Y * 0.5 },
+            size_rate: 0.0,
+        };
+        for _ in 0..20 {
+            station.devices(SCRIPTED_STEP_S, &[twist], Vec::new());
+        }
+        let lit = station.step(SCRIPTED_STEP_S, |_| {});
+        assert_ne!(lit.lights[0], before.lights[0], "the key light turned");
+        assert_eq!(lit.lights[1..], before.lights[1..], "the others stay");
+        assert_eq!(lit.tools.len(), glyphs, "the second tool is not drawn until it moves");
+
+        gamepad_drives(&mut station, Target::SecondTool);
+        let push = GamepadMotion {
+            six: SixDof { translation: Vec3::Y * 0.5, rotation: Vec3::ZERO },
+            size_rate: 0.0,
+        };
+        for _ in 0..10 {
+            station.devices(SCRIPTED_STEP_S, &[push], Vec::new());
+        }
+        let two = station.step(SCRIPTED_STEP_S, |_| {});
+        assert_eq!(two.tools.len(), glyphs + 1, "the second tool is drawn once moved");
+        let second = two.tools[glyphs].model.w_axis;
+        assert!(second.y > 0.01, "it went up: {second:?}");
+
+        // A mouse set to drive the light turns it with the trackball, not the scene.
+        let mut station = small_station(&scene);
+        let mut settings = InputSettings::shipped();
+        settings.mapping.set(DeviceClass::Mouse, Target::Light);
+        station.set_input_settings(&settings);
+        let eye = station.view.rig.eye_m;
+        station.script(&ScriptEvent::Drag {
+            button: MouseButton::Left,
+            from_px: Vec2::new(32.0, 32.0),
+            to_px: Vec2::new(48.0, 32.0),
+            steps: 4,
+        });
+        station.devices(SCRIPTED_STEP_S, &[], Vec::new());
+        let turned = station.step(SCRIPTED_STEP_S, |_| {});
+        assert!((station.view.rig.eye_m - eye).length() < 1e-6, "the view did not turn");
+        assert_ne!(turned.lights[0], before.lights[0], "the light did");
+        // Reset puts the light back.
+        station.key(KeyCode::Home, true);
+        assert_eq!(station.step(SCRIPTED_STEP_S, |_| {}).lights[0], before.lights[0]);
+
+        // A mouse set to drive the tool starts as its 3D cursor.
+        let mut station = small_station(&scene);
+        assert_eq!(station.mouse.mode, MouseMode::Scene);
+        settings.mapping.set(DeviceClass::Mouse, Target::Tool);
+        station.set_input_settings(&settings);
+        assert_eq!(station.mouse.mode, MouseMode::Cursor);
+    }
+
+    #[test]
+    fn unplugging_the_spacemouse_mid_stroke_ends_the_stroke_and_a_replug_drives_again() {
+        use crate::input::reader::{DeviceId, DeviceInfo, ReaderEvent};
+        use crate::input::spacemouse::{ButtonChange, RawAxes, SpaceMouseState};
+        let scene = ball_scene();
+        let mut station = small_station(&scene);
+        let mailbox = Arc::new(Mailbox::new(16));
+        station.attach_spacemice(mailbox.clone());
+        let info = DeviceInfo { path: "hid-a".into(), name: "SpaceMouse".into() };
+        mailbox.push_event(ReaderEvent::Connected { id: DeviceId(1), info: info.clone() });
+        mailbox.push_event(ReaderEvent::Buttons {
+            id: DeviceId(1),
+            change: ButtonChange { pressed: 1, released: 0 },
+            buttons: 1,
+        });
+        let push = SpaceMouseState { axes: RawAxes([175, 0, 0, 0, 0, 0]), buttons: 1, ..Default::default() };
+        for _ in 0..10 {
+            mailbox.publish_state(DeviceId(1), push);
+            station.devices(SCRIPTED_STEP_S, &[], Vec::new());
+            station.step(SCRIPTED_STEP_S, |_| {});
+        }
+        assert!(station.stroke.is_some() && station.playback.field().in_stroke());
+        let mass = station.playback.field().mass();
+        // Unplugged with the button held: the reader reports the loss, releasing it.
+        mailbox.push_event(ReaderEvent::Lost { id: DeviceId(1), released: 1, reason: "unplugged".into() });
+        station.devices(SCRIPTED_STEP_S, &[], Vec::new());
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert!(station.stroke.is_none() && !station.playback.field().in_stroke(), "the stroke ended");
+        let at = station.desk.poses.get(Target::Tool).position_m;
+        for _ in 0..5 {
+            station.devices(SCRIPTED_STEP_S, &[], Vec::new());
+            station.step(SCRIPTED_STEP_S, |_| {});
+        }
+        assert_eq!(station.desk.poses.get(Target::Tool).position_m, at, "a lost device moves nothing");
+        assert_eq!(station.playback.field().mass(), mass, "nor sculpts");
+        // Plugged back (a new id): it drives the tool again.
+        mailbox.push_event(ReaderEvent::Connected { id: DeviceId(2), info });
+        for _ in 0..10 {
+            mailbox.publish_state(DeviceId(2), SpaceMouseState { buttons: 0, ..push });
+            station.devices(SCRIPTED_STEP_S, &[], Vec::new());
+            station.step(SCRIPTED_STEP_S, |_| {});
+        }
+        assert!((station.desk.poses.get(Target::Tool).position_m - at).length() > 0.005);
+        assert!(station.stroke.is_none());
+    }
+
+    #[test]
+    fn the_open_key_opens_the_newest_sculpt_then_older_ones_and_warns_of_unsaved_strokes() {
+        use std::time::{Duration, SystemTime};
+        let dir = std::env::temp_dir().join(format!("argile-station-open-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let scene = ball_scene();
+        // Two sculpts: one stroke in `older`, two in `newer`.
+        let mut maker = Station::new(&scene, KeyBindings::shipped(), (64, 64), dir.join("older.argile"));
+        let sculpt = |station: &mut Station<'_>| {
+            station.key(KeyCode::Space, true);
+            station.key(KeyCode::ArrowRight, true);
+            for _ in 0..5 {
+                station.step(SCRIPTED_STEP_S, |_| {});
+            }
+            station.key(KeyCode::Space, false);
+            station.key(KeyCode::ArrowRight, false);
+            station.step(SCRIPTED_STEP_S, |_| {});
+        };
+        sculpt(&mut maker);
+        maker.save().unwrap();
+        let older_mass = maker.field().mass();
+        sculpt(&mut maker);
+        maker.save_to = dir.join("newer.argile");
+        maker.save().unwrap();
+        let newer_mass = maker.field().mass();
+        assert!(newer_mass > older_mass && older_mass > 0.0);
+        let age = |name: &str, s: u64| {
+            let f = std::fs::File::options().write(true).open(dir.join(name)).unwrap();
+            f.set_modified(SystemTime::now() - Duration::from_secs(s)).unwrap();
+        };
+        age("older.argile", 100);
+        age("newer.argile", 10);
+        std::fs::write(dir.join("notes.txt"), "not a sculpt").unwrap();
+
+        let mut station = Station::new(&scene, KeyBindings::shipped(), (64, 64), dir.join("fresh.argile"));
+        let ctrl = Modifiers { ctrl: true, ..Default::default() };
+        let open = |station: &mut Station<'_>| {
+            station.set_modifiers(ctrl);
+            station.key(KeyCode::KeyO, true);
+            station.key(KeyCode::KeyO, false);
+            station.set_modifiers(Modifiers::default());
+            let diff = remesh_dirty(station.playback.field_mut());
+            (station.field().mass(), diff, station.messages.drain(..).collect::<Vec<_>>())
+        };
+        let (mass, diff, said) = open(&mut station);
+        assert_eq!(mass, newer_mass, "the newest first: {said:?}");
+        assert!(!diff.upserted.is_empty(), "its clay is meshed");
+        assert!(said[0].starts_with("opened ") && said[0].contains("newer.argile"), "{said:?}");
+        let (mass, _, _) = open(&mut station);
+        assert_eq!(mass, older_mass, "then the next older");
+        // The opened sculpt is where the save key writes.
+        station.set_modifiers(ctrl);
+        station.key(KeyCode::KeyS, true);
+        station.key(KeyCode::KeyS, false);
+        station.set_modifiers(Modifiers::default());
+        assert!(station.messages.pop().unwrap().contains("older.argile"));
+
+        // Unsaved strokes: the first press warns and opens nothing; the second opens.
+        sculpt(&mut station);
+        let sculpted = station.field().mass();
+        let (mass, _, said) = open(&mut station);
+        assert_eq!(mass, sculpted, "nothing opened yet");
+        assert!(said[0].contains("1 unsaved stroke") && said[0].contains("newer.argile"), "{said:?}");
+        let (mass, diff, _) = open(&mut station);
+        assert_eq!(mass, newer_mass);
+        assert!(!diff.removed.is_empty() || !diff.upserted.is_empty(), "the old clay's chunks are redrawn");
+
+        // A damaged sculpt changes nothing and is named; the next press skips it.
+        std::fs::write(dir.join("broken.argile"), b"ARGL but not really").unwrap();
+        let (mass, _, said) = open(&mut station);
+        assert_eq!(mass, newer_mass);
+        assert!(said[0].contains("broken.argile"), "{said:?}");
+        let (mass, _, said) = open(&mut station);
+        // Saved a moment ago, `older` is now the newest after the damaged file.
+        assert!(said[0].starts_with("opened ") && said[0].contains("older.argile"), "{said:?}");
+        assert_eq!(mass, older_mass);
+
+        // An empty folder says what to do.
+        let empty = dir.join("empty");
+        std::fs::create_dir_all(&empty).unwrap();
+        station.set_open_dir(empty);
+        let (_, _, said) = open(&mut station);
+        assert!(said[0].starts_with("no sculpt (.argile) in") && said[0].contains("--open-dir"), "{said:?}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn the_clutch_holds_the_cursor_tool_then_it_follows_the_pointer_scaled_by_the_gain() {
+        let scene = Scene::default_scene();
+        let drag = |station: &mut Station<'_>, from: f32, to: f32| {
+            station.script(&ScriptEvent::Drag {
+                button: MouseButton::Left,
+                from_px: Vec2::new(from, 32.0),
+                to_px: Vec2::new(to, 32.0),
+                steps: 4,
+            });
+            station.mouse.tool_position_m
+        };
+        let cursor = |station: &mut Station<'_>| {
+            station.key(KeyCode::Tab, true);
+            station.key(KeyCode::Tab, false);
+        };
+        // Plain cursor: the tool lands under the pointer.
+        let mut plain = small_station(&scene);
+        cursor(&mut plain);
+        let a = drag(&mut plain, 32.0, 32.0);
+        let b = drag(&mut plain, 32.0, 48.0);
+        let reach = b - a;
+        assert!(reach.length() > 1e-3);
+
+        let mut settings = InputSettings::shipped();
+        settings.mouse.0.clutch_gain = 0.25;
+        let mut station = small_station(&scene);
+        station.set_input_settings(&settings);
+        cursor(&mut station);
+        let start = drag(&mut station, 32.0, 32.0);
+        assert!((start - a).length() < 1e-6, "not clutched yet: under the pointer");
+        // Clutch held: the pointer goes right, the tool stays.
+        station.key(KeyCode::KeyX, true);
+        let held = drag(&mut station, 32.0, 48.0);
+        assert!((held - start).length() < 1e-6, "held: {held} vs {start}");
+        station.key(KeyCode::KeyX, false);
+        // Released: the same drag again moves the tool a quarter as far, from where it was.
+        let after = drag(&mut station, 32.0, 48.0);
+        assert!(((after - start) - reach * 0.25).length() < 1e-4, "{} vs {}", after - start, reach * 0.25);
+        // A gamepad's clutch button lifts it too.
+        let clutch = |pressed| {
+            vec![ActionEvent { action: InputAction::Clutch, pressed, device: DeviceClass::Gamepad }]
+        };
+        station.devices(SCRIPTED_STEP_S, &[], clutch(true));
+        assert!((drag(&mut station, 48.0, 16.0) - after).length() < 1e-6);
+        station.devices(SCRIPTED_STEP_S, &[], clutch(false));
+        // Tab twice: back to the plain cursor.
+        cursor(&mut station);
+        cursor(&mut station);
+        assert!((drag(&mut station, 32.0, 48.0) - b).length() < 1e-3, "under the pointer again");
     }
 }

@@ -21,7 +21,7 @@ use anyhow::{Context, Result};
 use super::frame::build_frame;
 use super::playback::Playback;
 use super::station::{action_cycle, shape_cycle, shape_name};
-use crate::field::FieldReader;
+use crate::field::{Field, FieldReader};
 use crate::io::autosave::AutosaveConfig;
 use crate::math::{Mat4, Pose, Vec3, Vec4};
 use crate::mesh::{remesh_dirty, MeshDiff};
@@ -375,17 +375,26 @@ pub fn contact_density(field: &crate::field::Field, pose: Pose, half_m: Vec3) ->
 /// frame count of `options` is reached). Fails with an [`XrError`] that
 /// [`XrError::is_absent`] when there is no loader, runtime, Vulkan support or headset: the
 /// caller then falls back to the desktop stereo modes.
-pub fn run_xr(scene: &Scene, scene_name: &str, options: &XrRunOptions) -> Result<XrReport> {
+pub fn run_xr(
+    scene: &Scene,
+    opened: Option<Field>,
+    scene_name: &str,
+    options: &XrRunOptions,
+) -> Result<XrReport> {
     let environment = super::environment::load_environment(&scene.environment.choice)?;
     let mut station = XrStation::start(&options.session, &environment, scene.environment.intensity)?;
     let validation = station.renderer().validation_log();
     let save_to = options.save_to.clone().unwrap_or_else(|| PathBuf::from(format!("{scene_name}.argile")));
     let source = scene.source.clone();
-    let playback = Playback::new_autosaved(scene, |field| {
+    let start = |field: &mut Field| {
         options.autosave.clone().and_then(|config| {
             super::autosave::start_autosave(field, options.scene_toml.as_deref(), &source, config)
         })
-    });
+    };
+    let playback = match opened {
+        Some(field) => Playback::on_field(scene, field, start),
+        None => Playback::new_autosaved(scene, start),
+    };
     let mut sculptor = XrSculptor::new(scene, playback, save_to, options.left_handed);
     let mut report = XrReport {
         runtime: station.runtime().to_owned(),
@@ -528,7 +537,7 @@ pub(super) fn bench_frame_xr(
         save_to: Some(dir.join("bench.argile")),
         ..XrRunOptions::default()
     };
-    let report = run_xr(&scene, "bench", &options)?;
+    let report = run_xr(&scene, None, "bench", &options)?;
     let timed = &report.stage_ms[2.min(report.stage_ms.len())..];
     let median_of = |i: usize| super::bench::median(timed.iter().map(|s| s[i]).collect());
     let total = super::bench::median(timed.iter().map(|s| s.iter().sum()).collect());

@@ -73,6 +73,11 @@ pub enum StationAction {
     PointerAway,
     /// Held: move the desk tool towards the viewer.
     PointerToward,
+    /// Open a sculpt file: the newest in the open folder, then each older one in turn.
+    Open,
+    /// Held: the clutch is lifted: the mouse's 3D cursor moves without the tool; released, the
+    /// tool follows the pointer's motion from where it is, scaled by the mouse's clutch gain.
+    Clutch,
 }
 
 /// Every action with its name in the bindings file.
@@ -102,6 +107,8 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("pointer-down", StationAction::PointerDown),
     ("pointer-away", StationAction::PointerAway),
     ("pointer-toward", StationAction::PointerToward),
+    ("open", StationAction::Open),
+    ("clutch", StationAction::Clutch),
 ];
 
 impl StationAction {

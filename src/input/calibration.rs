@@ -58,6 +58,16 @@ impl Layer<'_> {
         self.at(None, format!("`{key}` is missing (a complete {} needs it)", self.what))
     }
 
+    /// A value given in the file, else `fallback` when absent.
+    pub(crate) fn value<T>(
+        &self,
+        value: Option<T>,
+        key: &str,
+        fallback: Option<T>,
+    ) -> Result<T, CalibrationError> {
+        value.or(fallback).ok_or_else(|| self.missing(key))
+    }
+
     /// A number within `range`, else `fallback` when absent.
     pub(crate) fn number(
         &self,
@@ -75,6 +85,15 @@ impl Layer<'_> {
             None => fallback.ok_or_else(|| self.missing(key)),
         }
     }
+}
+
+/// Reads a device file's text; the error names the file and says what it is (`kind`).
+pub(crate) fn read_text(path: &Path, kind: &'static str) -> Result<String, CalibrationError> {
+    std::fs::read_to_string(path).map_err(|source| CalibrationError::Read {
+        kind,
+        path: path.to_owned(),
+        source,
+    })
 }
 
 /// One of the device's raw axes, in report order.
@@ -231,12 +250,7 @@ impl SpaceMouseCalibration {
 
     /// Loads a calibration file, layered over the shipped defaults.
     pub fn load(path: &Path) -> Result<Self, CalibrationError> {
-        let text = std::fs::read_to_string(path).map_err(|source| CalibrationError::Read {
-            kind: "calibration",
-            path: path.to_owned(),
-            source,
-        })?;
-        Self::parse(&text, &path.display().to_string())
+        Self::parse(&read_text(path, "calibration")?, &path.display().to_string())
     }
 
     /// Parses calibration text layered over the shipped defaults; `name` is used in messages.

@@ -14,13 +14,12 @@
 //! A pad that disconnects releases its held actions, so a stroke in progress ends cleanly.
 
 use std::path::Path;
-use std::time::Duration;
 
 use gilrs::{Axis, Button, EventType, GamepadId, Gilrs};
 use serde::Deserialize;
 use toml::Spanned;
 
-use super::calibration::{CalibrationError, Layer, SixDof};
+use super::calibration::{read_text, CalibrationError, Layer, SixDof};
 use super::motion::{ActionEvent, DeviceClass, InputAction};
 use crate::math::Vec3;
 
@@ -179,11 +178,7 @@ impl GamepadCalibration {
 
     /// Loads a mapping file, layered over the shipped defaults.
     pub fn load(path: &Path) -> Result<Self, CalibrationError> {
-        let text = std::fs::read_to_string(path).map_err(|source| CalibrationError::Read {
-            kind: "gamepad mapping",
-            path: path.to_owned(),
-            source,
-        })?;
+        let text = read_text(path, "gamepad mapping")?;
         Self::parse_layer(&text, &path.display().to_string(), Some(&Self::shipped()))
     }
 
@@ -440,13 +435,102 @@ impl GamepadMapper {
     }
 }
 
-/// How strongly to rumble for a tool `depth_m` inside the clay: nothing outside, rising
-/// linearly to full strength at `full_depth_m`.
-pub fn contact_strength(depth_m: f32, full_depth_m: f32) -> f32 {
-    if !(depth_m.is_finite() && full_depth_m.is_finite() && full_depth_m > 0.0) {
-        return 0.0;
+/// What the tool a pad drives is doing to the clay this frame, as the station samples it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Contact {
+    /// Whether the tool touches the clay (the density somewhere in it reaches the iso-level).
+    pub touching: bool,
+    /// Mean density under the tool, 0 (air) to 1 (full clay).
+    pub density: f32,
+    /// Whether the tool is acting on the clay (a stroke is in progress).
+    pub stroking: bool,
+}
+
+/// A rumble to play on a pad: the strong (low-frequency) and weak (high-frequency) motors'
+/// magnitudes, 0 to 1, for `duration_ms`. Zero magnitudes stop the pad's rumble.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rumble {
+    /// Strong motor, 0 to 1.
+    pub strong: f32,
+    /// Weak motor, 0 to 1.
+    pub weak: f32,
+    /// How long it plays, milliseconds.
+    pub duration_ms: u32,
+}
+
+impl Rumble {
+    /// Stops the rumble.
+    pub const STOP: Rumble = Rumble { strong: 0.0, weak: 0.0, duration_ms: 0 };
+
+    /// Whether this stops the rumble rather than playing one.
+    pub fn is_stop(&self) -> bool {
+        self.strong <= 0.0 && self.weak <= 0.0
     }
-    (depth_m / full_depth_m).clamp(0.0, 1.0)
+}
+
+/// Contact feedback: which rumble to start, frame by frame, from the tool's [`Contact`].
+///
+/// ```text
+///  touch onset (not touching → touching) ──► a tap: strong 0.6, weak 0.3, 40 ms
+///  touching and stroking ──► strength s = 0.15 + 0.85 · density (density under the tool):
+///                            strong s, weak s/2, 120 ms; started again when s changes by a
+///                            sixteenth or every 80 ms, so it never lapses mid-stroke
+///  stroke or contact ends while the stroke rumble plays ──► STOP
+/// ```
+///
+/// A pure state machine (no device): [`ContactFeedback::update`] returns the effect to start,
+/// if any; the station plays it on every pad that drives the tool and has force feedback.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ContactFeedback {
+    touching: bool,
+    /// The stroke rumble's level (sixteenths) and the seconds since it was started.
+    holding: Option<(u8, f32)>,
+}
+
+impl ContactFeedback {
+    /// The tap at touch onset.
+    pub const TAP: Rumble = Rumble { strong: 0.6, weak: 0.3, duration_ms: 40 };
+    /// How long a stroke rumble plays if not started again.
+    pub const HOLD_MS: u32 = 120;
+    /// A stroke rumble is started again at least this often, seconds.
+    pub const REFRESH_S: f32 = 0.08;
+
+    /// The strength of the stroke rumble at `density` under the tool (0 to 1, clamped): light
+    /// contact is felt, full clay is full strength.
+    pub fn stroke_strength(density: f32) -> f32 {
+        let d = if density.is_finite() { density.clamp(0.0, 1.0) } else { 0.0 };
+        0.15 + 0.85 * d
+    }
+
+    /// One frame `dt_s` long with `contact`: the rumble to start now, if any.
+    pub fn update(&mut self, contact: Contact, dt_s: f32) -> Option<Rumble> {
+        let dt_s = if dt_s.is_finite() { dt_s.max(0.0) } else { 0.0 };
+        let onset = contact.touching && !self.touching;
+        self.touching = contact.touching;
+        if !(contact.touching && contact.stroking) {
+            let was_holding = self.holding.take().is_some();
+            return if onset { Some(Self::TAP) } else { was_holding.then_some(Rumble::STOP) };
+        }
+        let strength = Self::stroke_strength(contact.density);
+        let level = (strength * 16.0).round() as u8;
+        let due = match &mut self.holding {
+            Some((held, since)) => {
+                *since += dt_s;
+                *held != level || *since >= Self::REFRESH_S
+            }
+            None => true,
+        };
+        if onset {
+            // The tap first; the stroke rumble starts on the next frame.
+            self.holding = None;
+            return Some(Self::TAP);
+        }
+        if !due {
+            return None;
+        }
+        self.holding = Some((level, 0.0));
+        Some(Rumble { strong: strength, weak: strength * 0.5, duration_ms: Self::HOLD_MS })
+    }
 }
 
 /// Every connected gamepad, through gilrs.
@@ -514,22 +598,37 @@ impl Gamepads {
         self.pads.iter().find(|(p, _)| *p == id).map(|(_, m)| m)
     }
 
-    /// Rumbles pad `id` at `strength` (0 to 1, see [`contact_strength`]) for `duration`, as
-    /// contact feedback. Returns whether an effect was started: `false`, doing nothing, when
-    /// the pad is not connected, has no force feedback, or `strength` is zero.
-    pub fn rumble(&mut self, id: GamepadId, strength: f32, duration: Duration) -> bool {
+    /// The pads that have sent events (connected ones).
+    pub fn pad_ids(&self) -> impl Iterator<Item = GamepadId> + '_ {
+        self.pads.iter().map(|(id, _)| *id)
+    }
+
+    /// Plays `rumble` on pad `id` as contact feedback (see [`ContactFeedback`]); a stop
+    /// rumble ends the pad's effect. Returns whether an effect was started: `false`, doing
+    /// nothing, when the pad is not connected or has no force feedback, or for a stop.
+    pub fn play(&mut self, id: GamepadId, rumble: Rumble) -> bool {
         use gilrs::ff::{BaseEffect, BaseEffectType, EffectBuilder, Repeat, Replay, Ticks};
-        let strength = if strength.is_finite() { strength.clamp(0.0, 1.0) } else { 0.0 };
-        let supported = self.gilrs.connected_gamepad(id).is_some_and(|p| p.is_ff_supported());
-        if !supported || strength == 0.0 {
+        if rumble.is_stop() || !(rumble.strong.is_finite() && rumble.weak.is_finite()) {
+            // gilrs stops an effect when it is dropped.
+            self.effects.retain(|(p, _)| *p != id);
             return false;
         }
-        let ticks = Ticks::from_ms(u32::try_from(duration.as_millis()).unwrap_or(u32::MAX));
-        let magnitude = (strength * f32::from(u16::MAX)) as u16;
+        let supported = self.gilrs.connected_gamepad(id).is_some_and(|p| p.is_ff_supported());
+        if !supported {
+            return false;
+        }
+        let ticks = Ticks::from_ms(rumble.duration_ms);
+        let magnitude = |v: f32| (v.clamp(0.0, 1.0) * f32::from(u16::MAX)) as u16;
+        let scheduling = Replay { play_for: ticks, ..Default::default() };
         let effect = EffectBuilder::new()
             .add_effect(BaseEffect {
-                kind: BaseEffectType::Strong { magnitude },
-                scheduling: Replay { play_for: ticks, ..Default::default() },
+                kind: BaseEffectType::Strong { magnitude: magnitude(rumble.strong) },
+                scheduling,
+                envelope: Default::default(),
+            })
+            .add_effect(BaseEffect {
+                kind: BaseEffectType::Weak { magnitude: magnitude(rumble.weak) },
+                scheduling,
                 envelope: Default::default(),
             })
             .repeat(Repeat::For(ticks))
@@ -587,5 +686,39 @@ mod tests {
         let e =
             GamepadCalibration::parse_layer("dead_zone = 0.1\n", "alone.toml", None).unwrap_err().to_string();
         assert!(e.contains("curve_exponent") && e.contains("missing"), "{e}");
+    }
+
+    #[test]
+    fn contact_feedback_taps_on_touch_follows_density_while_stroking_and_stops() {
+        let mut f = ContactFeedback::default();
+        let air = Contact { touching: false, density: 0.0, stroking: false };
+        let dt = 1.0 / 60.0;
+        assert_eq!(f.update(air, dt), None, "nothing in the air");
+        let touch = Contact { touching: true, density: 0.3, stroking: false };
+        assert_eq!(f.update(touch, dt), Some(ContactFeedback::TAP), "a tap at contact");
+        assert_eq!(f.update(touch, dt), None, "resting in contact without a stroke: quiet");
+        let stroke = |density: f32| Contact { touching: true, density, stroking: true };
+        let first = f.update(stroke(0.3), dt).unwrap();
+        assert!((first.strong - ContactFeedback::stroke_strength(0.3)).abs() < 1e-6);
+        assert_eq!(first.duration_ms, ContactFeedback::HOLD_MS);
+        assert_eq!(f.update(stroke(0.3), dt), None, "same density, not yet due");
+        let deeper = f.update(stroke(0.9), dt).unwrap();
+        assert!(deeper.strong > first.strong && deeper.weak > first.weak, "deeper clay, stronger");
+        // Held at one density, it is started again before it lapses.
+        let mut again = 0;
+        for _ in 0..30 {
+            again += usize::from(f.update(stroke(0.9), dt).is_some());
+        }
+        assert!((5..=7).contains(&again), "every 80 ms over half a second: {again}");
+        assert!(ContactFeedback::REFRESH_S * 1000.0 < ContactFeedback::HOLD_MS as f32);
+        assert_eq!(f.update(touch, dt), Some(Rumble::STOP), "the stroke ends: stop");
+        assert_eq!(f.update(air, dt), None);
+        // Touching while already stroking (the button held in the air): the tap first.
+        assert_eq!(f.update(Contact { touching: false, density: 0.0, stroking: true }, dt), None);
+        assert_eq!(f.update(stroke(0.5), dt), Some(ContactFeedback::TAP));
+        assert!(f.update(stroke(0.5), dt).is_some_and(|r| !r.is_stop()));
+        assert_eq!(f.update(air, dt), Some(Rumble::STOP));
+        assert_eq!(ContactFeedback::stroke_strength(f32::NAN), ContactFeedback::stroke_strength(0.0));
+        assert_eq!(ContactFeedback::stroke_strength(7.0), 1.0);
     }
 }

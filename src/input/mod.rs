@@ -31,6 +31,7 @@ pub mod motion;
 pub mod mouse;
 pub mod opentrack;
 pub mod reader;
+pub mod settings;
 pub mod smoothing;
 pub mod spacemouse;
 pub mod spacenav;

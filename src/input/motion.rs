@@ -102,12 +102,29 @@ impl Default for MappingTable {
 }
 
 /// The `[targets]` settings table; every key is optional and unknown keys are refused.
-#[derive(Deserialize)]
+#[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
-struct TargetsFile {
+pub(crate) struct TargetsFile {
     spacemouse: Option<Target>,
     gamepad: Option<Target>,
     mouse: Option<Target>,
+}
+
+impl TargetsFile {
+    /// `base` with the targets this table names.
+    pub(crate) fn over(&self, base: MappingTable) -> MappingTable {
+        let mut out = base;
+        for (device, target) in [
+            (DeviceClass::SpaceMouse, self.spacemouse),
+            (DeviceClass::Gamepad, self.gamepad),
+            (DeviceClass::Mouse, self.mouse),
+        ] {
+            if let Some(t) = target {
+                out.set(device, t);
+            }
+        }
+        out
+    }
 }
 
 impl MappingTable {
@@ -140,17 +157,7 @@ impl MappingTable {
             let (line, column) = e.span().map_or((1, 1), |s| line_column(text, s.start));
             CalibrationError::Invalid { path: name.to_owned(), line, column, message: e.message().to_owned() }
         })?;
-        let mut out = *self;
-        for (device, target) in [
-            (DeviceClass::SpaceMouse, file.spacemouse),
-            (DeviceClass::Gamepad, file.gamepad),
-            (DeviceClass::Mouse, file.mouse),
-        ] {
-            if let Some(t) = target {
-                out.set(device, t);
-            }
-        }
-        Ok(out)
+        Ok(file.over(*self))
     }
 }
 

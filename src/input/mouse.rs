@@ -19,11 +19,26 @@
 //! rotation is the inverse of the step taken backwards, so retracing a path restores the
 //! orientation. Dragging right turns the front of the scene to the right (a positive turn about
 //! +y). Distance changes are multiplicative (each wheel step or drag pixel scales it), clamped.
+//!
+//! The settings (trackball, its speed and direction, the wheel's zoom step and direction, the
+//! 3D cursor's plane) are data: `calibration/mouse.toml`, layered like the other device files
+//! (a user file names only what it changes; errors give file, line and column).
 
+use std::path::Path;
+
+use serde::Deserialize;
+use toml::Spanned;
+
+use super::calibration::{read_text, CalibrationError, Layer};
 use crate::math::{Mat4, Quat, Vec2, Vec3, Vec4};
 
+/// The shipped mouse settings, embedded in the binary; `calibration/mouse.toml` documents
+/// every key.
+pub const SHIPPED_MOUSE_TOML: &str = include_str!("../../calibration/mouse.toml");
+
 /// Which trackball.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum TrackballKind {
     /// Shoemake's arcball: the rotation is twice the arc between the two ball points, so a
     /// drag from the centre to the rim turns half a turn and retracing always restores.
@@ -154,11 +169,31 @@ pub enum MouseMode {
     Cursor,
 }
 
+/// The plane the 3D cursor carries the tool in (through the tool).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CursorPlane {
+    /// Facing the viewer: the tool stays under the pointer at its depth.
+    View,
+    /// The ground plane (normal +Y): the tool slides at its height.
+    Horizontal,
+}
+
 /// Mouse navigation settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MouseSettings {
     /// Which trackball.
     pub trackball: TrackballKind,
+    /// Turn per drag as a multiple of the trackball's own.
+    pub trackball_speed: f32,
+    /// Reverse the trackball's turn (the viewer goes round the scene).
+    pub invert_trackball: bool,
+    /// Reverse the wheel.
+    pub invert_wheel: bool,
+    /// The 3D cursor's plane.
+    pub cursor_plane: CursorPlane,
+    /// Tool motion per pointer motion in the cursor's clutch (relative) mode.
+    pub clutch_gain: f32,
     /// Distance factor per wheel step (distance × factor^steps; below 1: the wheel away brings
     /// the scene nearer).
     pub wheel_factor: f32,
@@ -173,15 +208,139 @@ pub struct MouseSettings {
 }
 
 impl Default for MouseSettings {
+    /// The values of the shipped `calibration/mouse.toml` (a test holds them equal).
     fn default() -> Self {
         Self {
             trackball: TrackballKind::Shoemake,
+            trackball_speed: 1.0,
+            invert_trackball: false,
+            invert_wheel: false,
+            cursor_plane: CursorPlane::View,
+            clutch_gain: 1.0,
             wheel_factor: 0.9,
             drag_factor_per_px: 1.005,
             min_distance_m: 0.05,
             max_distance_m: 20.0,
             cursor_depth_step_m: 0.005,
         }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MouseFile {
+    trackball: Option<TrackballKind>,
+    trackball_speed: Option<Spanned<f32>>,
+    invert_trackball: Option<bool>,
+    wheel_zoom_step: Option<Spanned<f32>>,
+    invert_wheel: Option<bool>,
+    drag_zoom_per_px: Option<Spanned<f32>>,
+    min_distance_m: Option<Spanned<f32>>,
+    max_distance_m: Option<Spanned<f32>>,
+    cursor_plane: Option<CursorPlane>,
+    cursor_depth_step_m: Option<Spanned<f32>>,
+    clutch_gain: Option<Spanned<f32>>,
+}
+
+impl MouseSettings {
+    /// The shipped settings (`calibration/mouse.toml`, embedded).
+    pub fn shipped() -> Self {
+        Self::parse_layer(SHIPPED_MOUSE_TOML, "calibration/mouse.toml", None)
+            .expect("the shipped mouse settings are valid (tested)")
+    }
+
+    /// Loads a settings file, layered over the shipped defaults.
+    pub fn load(path: &Path) -> Result<Self, CalibrationError> {
+        let text = read_text(path, "mouse settings")?;
+        Self::parse_layer(&text, &path.display().to_string(), Some(&Self::shipped()))
+    }
+
+    /// Parses settings text over `base`; without a base every key must be present. `name` is
+    /// used in messages.
+    pub fn parse_layer(text: &str, name: &str, base: Option<&Self>) -> Result<Self, CalibrationError> {
+        let layer = Layer { text, name, what: "mouse settings file" };
+        let file: MouseFile = toml::from_str(text).map_err(|e| layer.at(e.span(), e.message().to_owned()))?;
+        let trackball = layer.value(file.trackball, "trackball", base.map(|b| b.trackball))?;
+        let cursor_plane = layer.value(file.cursor_plane, "cursor_plane", base.map(|b| b.cursor_plane))?;
+        let trackball_speed = layer.number(
+            file.trackball_speed,
+            "trackball_speed",
+            0.1..=10.0,
+            base.map(|b| b.trackball_speed),
+        )?;
+        let wheel_zoom_step = layer.number(
+            file.wheel_zoom_step,
+            "wheel_zoom_step",
+            0.01..=0.5,
+            base.map(|b| 1.0 - b.wheel_factor),
+        )?;
+        let drag_zoom_per_px = layer.number(
+            file.drag_zoom_per_px,
+            "drag_zoom_per_px",
+            0.0001..=0.05,
+            base.map(|b| b.drag_factor_per_px - 1.0),
+        )?;
+        let min_distance_m = layer.number(
+            file.min_distance_m,
+            "min_distance_m",
+            0.01..=1000.0,
+            base.map(|b| b.min_distance_m),
+        )?;
+        let max_span = file.max_distance_m.as_ref().map(Spanned::span);
+        let max_distance_m = layer.number(
+            file.max_distance_m,
+            "max_distance_m",
+            0.01..=1000.0,
+            base.map(|b| b.max_distance_m),
+        )?;
+        if min_distance_m >= max_distance_m {
+            return Err(layer.at(
+                max_span,
+                format!(
+                    "`max_distance_m` ({max_distance_m}) must be farther than `min_distance_m` ({min_distance_m})"
+                ),
+            ));
+        }
+        let cursor_depth_step_m = layer.number(
+            file.cursor_depth_step_m,
+            "cursor_depth_step_m",
+            0.0001..=0.1,
+            base.map(|b| b.cursor_depth_step_m),
+        )?;
+        Ok(Self {
+            trackball,
+            trackball_speed,
+            invert_trackball: layer.value(
+                file.invert_trackball,
+                "invert_trackball",
+                base.map(|b| b.invert_trackball),
+            )?,
+            invert_wheel: layer.value(file.invert_wheel, "invert_wheel", base.map(|b| b.invert_wheel))?,
+            cursor_plane,
+            clutch_gain: layer.number(
+                file.clutch_gain,
+                "clutch_gain",
+                0.05..=4.0,
+                base.map(|b| b.clutch_gain),
+            )?,
+            wheel_factor: 1.0 - wheel_zoom_step,
+            drag_factor_per_px: 1.0 + drag_zoom_per_px,
+            min_distance_m,
+            max_distance_m,
+            cursor_depth_step_m,
+        })
+    }
+}
+
+impl MouseSettings {
+    /// A trackball step as these settings turn it: its angle times the speed, reversed when
+    /// inverted (so retracing a path still restores the orientation).
+    pub fn turn(&self, step: Quat) -> Quat {
+        let gain = if self.invert_trackball { -self.trackball_speed } else { self.trackball_speed };
+        if gain == 1.0 {
+            return step;
+        }
+        Quat::from_scaled_axis(step.to_scaled_axis() * gain)
     }
 }
 
@@ -257,7 +416,7 @@ impl MouseNavigator {
                     MouseMode::Scene if self.left => {
                         let from = pixel_to_ball(previous, self.viewport_px);
                         let to = pixel_to_ball(at, self.viewport_px);
-                        let step = trackball_rotation(from, to, self.settings.trackball);
+                        let step = self.settings.turn(trackball_rotation(from, to, self.settings.trackball));
                         self.scene_rotation = (step * self.scene_rotation).normalize();
                     }
                     MouseMode::Scene if self.right => {
@@ -274,6 +433,7 @@ impl MouseNavigator {
                 if !steps.is_finite() {
                     return;
                 }
+                let steps = if self.settings.invert_wheel { -steps } else { steps };
                 match self.mode {
                     MouseMode::Scene => self.scale_distance(self.settings.wheel_factor.powf(steps)),
                     MouseMode::Cursor => {
@@ -283,6 +443,11 @@ impl MouseNavigator {
                 }
             }
         }
+    }
+
+    /// Whether the left button is down (in cursor mode, the tool is being carried).
+    pub fn left_held(&self) -> bool {
+        self.left
     }
 
     /// Where the pointer was last seen, pixels (the viewport's centre before any).
@@ -301,7 +466,10 @@ impl MouseNavigator {
 
     fn place_cursor(&mut self, at: Vec2, inverse_view_projection: &Mat4, view_direction: Vec3) {
         let ndc = pixel_to_ndc(at, self.viewport_px);
-        let normal = view_direction.try_normalize().unwrap_or(Vec3::NEG_Z);
+        let normal = match self.settings.cursor_plane {
+            CursorPlane::View => view_direction.try_normalize().unwrap_or(Vec3::NEG_Z),
+            CursorPlane::Horizontal => Vec3::Y,
+        };
         if let Some(p) = cursor_on_plane(ndc, inverse_view_projection, self.tool_position_m, normal) {
             self.tool_position_m = p;
         }
@@ -361,5 +529,78 @@ mod tests {
         );
         assert_eq!(cursor_ray(Vec2::ZERO, &Mat4::ZERO), None);
         let _ = PI;
+    }
+
+    #[test]
+    fn the_shipped_settings_are_the_defaults_and_user_files_layer_over_them() {
+        assert_eq!(MouseSettings::shipped(), MouseSettings::default());
+        let base = MouseSettings::shipped();
+        let mine = MouseSettings::parse_layer(
+            "trackball_speed = 2.0\ninvert_wheel = true\ncursor_plane = \"horizontal\"\nwheel_zoom_step = 0.2\n",
+            "mine.toml",
+            Some(&base),
+        )
+        .unwrap();
+        assert_eq!(mine.trackball_speed, 2.0);
+        assert!(mine.invert_wheel && !mine.invert_trackball);
+        assert_eq!(mine.cursor_plane, CursorPlane::Horizontal);
+        assert!((mine.wheel_factor - 0.8).abs() < 1e-6);
+        assert_eq!(mine.trackball, base.trackball, "unnamed keys keep the shipped value");
+
+        let err =
+            |text: &str| MouseSettings::parse_layer(text, "mine.toml", Some(&base)).unwrap_err().to_string();
+        let e = err("trackball_speed = 1.0\ntrackbal = \"bell\"\n");
+        assert!(e.starts_with("mine.toml:2:1:") && e.contains("trackbal"), "{e}");
+        let e = err("wheel_zoom_step = 0.9\n");
+        assert!(e.starts_with("mine.toml:1:19:") && e.contains("between 0.01 and 0.5"), "{e}");
+        let e = err("cursor_plane = \"diagonal\"\n");
+        assert!(e.starts_with("mine.toml:1:16:") && e.contains("diagonal"), "{e}");
+        let e = err("min_distance_m = 2.0\nmax_distance_m = 1.0\n");
+        assert!(e.starts_with("mine.toml:2:18:") && e.contains("farther"), "{e}");
+        let e =
+            MouseSettings::parse_layer("trackball = \"bell\"\n", "alone.toml", None).unwrap_err().to_string();
+        assert!(e.contains("missing"), "{e}");
+    }
+
+    #[test]
+    fn speed_invert_and_cursor_plane_settings_change_what_the_mouse_does() {
+        let identity = Mat4::IDENTITY;
+        let drag = |settings: MouseSettings| {
+            let mut m = MouseNavigator::new(settings, Vec2::new(100.0, 100.0), 1.0);
+            m.handle(MouseEvent::Press(MouseButton::Left, Vec2::new(50.0, 50.0)), &identity, Vec3::NEG_Z);
+            m.handle(MouseEvent::Move(Vec2::new(60.0, 50.0)), &identity, Vec3::NEG_Z);
+            m.scene_rotation.to_axis_angle()
+        };
+        let (axis, angle) = drag(MouseSettings::default());
+        let (fast_axis, fast) = drag(MouseSettings { trackball_speed: 2.0, ..MouseSettings::default() });
+        assert!((fast - 2.0 * angle).abs() < 1e-5 && (fast_axis - axis).length() < 1e-5);
+        let (back_axis, back) = drag(MouseSettings { invert_trackball: true, ..MouseSettings::default() });
+        assert!((back - angle).abs() < 1e-5 && (back_axis + axis).length() < 1e-5, "reversed");
+
+        let wheel = |settings: MouseSettings| {
+            let mut m = MouseNavigator::new(settings, Vec2::new(100.0, 100.0), 1.0);
+            m.handle(MouseEvent::Wheel(1.0), &identity, Vec3::NEG_Z);
+            m.distance_m
+        };
+        assert!(wheel(MouseSettings::default()) < 1.0);
+        assert!(wheel(MouseSettings { invert_wheel: true, ..MouseSettings::default() }) > 1.0);
+
+        // The horizontal cursor plane keeps the tool at its height whatever the pointer does.
+        let view = Mat4::look_at_rh(Vec3::new(0.0, 1.0, 1.0), Vec3::ZERO, Vec3::Y);
+        let inv = (Mat4::perspective_rh(FRAC_PI_2, 1.0, 0.1, 10.0) * view).inverse();
+        let forward = (Vec3::ZERO - Vec3::new(0.0, 1.0, 1.0)).normalize();
+        let settings = MouseSettings { cursor_plane: CursorPlane::Horizontal, ..MouseSettings::default() };
+        let mut m = MouseNavigator::new(settings, Vec2::new(100.0, 100.0), 1.0);
+        m.mode = MouseMode::Cursor;
+        m.handle(MouseEvent::Press(MouseButton::Left, Vec2::new(70.0, 40.0)), &inv, forward);
+        assert!(m.tool_position_m.y.abs() < 1e-5 && m.tool_position_m.x > 0.01, "{}", m.tool_position_m);
+        let mut v = MouseNavigator::new(MouseSettings::default(), Vec2::new(100.0, 100.0), 1.0);
+        v.mode = MouseMode::Cursor;
+        v.handle(MouseEvent::Press(MouseButton::Left, Vec2::new(70.0, 40.0)), &inv, forward);
+        assert!(
+            v.tool_position_m.y.abs() > 0.01,
+            "the view plane tilts with the view: {}",
+            v.tool_position_m
+        );
     }
 }

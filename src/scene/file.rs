@@ -38,6 +38,14 @@ pub(super) struct SceneFile {
     pub head: Option<super::head::HeadSpec>,
     #[serde(default)]
     pub virtual_clay: VirtualClaySpec,
+    pub input: Option<InputSpec>,
+}
+
+/// `[input]`: the desk input settings file the scene asks for.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct InputSpec {
+    pub settings: Spanned<String>,
 }
 
 #[derive(Deserialize)]

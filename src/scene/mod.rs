@@ -251,6 +251,10 @@ pub struct Scene {
     pub head: Option<HeadPath>,
     /// How the clay behaves under tools that push (`[virtual_clay]`).
     pub virtual_clay: VirtualClaySettings,
+    /// The desk input settings file the scene names (`[input] settings`, resolved against the
+    /// scene's folder): which target each device drives and its calibration files, read over
+    /// the user's settings and under the command line's.
+    pub input_settings: Option<std::path::PathBuf>,
 }
 
 /// The virtual clay's settings: its fluidity, its step, and what holds it besides the tools.
@@ -705,6 +709,24 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
             .collect(),
     };
 
+    let input_settings = match &file.input {
+        None => None,
+        Some(spec) => {
+            let p = Path::new(spec.settings.get_ref());
+            let path = match base_dir {
+                Some(dir) if p.is_relative() => dir.join(p),
+                _ => p.to_owned(),
+            };
+            if !path.is_file() {
+                return Err(at(
+                    Some(spec.settings.span()),
+                    format!("[input] settings: there is no file {}", path.display()),
+                ));
+            }
+            Some(path)
+        }
+    };
+
     Ok(Scene {
         source: name.to_owned(),
         voxel_size_m: field_voxel,
@@ -722,6 +744,7 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
         display,
         head,
         virtual_clay,
+        input_settings,
     })
 }
 

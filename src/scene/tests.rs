@@ -216,3 +216,17 @@ fn the_display_table_names_a_mode_parity_and_fallback() {
     let (_, _, message) = err("[display]\nfallback = \"stereo\"\n");
     assert!(message.contains("`stereo` is not a display mode") && message.contains("or none"), "{message}");
 }
+
+#[test]
+fn the_input_table_names_a_settings_file_beside_the_scene() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("calibration");
+    let s = Scene::parse("[input]\nsettings = \"input.toml\"\n", "t.toml", Some(&dir)).unwrap();
+    assert_eq!(s.input_settings, Some(dir.join("input.toml")));
+    assert_eq!(Scene::parse("", "t.toml", None).unwrap().input_settings, None);
+    let (line, column, message) = err("[input]\nsettings = \"no-such-input.toml\"\n");
+    assert_eq!((line, column), (2, 12));
+    assert!(message.contains("there is no file") && message.contains("no-such-input.toml"), "{message}");
+    let (line, _, message) = err("[input]\nsetings = \"input.toml\"\n");
+    assert_eq!(line, 2);
+    assert!(message.contains("setings"), "{message}");
+}
