@@ -434,7 +434,8 @@ fn bench_input(size: BenchSize, emit: &mut impl FnMut(Value)) {
 /// The bend of Dewaele–Cani §5.1 in a window of `dims` cells (1 mm voxels): a bar along X,
 /// 3/4 of the window long, of radius a sixth of its smaller cross extent, rests on a support
 /// block under its left third; a ball of the bar's radius pushes its right end down by a
-/// voxel every two steps. Reports steps per second once the ball touches the bar.
+/// voxel every two steps. Reports steps per second once the ball touches the bar, and how
+/// many of the steps passed the ball's motion on to the clay (once per voxel travelled).
 fn bench_clay_bend(size: BenchSize, emit: &mut impl FnMut(Value)) {
     use crate::clay::{Clay, ClayParams, ClayTool};
     use crate::math::Pose;
@@ -504,6 +505,7 @@ fn bench_clay_bend(size: BenchSize, emit: &mut impl FnMut(Value)) {
             "share_conservation": layers[2] / total,
             "share_tension": layers[3] / total,
             "conservation_pops_per_step": (t.conserve_pops - before.conserve_pops) as f64 / size.clay_steps as f64,
+            "displacement_steps": t.displacements - before.displacements,
             "mass_drift": (clay.mass() - mass0) / mass0,
         }));
     }

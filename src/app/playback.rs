@@ -129,6 +129,12 @@ impl<'s> Playback<'s> {
         self.field
     }
 
+    /// The clay's matter: the field's mass, plus what a push in progress holds beyond the
+    /// densities of 1 the field can show (the excess its conservation layer still carries).
+    pub fn matter(&self) -> f64 {
+        self.field.mass() + self.push.as_ref().map_or(0.0, |p| p.clay.excess_mass())
+    }
+
     /// The clay, mutably (to drain its dirty set).
     pub fn field_mut(&mut self) -> &mut Field {
         &mut self.field
@@ -255,7 +261,8 @@ impl<'s> Playback<'s> {
     }
 
     /// Runs the virtual clay over `previous ..= t`: a push starts when a hand's push tool turns
-    /// active (with the supports held at that moment, the table and the fixed boxes), follows
+    /// active (with the supports held still and active at that moment, the table and the fixed
+    /// boxes; a support whose hand moves it or turns it off later is let go), follows
     /// the hands at the clay's own step rate, is written back into the field after each
     /// interval, and ends, settled, when no hand pushes any more.
     fn step_clay(&mut self, previous: f32, t: f32) {
@@ -279,21 +286,61 @@ impl<'s> Playback<'s> {
                 self.field.begin_stroke();
                 self.owns_stroke = true;
             }
-            self.push = Some(self.start_push(&pushing, previous));
+            self.push = Some(self.start_push(&pushing, previous, t - previous));
         }
         let Some(bodies) = self.push.as_ref().map(|p| p.bodies.clone()) else { return };
         let now = self.push.as_ref().map(|p| p.clay.poses()).unwrap_or_default();
+        // A scripted support holds while its hand holds it still; once the hand moves it or
+        // lets go, it holds no more. A live hand (a controller) is never perfectly still: its
+        // support stays where it was put for as long as the hand keeps it on.
+        let released: Vec<usize> = bodies
+            .iter()
+            .enumerate()
+            .filter_map(|(i, &(hand, tool))| {
+                let hand = hand?;
+                (self.tools[tool].action == Action::Support
+                    && !self.held_still(hand, tool, now[i], previous, t))
+                .then_some(i)
+            })
+            .collect();
         let poses: Vec<Pose> = bodies
             .iter()
             .zip(now)
-            .map(|(&(hand, _), now)| hand.and_then(|h| self.state_at(h, t)).map_or(now, |s| s.pose))
+            .map(|(&(hand, tool), now)| {
+                let placed = self.live.is_some() && self.tools[tool].action == Action::Support;
+                hand.filter(|_| !placed).and_then(|h| self.state_at(h, t)).map_or(now, |s| s.pose)
+            })
             .collect();
         let Some(push) = self.push.as_mut() else { return };
+        for i in released {
+            push.clay.release(i);
+        }
         push.clay.advance(&poses, t - previous);
         push.clay.write_to(&mut self.field);
     }
 
-    fn start_push(&self, pushing: &[(Hand, usize)], t: f32) -> Push {
+    /// Whether `hand` holds `tool` active and still at `pose` over `from ..= to` (a support's
+    /// hold: it holds nothing while its hand moves it or lets it go). A live hand holds its
+    /// support while it keeps it on, wherever the hand is: the support stays where it was put.
+    fn held_still(&self, hand: Hand, tool: usize, pose: Pose, from: f32, to: f32) -> bool {
+        // Interpolating between equal keys may round the rotation by an ulp: still is within a
+        // micrometre and three milliradians.
+        let same = |p: Pose| {
+            p.position_m.distance(pose.position_m) <= 1e-6
+                && p.rotation.dot(pose.rotation).abs() >= 1.0 - 1e-6
+        };
+        if self.live.is_some() {
+            return self.state_at(hand, to).is_some_and(|s| s.tool == tool && s.active);
+        }
+        let mid = 0.5 * (from + to);
+        [from, mid, to]
+            .iter()
+            .all(|&t| self.state_at(hand, t).is_some_and(|s| s.tool == tool && same(s.pose)))
+            && self.state_at(hand, mid).is_some_and(|s| s.active)
+    }
+
+    /// Starts a push over the interval `t ..= t + step_s`.
+    fn start_push(&self, pushing: &[(Hand, usize)], t: f32, step_s: f32) -> Push {
         let scene = self.scene;
         let mut tools = Vec::new();
         let mut bodies = Vec::new();
@@ -302,7 +349,8 @@ impl<'s> Playback<'s> {
             let Some(state) = self.state_at(hand, t) else { continue };
             let tool = &self.tools[state.tool];
             let support = match tool.action {
-                Action::Support => true,
+                // A support holds the clay only if its hand holds it still as the push starts.
+                Action::Support if self.held_still(hand, state.tool, state.pose, t, t + step_s) => true,
                 Action::Push if pushing.contains(&(hand, state.tool)) => false,
                 _ => continue,
             };
@@ -440,8 +488,15 @@ position_m = [0.1, 0.0, 0.0]
             let mut p = Playback::new(&scene);
             let initial = p.field().clone();
             let end = scene.timeline.duration_s() + 0.1;
-            p.advance_to(end, |_| {});
-            let (m0, m1) = (initial.mass(), p.field().mass());
+            // The mass the field holds after every step of the timeline, not only at its end.
+            let m0 = initial.mass();
+            let mut worst = 0.0f64;
+            while p.time_s() < end {
+                p.step_towards(end);
+                worst = worst.max((p.matter() - m0).abs() / m0);
+            }
+            assert!(worst < 0.01, "{name}: the mass strayed by {:.3} % during the timeline", worst * 100.0);
+            let m1 = p.field().mass();
             assert!((m1 - m0).abs() / m0 < 0.01, "{name}: mass {m1} from {m0}");
             assert!(!p.field().same_samples(&initial), "{name}: the push moved clay");
             assert_eq!(p.field().history_stats().undo_in_memory, 1, "{name}: one push, one undo step");
@@ -460,5 +515,93 @@ position_m = [0.1, 0.0, 0.0]
         assert!(steps >= 200, "fixed steps of 1/90 s over 2.5 s, got {steps}");
         assert_ne!(p.field().mass(), initial);
         assert_eq!(p.hands().len(), 2);
+    }
+
+    /// A bar on a support block held by the left hand, its right end pushed down by the right
+    /// hand's ball; `left_keys` are the left hand's keys. Returns how far (voxels) the bar's
+    /// left part sank.
+    fn left_end_sinks(left_keys: &str) -> f64 {
+        let text = format!(
+            r#"
+[field]
+voxel_size_m = 0.002
+[virtual_clay]
+fluidity = 1.0
+[[clay]]
+shape = "bar"
+length_m = 0.1
+radius_m = 0.008
+[[tool]]
+name = "block"
+shape = "box"
+size_m = [0.04, 0.016, 0.03]
+action = "support"
+[[tool]]
+name = "ball"
+radius_m = 0.008
+action = "push"
+[[key]]
+time_s = 0.0
+tool = "ball"
+position_m = [0.036, 0.018, 0.0]
+active = true
+[[key]]
+time_s = 0.8
+tool = "ball"
+position_m = [0.036, -0.014, 0.0]
+{left_keys}
+"#
+        );
+        let scene = Scene::parse(&text, "support.toml", None).unwrap();
+        let mut p = Playback::new(&scene);
+        // Mean height (voxels) of the matter over the left part of the bar.
+        let left = |f: &Field| {
+            let (mut m, mut my) = (0.0f64, 0.0f64);
+            for z in -8..=8 {
+                for y in -24..=12 {
+                    for x in -22..=-12 {
+                        let d = f64::from(f.density(IVec3::new(x, y, z)));
+                        m += d;
+                        my += d * f64::from(y);
+                    }
+                }
+            }
+            my / m
+        };
+        let before = left(p.field());
+        p.advance_to(0.9, |_| {});
+        before - left(p.field())
+    }
+
+    /// The left hand's keys for the block under the bar's left part: (time, height, active).
+    fn block_keys(keys: &[(f32, f32, bool)]) -> String {
+        keys.iter()
+            .map(|&(t, y, active)| {
+                format!("[[key]]\ntime_s = {t:?}\nhand = \"left\"\ntool = \"block\"\nposition_m = [-0.03, {y:?}, 0.0]\nactive = {active}\n")
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_support_held_still_as_the_push_starts_holds_the_clay() {
+        let held = left_end_sinks(&block_keys(&[(0.0, -0.016, true), (1.0, -0.016, false)]));
+        assert!(held.abs() < 1.0, "the part on the held block moved {held:.2} voxels");
+    }
+
+    #[test]
+    fn a_support_still_moving_as_the_push_starts_holds_nothing() {
+        // The block, touching the bar, still slides up as the push starts: it is not held
+        // still, so it holds nothing and the push carries the whole bar down.
+        let sliding =
+            left_end_sinks(&block_keys(&[(0.0, -0.017, true), (0.3, -0.016, true), (1.0, -0.016, false)]));
+        assert!(sliding > 4.0, "the bar's left part sank {sliding:.2} voxels");
+    }
+
+    #[test]
+    fn a_support_let_go_during_the_push_holds_no_more() {
+        let held = left_end_sinks(&block_keys(&[(0.0, -0.016, true), (1.0, -0.016, false)]));
+        let let_go =
+            left_end_sinks(&block_keys(&[(0.0, -0.016, true), (0.3, -0.016, false), (1.0, -0.016, false)]));
+        assert!(let_go > held + 2.0, "let go after 0.3 s: {let_go:.2} voxels; held: {held:.2}");
     }
 }

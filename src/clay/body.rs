@@ -40,7 +40,7 @@ pub struct ClayTool {
     /// Where it starts.
     pub pose: Pose,
     /// A support: held still, whatever poses the simulation is given for it; its cells anchor
-    /// the clay (displacement 0).
+    /// the clay (displacement 0) until it is let go ([`super::Clay::release`]).
     pub support: bool,
 }
 
@@ -128,15 +128,15 @@ impl Depth {
     }
 }
 
-/// The cells a body covers in the grid at one pose: density and outward directions.
+/// The cells a body covers in the grid at one pose, with the body's density there. The
+/// directions matter may leave each cell by are found when the conservation layer first needs
+/// them ([`Body::outward_dirs_at`]): most covered cells hold no matter.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Footprint {
     /// Linear cell indices, ascending.
     pub cells: Vec<u32>,
     /// The body's density at each cell, in (0, 1].
     pub density: Vec<f32>,
-    /// Directions matter may leave each cell by.
-    pub dirs: Vec<u8>,
 }
 
 /// A body prepared for the simulation.
@@ -148,6 +148,9 @@ pub(crate) struct Body {
     /// The current pose and its footprint.
     pub pose: Pose,
     pub footprint: Footprint,
+    /// The pose from which the tool's motion in contact with the clay has not yet been
+    /// passed on to it (see [`super::ClayParams::min_travel_voxels`]).
+    pub untransmitted_from: Option<Pose>,
 }
 
 impl Body {
@@ -157,7 +160,7 @@ impl Body {
             _ => None,
         };
         let pose = tool.pose;
-        Self { tool, depth, pose, footprint: Footprint::default() }
+        Self { tool, depth, pose, footprint: Footprint::default(), untransmitted_from: None }
     }
 
     /// The body's density at a world point and a signed distance-like value whose gradient
@@ -168,6 +171,10 @@ impl Body {
             ClayShape::Plane => {
                 let n = frame.pose.rotation * Vec3::Y;
                 let d = n.dot(world_m - frame.pose.position_m);
+                (ramp(d, band_local), d)
+            }
+            ClayShape::Tool { shape: ToolShape::Solid(s), .. } => {
+                let d = s.signed_distance(frame.world_to_local(world_m));
                 (ramp(d, band_local), d)
             }
             ClayShape::Tool { shape, .. } => {
@@ -203,6 +210,13 @@ impl Body {
         }
     }
 
+    /// How far (world metres) inside the band a point whose outward value is `outward` surely
+    /// is, for the same shapes: every point that near is covered fully (density 1).
+    #[inline]
+    fn depth_m(&self, frame: &ToolFrame, band_local: f32, outward: f32) -> Option<f32> {
+        self.clearance_m(frame, band_local, -outward)
+    }
+
     fn frame(&self, pose: Pose) -> ToolFrame {
         match &self.tool.shape {
             ClayShape::Tool { scale, .. } => ToolFrame::new(pose, *scale),
@@ -210,17 +224,35 @@ impl Body {
         }
     }
 
+    /// How far (world metres) a point of the body moves at most between poses `a` and `b`:
+    /// the translation, plus the rotation's arc at the body's outermost point.
+    pub fn travel_m(&self, a: Pose, b: Pose) -> f32 {
+        let reach = match &self.tool.shape {
+            ClayShape::Tool { shape, scale } => (shape.half_extents_m() * *scale).length(),
+            ClayShape::Plane => 0.0,
+        };
+        let angle = 2.0 * a.rotation.dot(b.rotation).abs().min(1.0).acos();
+        a.position_m.distance(b.position_m) + angle * reach
+    }
+
+    /// The width of the band across the body's surface, in its local frame.
+    fn band_local(&self, frame: &ToolFrame, transform: &VoxelTransform) -> f32 {
+        let band_m = SOLID_BAND_VOXELS * transform.voxel_size_m;
+        match &self.tool.shape {
+            ClayShape::Plane => band_m,
+            ClayShape::Tool { .. } => band_m / frame.min_scale(),
+        }
+    }
+
     /// The lattice box (inclusive, clipped to the grid's interior) the body can cover at
     /// `pose`, and the band width in its local frame.
     fn reach(&self, grid: &Grid, transform: &VoxelTransform, pose: Pose) -> (IVec3, IVec3, f32) {
-        let h = transform.voxel_size_m;
         let frame = self.frame(pose);
-        let band_m = SOLID_BAND_VOXELS * h;
+        let band_local = self.band_local(&frame, transform);
         let interior = (grid.lo + IVec3::ONE, grid.lo + grid.dims - IVec3::splat(2));
         match &self.tool.shape {
-            ClayShape::Plane => (interior.0, interior.1, band_m),
+            ClayShape::Plane => (interior.0, interior.1, band_local),
             ClayShape::Tool { shape, .. } => {
-                let band_local = band_m / frame.min_scale();
                 let mut half = shape.half_extents_m();
                 if shape.is_hard_edged() {
                     half += Vec3::splat(0.5 * band_local);
@@ -233,9 +265,8 @@ impl Body {
         }
     }
 
-    /// The cells the body covers at `pose`, with their outward directions. Planes of the
-    /// box are evaluated in parallel and gathered in order, so the result does not depend
-    /// on the number of threads.
+    /// The cells the body covers at `pose`. Planes of the box are evaluated in parallel and
+    /// gathered in order, so the result does not depend on the number of threads.
     pub fn footprint_at(&self, grid: &Grid, transform: &VoxelTransform, pose: Pose) -> Footprint {
         let (lo, hi, band_local) = self.reach(grid, transform, pose);
         let mut fp = Footprint::default();
@@ -243,8 +274,7 @@ impl Body {
             return fp;
         }
         let frame = self.frame(pose);
-        let eps = 0.5 * transform.voxel_size_m;
-        let planes: Vec<Vec<(u32, f32, u8)>> = (lo.z..=hi.z)
+        let planes: Vec<Vec<(u32, f32)>> = (lo.z..=hi.z)
             .into_par_iter()
             .map(|z| {
                 let mut out = Vec::new();
@@ -263,25 +293,44 @@ impl Body {
                             }
                             continue;
                         }
-                        // Central differences of the outward distance, in world space: they
-                        // are symmetric, so a freeform tool's stepped depth gives no slant.
-                        let diff = |axis: Vec3| {
-                            self.sample(&frame, band_local, w + axis * eps).1
-                                - self.sample(&frame, band_local, w - axis * eps).1
-                        };
-                        let g = Vec3::new(diff(Vec3::X), diff(Vec3::Y), diff(Vec3::Z));
-                        out.push((grid.index(p - grid.lo) as u32, t.min(1.0), outward_dirs(g)));
+                        let i = grid.index(p - grid.lo) as u32;
+                        out.push((i, t.min(1.0)));
+                        if t >= 1.0 {
+                            // Likewise, the cells that deep inside along the row are covered
+                            // fully (a hundredth of a cell is kept for rounding).
+                            if let Some(deep_m) = self.depth_m(&frame, band_local, outward) {
+                                let k = ((deep_m / transform.voxel_size_m) - 0.01).floor().max(0.0) as i32;
+                                let k = k.min(hi.x - x + 1);
+                                out.extend((1..=k as u32).map(|j| (i + j, 1.0)));
+                                x += k;
+                            }
+                        }
                     }
                 }
                 out
             })
             .collect();
-        for (c, t, d) in planes.into_iter().flatten() {
+        for (c, t) in planes.into_iter().flatten() {
             fp.cells.push(c);
             fp.density.push(t);
-            fp.dirs.push(d);
         }
         fp
+    }
+
+    /// The directions matter may leave lattice point `p` by, under the body at its current
+    /// pose: those within 60° of the gradient of its outward distance (§3.2.2).
+    pub fn outward_dirs_at(&self, transform: &VoxelTransform, p: IVec3) -> u8 {
+        let frame = self.frame(self.pose);
+        let band_local = self.band_local(&frame, transform);
+        let w = transform.index_to_world(p.as_vec3());
+        let eps = 0.5 * transform.voxel_size_m;
+        // Central differences of the outward distance, in world space: they are symmetric,
+        // so a freeform tool's stepped depth gives no slant.
+        let diff = |axis: Vec3| {
+            self.sample(&frame, band_local, w + axis * eps).1
+                - self.sample(&frame, band_local, w - axis * eps).1
+        };
+        outward_dirs(Vec3::new(diff(Vec3::X), diff(Vec3::Y), diff(Vec3::Z)))
     }
 
     /// Whether the body at `pose` covers a cell holding matter (more than `min_density`).

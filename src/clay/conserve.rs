@@ -16,7 +16,9 @@ use std::collections::VecDeque;
 
 use rayon::prelude::*;
 
-use super::grid::{Grid, QUEUED, WALL};
+use crate::math::IVec3;
+
+use super::grid::{Grid, ALL_DIRS, COVERED, DIRS_UNKNOWN, QUEUED, WALL};
 
 /// The factor by which a cell overshoots its excess (§3.2.3): what it gives its six
 /// neighbours, a sixth comes back.
@@ -30,21 +32,26 @@ pub(crate) struct Conservation {
 
 impl Conservation {
     /// Queues every cell over its capacity by more than `threshold` that is not queued yet,
-    /// in index order. Planes are searched in parallel and queued in order.
+    /// in index order. Planes are searched in parallel and queued in order; rows that hold no
+    /// matter are skipped.
     pub fn seed(&mut self, grid: &mut Grid, threshold: f32) {
         let g: &Grid = grid;
-        let plane = (g.dims.x * g.dims.y) as usize;
-        let found: Vec<Vec<u32>> = g
-            .density
-            .par_chunks(plane)
-            .zip(g.capacity.par_chunks(plane))
-            .zip(g.flags.par_chunks(plane))
-            .enumerate()
-            .map(|(z, ((d, cap), flags))| {
+        let nx = g.dims.x as usize;
+        let plane = nx * g.dims.y as usize;
+        let found: Vec<Vec<u32>> = (0..g.dims.z as usize)
+            .into_par_iter()
+            .map(|z| {
                 let mut out = Vec::new();
-                for i in 0..d.len() {
-                    if d[i] > cap[i] + threshold && flags[i] & (QUEUED | WALL) == 0 {
-                        out.push((z * plane + i) as u32);
+                for (y, _) in g.rows[z * g.dims.y as usize..][..g.dims.y as usize]
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, &r)| r != 0)
+                {
+                    let row = z * plane + y * nx;
+                    for i in row..row + nx {
+                        if g.density[i] > g.capacity[i] + threshold && g.flags[i] & (QUEUED | WALL) == 0 {
+                            out.push(i as u32);
+                        }
                     }
                 }
                 out
@@ -61,28 +68,48 @@ impl Conservation {
         self.queue.len()
     }
 
-    /// Pops at most `max_iterations` cells, moving their excess. Returns the cells popped.
-    pub fn run(&mut self, grid: &mut Grid, threshold: f32, max_iterations: usize) -> usize {
+    /// Pops at most `max_iterations` cells, moving their excess. `outward(owner, p)` gives the
+    /// directions matter may leave lattice point `p` by under body `owner`, for the covered
+    /// cells whose directions are not known yet. Returns the cells popped.
+    pub fn run(
+        &mut self,
+        grid: &mut Grid,
+        threshold: f32,
+        max_iterations: usize,
+        outward: impl Fn(u8, IVec3) -> u8,
+    ) -> usize {
+        let g = grid;
+        // Capacities are read only where a body covers the cell; elsewhere they are 1.
+        let capacity = |g: &Grid, i: usize| if g.flags[i] & COVERED != 0 { g.capacity[i] } else { 1.0 };
         let mut pops = 0;
         while pops < max_iterations {
             let Some(c) = self.queue.pop_front() else { break };
             pops += 1;
             let c = c as usize;
-            grid.flags[c] &= !QUEUED;
-            let (d, cap) = (grid.density[c], grid.capacity[c]);
+            g.flags[c] &= !QUEUED;
+            let (d, cap) = (g.density[c], capacity(g, c));
             let excess = d - cap;
             if excess <= threshold {
                 continue;
             }
-            let dirs = grid.dirs[c];
+            let dirs = if g.flags[c] & COVERED == 0 {
+                ALL_DIRS
+            } else if g.dirs[c] == DIRS_UNKNOWN {
+                let dirs = outward(g.owner[c], g.lo + g.coord(c));
+                g.dirs[c] = dirs;
+                dirs
+            } else {
+                g.dirs[c]
+            };
             let mut targets = [0usize; 6];
             let mut n = 0;
             for dir in 0..6 {
                 if dirs & (1 << dir) == 0 {
                     continue;
                 }
-                let j = grid.neighbour(c, dir);
-                if grid.flags[j] & WALL != 0 || grid.capacity[j] < cap {
+                let j = g.neighbour(c, dir);
+                let fj = g.flags[j];
+                if fj & WALL != 0 || (fj & COVERED != 0 && g.capacity[j] < cap) {
                     continue;
                 }
                 targets[n] = j;
@@ -94,11 +121,12 @@ impl Conservation {
             let over = if n >= 2 { OVERSHOOT } else { 1.0 };
             let moved = (excess * over).min(d);
             let share = moved / n as f32;
-            grid.density[c] = if moved >= d { 0.0 } else { d - moved };
+            g.density[c] = if moved >= d { 0.0 } else { d - moved };
+            g.mark_around(c);
             for &j in &targets[..n] {
-                grid.density[j] += share;
-                if grid.density[j] > grid.capacity[j] + threshold && grid.flags[j] & QUEUED == 0 {
-                    grid.flags[j] |= QUEUED;
+                g.density[j] += share;
+                if g.flags[j] & QUEUED == 0 && g.density[j] > capacity(g, j) + threshold {
+                    g.flags[j] |= QUEUED;
                     self.queue.push_back(j as u32);
                 }
             }

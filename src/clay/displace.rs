@@ -26,7 +26,7 @@ use rayon::prelude::*;
 
 use crate::math::{IVec3, Pose, Vec3, VoxelTransform};
 
-use super::grid::{Grid, FIXED, NO_OWNER, WALL};
+use super::grid::{Grid, COVERED, FIXED, NO_OWNER, WALL};
 
 /// One pseudo-distance over the grid, with the cells it reached (to reset them cheaply).
 #[derive(Debug, Default)]
@@ -57,7 +57,8 @@ impl Distance {
     }
 
     /// Spreads the distance from `seeds` (distance 0). `is_barrier(i)`: the cell is reached
-    /// (at cost 1) but not crossed, and counts towards [`Distance::to_others`].
+    /// (at cost 1) but not crossed, and counts towards [`Distance::to_others`]; it is asked
+    /// only of cells a body covers or that are fixed (no other cell is a barrier).
     pub fn propagate(
         &mut self,
         grid: &Grid,
@@ -88,23 +89,29 @@ impl Distance {
                 if dc as usize != b {
                     continue; // improved since it was queued
                 }
-                if dc > 0.0 && is_barrier(c) {
+                if dc > 0.0 && grid.flags[c] & (COVERED | FIXED) != 0 && is_barrier(c) {
                     self.to_others = self.to_others.min(dc);
                     continue;
                 }
                 for d in 0..6 {
                     let n = grid.neighbour(c, d);
-                    if grid.flags[n] & WALL != 0 {
+                    let f = grid.flags[n];
+                    if f & WALL != 0 {
                         continue;
                     }
-                    let cost = if is_barrier(n) {
+                    let cost = if f & (COVERED | FIXED) != 0 && is_barrier(n) {
                         1.0
                     } else {
                         let rho = grid.density[n];
                         if rho < min_density {
                             continue;
                         }
-                        1.0 / rho.min(1.0)
+                        // A full cell costs exactly 1 (and 1 / 1 is 1: the same sums).
+                        if rho >= 1.0 {
+                            1.0
+                        } else {
+                            1.0 / rho
+                        }
                     };
                     let nd = dc + cost;
                     if nd < self.dist[n] {
@@ -196,7 +203,7 @@ impl Displacement {
         rayon::join(
             || {
                 fixed_dist.propagate(g, static_seeds, min_density, |i| {
-                    g.owner[i] != NO_OWNER && !support(g.owner[i]) && !is_fixed(i)
+                    g.flags[i] & (COVERED | FIXED) == COVERED && !support(g.owner[i])
                 })
             },
             || {
@@ -204,7 +211,8 @@ impl Displacement {
                     let seeds =
                         covered.iter().map(|&c| c as usize).filter(|&i| g.owner[i] == m.body && !is_fixed(i));
                     dist.propagate(g, seeds, min_density, |i| {
-                        is_fixed(i) || (g.owner[i] != NO_OWNER && g.owner[i] != m.body)
+                        let f = g.flags[i];
+                        f & FIXED != 0 || (f & COVERED != 0 && g.owner[i] != m.body)
                     });
                 })
             },
@@ -213,22 +221,23 @@ impl Displacement {
         self.moved.clear();
         let h = transform.voxel_size_m;
         for (mi, m) in movers.iter().enumerate() {
-            let d1 = &self.movers[mi];
+            let (d1, held, all) = (&self.movers[mi], &self.fixed, &self.movers[..movers.len()]);
             let d12 = d1.to_others;
             // A tool that only translates moves every cell by the same vector.
             let translation =
                 (m.from.rotation == m.to.rotation).then(|| (m.to.position_m - m.from.position_m) / h);
-            for &c in &d1.reached {
-                let c = c as usize;
+            // Each cell's step depends on the distances only: chunks of cells run in parallel
+            // and are gathered in order, so the sums below do not depend on the threads.
+            let step_of = |c: usize| -> Option<Vec3> {
                 if g.flags[c] & (FIXED | WALL) != 0 || g.density[c] <= 0.0 {
-                    continue;
+                    return None;
                 }
                 if g.owner[c] != NO_OWNER && g.owner[c] != m.body {
-                    continue;
+                    return None;
                 }
                 // The nearest other group: the static one or another moving tool.
-                let mut d2 = self.fixed.dist[c];
-                for (mj, other) in self.movers.iter().enumerate().take(movers.len()) {
+                let mut d2 = held.dist[c];
+                for (mj, other) in all.iter().enumerate() {
                     if mj != mi {
                         d2 = d2.min(other.dist[c]);
                     }
@@ -240,7 +249,7 @@ impl Displacement {
                 };
                 let weight = 0.5 * (1.0 - k) * fluidity;
                 if weight <= 0.0 {
-                    continue;
+                    return None;
                 }
                 let motion = match translation {
                     Some(t) => t,
@@ -251,7 +260,15 @@ impl Displacement {
                         (rigid - p) / h
                     }
                 };
-                let step = motion * weight;
+                Some(motion * weight)
+            };
+            let steps: Vec<(u32, Vec3)> = d1
+                .reached
+                .par_chunks(1 << 12)
+                .flat_map_iter(|chunk| chunk.iter().filter_map(|&c| step_of(c as usize).map(|s| (c, s))))
+                .collect();
+            for (c, step) in steps {
+                let c = c as usize;
                 if self.delta[c] == Vec3::ZERO {
                     self.moved.push(c as u32);
                 }
@@ -275,7 +292,12 @@ impl Displacement {
             self.delta[c] = Vec3::ZERO;
             let base = dest.floor();
             let f = dest - base;
-            let b = grid.index(base.as_ivec3());
+            let bc = base.as_ivec3();
+            let b = grid.index(bc);
+            let (r, ny) = ((bc.y + grid.dims.y * bc.z) as usize, grid.dims.y as usize);
+            for row in [r, r + 1, r + ny, r + ny + 1] {
+                grid.rows[row] = 1;
+            }
             let (sy, sz) = (grid.offsets[3] as usize, grid.offsets[5] as usize);
             let w = [1.0 - f.x, f.x];
             let wy = [1.0 - f.y, f.y];

@@ -23,6 +23,8 @@ pub(crate) const FIXED: u8 = 1;
 pub(crate) const WALL: u8 = 2;
 /// The cell is in the conservation layer's queue.
 pub(crate) const QUEUED: u8 = 4;
+/// A body covers the cell: its capacity may be under 1 and its owner is set.
+pub(crate) const COVERED: u8 = 8;
 
 /// No tool covers the cell.
 pub(crate) const NO_OWNER: u8 = u8::MAX;
@@ -38,14 +40,20 @@ pub(crate) struct Grid {
     pub density: Vec<f32>,
     /// Room for matter per cell: 1 − the densest tool covering it.
     pub capacity: Vec<f32>,
-    /// Directions matter may leave the cell by (bit `d` for [`NEIGHBOURS`]`[d]`).
+    /// Directions matter may leave the cell by (bit `d` for [`NEIGHBOURS`]`[d]`), or
+    /// [`DIRS_UNKNOWN`].
     pub dirs: Vec<u8>,
     /// Index of the tool covering the cell most, or [`NO_OWNER`].
     pub owner: Vec<u8>,
-    /// [`FIXED`], [`WALL`], [`QUEUED`].
+    /// [`FIXED`], [`WALL`], [`QUEUED`], [`COVERED`].
     pub flags: Vec<u8>,
     /// Linear offsets of the six neighbours: −x, +x, −y, +y, −z, +z.
     pub offsets: [isize; 6],
+    /// Per row of cells along X (index `y + ny·z`): 0 where every cell of the row is surely
+    /// empty. Every layer that puts matter in a cell marks its row ([`Grid::mark_around`]);
+    /// the scans for excess, loose matter and crumbs skip the rows left unmarked, and the
+    /// tension layer's scan unmarks the rows it finds empty.
+    pub rows: Vec<u8>,
 }
 
 /// The six axis directions, in the order of [`Grid::offsets`] and of the direction bits.
@@ -60,6 +68,9 @@ pub(crate) const NEIGHBOURS: [IVec3; 6] = [
 
 /// Every direction allowed.
 pub(crate) const ALL_DIRS: u8 = 0b11_1111;
+
+/// A body covers the cell and its directions are not known yet (found on first need).
+pub(crate) const DIRS_UNKNOWN: u8 = u8::MAX;
 
 impl Grid {
     /// Copies the field's densities over lattice points `lo ..= hi` (at least 3 on each axis).
@@ -86,6 +97,7 @@ impl Grid {
         }
         let sy = dims.x as isize;
         let sz = sy * dims.y as isize;
+        let rows = density.chunks(dims.x as usize).map(|r| u8::from(r.iter().any(|&d| d > 0.0))).collect();
         Self {
             lo,
             dims,
@@ -95,7 +107,20 @@ impl Grid {
             owner: vec![NO_OWNER; n],
             flags,
             offsets: [-1, 1, -sy, sy, -sz, sz],
+            rows,
         }
+    }
+
+    /// Marks the rows of interior cell `i` and of its six neighbours as holding matter.
+    #[inline]
+    pub fn mark_around(&mut self, i: usize) {
+        let r = i / self.dims.x as usize;
+        let ny = self.dims.y as usize;
+        self.rows[r - 1] = 1;
+        self.rows[r] = 1;
+        self.rows[r + 1] = 1;
+        self.rows[r - ny] = 1;
+        self.rows[r + ny] = 1;
     }
 
     /// Number of cells.

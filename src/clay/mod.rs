@@ -45,6 +45,27 @@
 //!   "above-threshold" cells; its threshold, 0.3, would let a visible speck hang on the body
 //!   by a thread of invisible matter).
 //! - Colour is not carried with the matter: cells that fill up take the window's mean colour.
+//! - The displacement layer passes a tool's motion on once the tool has travelled a cell in
+//!   contact since it last did ([`ClayParams::min_travel_voxels`]), not at every step: the
+//!   paper's 32³ grid moved by about a cell per step, ours by a tenth of one, and the
+//!   trilinear splat smears matter a little each time it moves it by a fraction of a cell, so
+//!   a slow push roughened the clay it dragged (visible ripples on a bent bar). The other two
+//!   layers run every step; the motion left when the push ends is passed on by
+//!   [`Clay::finish`].
+
+//!
+//! ## Where the time goes, and what is skipped
+//!
+//! The work that is skipped changes no result (the same bits as doing it all):
+//! - rows of cells along X that hold no matter (the grid's row marks, set by every layer that
+//!   puts matter in a cell) are left out of the scans for excess, loose matter and crumbs;
+//! - a body's footprint skips the cells a solid's distance clears along each row, outside it
+//!   and deep inside it (those are fully covered); the outward directions of a covered cell
+//!   are found the first time the conservation layer moves matter out of it;
+//! - whether a moving tool touches the clay at either end of a step is read from its
+//!   footprints there, not from another sweep of its box;
+//! - the pseudo-distances ask whether a cell is a barrier only of covered or fixed cells; the
+//!   displacement's per-cell steps are computed in parallel chunks gathered in order.
 
 mod body;
 mod conserve;

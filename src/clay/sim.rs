@@ -9,7 +9,7 @@ use crate::math::{IVec3, Pose, VoxelTransform};
 use super::body::{Body, ClayTool};
 use super::conserve::Conservation;
 use super::displace::{Displacement, Groups, Mover};
-use super::grid::{write_back, Grid, ALL_DIRS, FIXED, NO_OWNER, WALL};
+use super::grid::{write_back, Grid, ALL_DIRS, COVERED, DIRS_UNKNOWN, FIXED, NO_OWNER, WALL};
 use super::tension::Tension;
 
 /// The clay's behaviour. The defaults are the paper's where it gives a value.
@@ -31,7 +31,8 @@ pub struct ClayParams {
     /// `1 / SOLID_BAND_VOXELS` = 0.25 across their surface; the default 0.1 leaves them alone.
     pub tension_gradient: f32,
     /// Components of at most this many cells at or above the field's iso-level (pieces the
-    /// user sees apart from the rest) are crumbs.
+    /// user sees apart from the rest) are crumbs. The paper's "few neighbouring cells" were
+    /// cells of a 32³ grid, each worth a few dozen of our finer ones: 64.
     pub crumb_cells: usize,
     /// Whether a removed crumb's matter goes back to the nearest dense cell (mass is then
     /// conserved) or is discarded.
@@ -41,6 +42,13 @@ pub struct ClayParams {
     /// Simulation step, seconds: [`Clay::advance`] runs one step per `step_s` of time,
     /// whatever the caller's frame rate.
     pub step_s: f32,
+    /// The displacement layer passes a tool's motion on to the clay once the tool has
+    /// travelled this far (voxels) in contact since it last did. Splatting matter by a small
+    /// fraction of a cell smears it a little each time: a tool dragging clay by a tenth of a
+    /// cell per step would blur and roughen the surface it drags (the paper's coarse grid
+    /// moved by about a cell per step). The conservation and tension layers still run every
+    /// step. 0 passes the motion on at every step.
+    pub min_travel_voxels: f32,
 }
 
 impl Default for ClayParams {
@@ -51,10 +59,11 @@ impl Default for ClayParams {
             max_iterations: 300_000,
             tension_density: 0.3,
             tension_gradient: 0.1,
-            crumb_cells: 16,
+            crumb_cells: 64,
             return_crumbs: true,
             min_density: 0.01,
             step_s: 1.0 / 60.0,
+            min_travel_voxels: 1.0,
         }
     }
 }
@@ -74,6 +83,8 @@ pub struct LayerTimes {
     pub steps: u64,
     /// Cells popped by the conservation layer.
     pub conserve_pops: u64,
+    /// Steps in which the displacement layer moved matter (a tool had travelled far enough).
+    pub displacements: u64,
 }
 
 /// The virtual clay of one push: a window of the field simulated while tools act on it.
@@ -150,6 +161,19 @@ impl Clay {
         }
     }
 
+    /// Lets support `tool` (an index in the order given) go: from the next step it covers no
+    /// cell and holds nothing, as when the hand holding it moves or opens. Tools that push
+    /// are left alone. Returns whether the tool was a support still holding.
+    pub fn release(&mut self, tool: usize) -> bool {
+        let Some(body) = self.bodies.get_mut(tool) else { return false };
+        if !body.tool.support || body.footprint.cells.is_empty() {
+            return false;
+        }
+        body.footprint = Default::default();
+        self.place_bodies();
+        true
+    }
+
     /// The window, lattice points `lo ..= hi`.
     pub fn window(&self) -> (IVec3, IVec3) {
         (self.grid.lo, self.grid.lo + self.grid.dims - IVec3::ONE)
@@ -163,6 +187,12 @@ impl Clay {
     /// Total matter in the window (sum of densities, f64).
     pub fn mass(&self) -> f64 {
         self.grid.mass()
+    }
+
+    /// The matter held beyond full cells (densities over 1), which the field, whose
+    /// densities stay in [0, 1], does not show until [`Clay::finish`] settles it.
+    pub fn excess_mass(&self) -> f64 {
+        self.grid.density.iter().map(|&d| f64::from((d - 1.0).max(0.0))).sum()
     }
 
     /// Density at a lattice point of the window (0 outside it).
@@ -229,10 +259,20 @@ impl Clay {
             }
             let from = body.pose;
             let min = self.params.min_density;
-            if body.touches(&self.grid, &self.transform, to, min) {
+            // The footprint at `to` (needed anyway), and the one kept from the last step at
+            // `from`, tell whether the tool touches matter at either end of the step.
+            let footprint = body.footprint_at(&self.grid, &self.transform, to);
+            let g = &self.grid;
+            let holds_matter = |cells: &[u32]| cells.iter().any(|&c| g.density[c as usize] > min);
+            if !holds_matter(&footprint.cells) {
+                body.untransmitted_from = None;
+            } else {
                 // The motion counts from the contact (§3.1): bisect for it when the tool
-                // was clear of the clay at the start of the step.
-                let start = if body.touches(&self.grid, &self.transform, from, min) {
+                // was clear of the clay at the start of the step. Motion not yet passed on
+                // counts from where it began.
+                let start = if let Some(since) = body.untransmitted_from {
+                    since
+                } else if holds_matter(&body.footprint.cells) {
                     from
                 } else {
                     let (mut a, mut b) = (0.0f32, 1.0f32);
@@ -246,27 +286,25 @@ impl Clay {
                     }
                     from.lerp(&to, b)
                 };
-                movers.push(Mover { body: i as u8, from: start, to });
+                let travel = body.travel_m(start, to) / self.transform.voxel_size_m;
+                // A thousandth of a cell is allowed for the rounding of interpolated poses, so
+                // that a tool travelling exactly a cell is seen to, at any frame rate.
+                if travel >= self.params.min_travel_voxels - 1e-3 {
+                    movers.push(Mover { body: i as u8, from: start, to });
+                    body.untransmitted_from = None;
+                } else {
+                    body.untransmitted_from = Some(start);
+                }
             }
             body.pose = to;
-            body.footprint = body.footprint_at(&self.grid, &self.transform, to);
+            body.footprint = footprint;
         }
         self.place_bodies();
         let t1 = Instant::now();
-        let supports: Vec<bool> = self.bodies.iter().map(|b| b.tool.support).collect();
-        let groups = Groups { covered: &self.covered, fixed: &self.fixed, supports: &supports };
-        self.displacement.run(
-            &mut self.grid,
-            &self.transform,
-            &movers,
-            &groups,
-            self.params.fluidity,
-            self.params.min_density,
-        );
+        self.displace(&movers);
+        self.times.displacements += u64::from(!movers.is_empty());
         let t2 = Instant::now();
-        self.conservation.seed(&mut self.grid, self.params.excess_threshold);
-        let pops =
-            self.conservation.run(&mut self.grid, self.params.excess_threshold, self.params.max_iterations);
+        let pops = self.conserve(self.params.excess_threshold, self.params.max_iterations);
         let t3 = Instant::now();
         let p = &self.params;
         self.tension.run(&mut self.grid, p.tension_density, p.tension_gradient);
@@ -280,6 +318,23 @@ impl Clay {
         self.times.conserve_pops += pops as u64;
     }
 
+    /// The displacement layer, for `movers`.
+    fn displace(&mut self, movers: &[Mover]) {
+        let supports: Vec<bool> = self.bodies.iter().map(|b| b.tool.support).collect();
+        let groups = Groups { covered: &self.covered, fixed: &self.fixed, supports: &supports };
+        let p = &self.params;
+        self.displacement.run(&mut self.grid, &self.transform, movers, &groups, p.fluidity, p.min_density);
+    }
+
+    /// The conservation layer: queues the cells over capacity by more than `threshold` and
+    /// pops at most `max_iterations`. Returns the cells popped.
+    fn conserve(&mut self, threshold: f32, max_iterations: usize) -> usize {
+        self.conservation.seed(&mut self.grid, threshold);
+        let (bodies, transform) = (&self.bodies, &self.transform);
+        let outward = |owner: u8, p: IVec3| bodies[owner as usize].outward_dirs_at(transform, p);
+        self.conservation.run(&mut self.grid, threshold, max_iterations, outward)
+    }
+
     /// Rebuilds capacities, allowed directions and owners from the bodies' footprints.
     fn place_bodies(&mut self) {
         let g = &mut self.grid;
@@ -288,18 +343,20 @@ impl Clay {
             g.capacity[c] = 1.0;
             g.dirs[c] = ALL_DIRS;
             g.owner[c] = NO_OWNER;
+            g.flags[c] &= !COVERED;
         }
         self.covered.clear();
         for (b, body) in self.bodies.iter().enumerate() {
             let fp = &body.footprint;
-            for ((&c, &t), &dirs) in fp.cells.iter().zip(&fp.density).zip(&fp.dirs) {
+            for (&c, &t) in fp.cells.iter().zip(&fp.density) {
                 let c = c as usize;
                 if g.owner[c] == NO_OWNER {
                     self.covered.push(c as u32);
+                    g.flags[c] |= COVERED;
                 }
                 if g.owner[c] == NO_OWNER || 1.0 - t < g.capacity[c] {
                     g.capacity[c] = 1.0 - t;
-                    g.dirs[c] = dirs;
+                    g.dirs[c] = DIRS_UNKNOWN;
                     g.owner[c] = b as u8;
                 }
             }
@@ -312,13 +369,30 @@ impl Clay {
         write_back(&self.grid, &mut self.written, field, self.colour);
     }
 
-    /// Ends the push: settles the excess the conservation layer tolerated (down to 1e-4 over
-    /// capacity, the iteration cap lifted), so that clamping to [0, 1] loses no visible
-    /// matter, and writes the clay back into `field`.
+    /// Ends the push: passes on the tools' motion not yet passed to the clay; lets the tools
+    /// go and removes the crumbs they held; settles the excess the conservation layer
+    /// tolerated (down to 1e-4 over capacity, the iteration cap lifted), so that clamping to
+    /// [0, 1] loses no visible matter; and writes the clay back into `field`.
     pub fn finish(mut self, field: &mut Field) {
+        // The tools' last motion not yet passed on to the clay.
+        let movers: Vec<Mover> = self
+            .bodies
+            .iter()
+            .enumerate()
+            .filter_map(|(i, b)| b.untransmitted_from.map(|from| Mover { body: i as u8, from, to: b.pose }))
+            .collect();
+        if !movers.is_empty() {
+            self.displace(&movers);
+        }
+        // The tools let go: crumbs they held while working them are loose now, and are eaten.
+        for body in &mut self.bodies {
+            body.footprint = Default::default();
+        }
+        self.place_bodies();
+        let p = &self.params;
+        self.tension.remove_crumbs(&mut self.grid, self.iso, p.crumb_cells, p.return_crumbs);
         let threshold = 1e-4;
-        self.conservation.seed(&mut self.grid, threshold);
-        self.conservation.run(&mut self.grid, threshold, usize::MAX);
+        self.conserve(threshold, usize::MAX);
         self.write_to(field);
     }
 }
@@ -333,6 +407,7 @@ fn sanitised(p: ClayParams) -> ClayParams {
         tension_gradient: finite_or(p.tension_gradient, d.tension_gradient).max(0.0),
         min_density: finite_or(p.min_density, d.min_density).clamp(1e-4, 1.0),
         step_s: if p.step_s.is_finite() && p.step_s > 0.0 { p.step_s } else { d.step_s },
+        min_travel_voxels: finite_or(p.min_travel_voxels, d.min_travel_voxels).max(0.0),
         ..p
     }
 }

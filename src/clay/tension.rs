@@ -30,24 +30,38 @@ pub(crate) struct Tension {
     search: VecDeque<u32>,
     seen: Vec<u32>,
     epoch: u32,
+    /// The last label given (labels are not reused between runs).
+    next_label: u32,
 }
 
 impl Tension {
-    /// Moves loose matter to denser neighbours. Returns the matter moved.
+    /// Moves loose matter to denser neighbours. Returns the matter moved. Rows that hold no
+    /// matter are skipped, and those found empty are unmarked.
     pub fn run(&mut self, grid: &mut Grid, threshold: f32, target_gradient: f32) -> f64 {
-        let g: &Grid = grid;
+        let ny = grid.dims.y as usize;
+        let nz = grid.dims.z as usize;
+        let mut rows = std::mem::take(&mut grid.rows);
+        let g = &*grid;
         let nx = g.dims.x as usize;
-        let plane = nx * g.dims.y as usize;
+        let plane = nx * ny;
         let (sy, sz) = (g.offsets[3] as usize, g.offsets[5] as usize);
         let target2 = target_gradient * target_gradient;
         // One z-plane per task; planes collected in order, so the list is the same whatever
         // the number of threads.
-        let planes: Vec<Vec<(u32, [f32; 6])>> = (1..g.dims.z as usize - 1)
-            .into_par_iter()
-            .map(|z| {
+        let planes: Vec<Vec<(u32, [f32; 6])>> = rows
+            .par_chunks_mut(ny)
+            .enumerate()
+            .map(|(z, rows)| {
                 let mut out = Vec::new();
-                for y in 1..g.dims.y as usize - 1 {
+                for (y, flag) in rows.iter_mut().enumerate().filter(|(_, f)| **f != 0) {
                     let row = z * plane + y * nx;
+                    if g.density[row..row + nx].iter().all(|&d| d <= 0.0) {
+                        *flag = 0;
+                        continue;
+                    }
+                    if z == 0 || z == nz - 1 || y == 0 || y == ny - 1 {
+                        continue;
+                    }
                     for i in row + 1..row + nx - 1 {
                         let d = g.density[i];
                         if !(d > 0.0 && d < threshold) || g.capacity[i] < 1.0 || g.flags[i] & FIXED != 0 {
@@ -77,6 +91,8 @@ impl Tension {
                 out
             })
             .collect();
+        let g = grid;
+        g.rows = rows;
         self.moves.clear();
         for p in planes {
             self.moves.extend(p);
@@ -88,11 +104,12 @@ impl Tension {
             // held at the start of the layer and keeps what arrived since.
             let given: f32 = shares.iter().sum();
             total += f64::from(given);
-            grid.density[i] = (grid.density[i] - given).max(0.0);
+            g.density[i] = (g.density[i] - given).max(0.0);
+            g.mark_around(i);
             for (dir, s) in shares.into_iter().enumerate() {
                 if s > 0.0 {
-                    let j = grid.neighbour(i, dir);
-                    grid.density[j] += s;
+                    let j = g.neighbour(i, dir);
+                    g.density[j] += s;
                 }
             }
         }
@@ -111,15 +128,20 @@ impl Tension {
         give_back: bool,
     ) -> f64 {
         let n = grid.len();
-        if self.label.len() != n {
+        // Labels grow from run to run; a cell is labelled in this run when its label is
+        // above `base`, so the labels need no clearing but on wrapping round.
+        if self.label.len() != n || self.next_label > u32::MAX - n as u32 {
             self.label = vec![0; n];
             self.seen = vec![0; n];
+            self.next_label = 0;
         }
-        self.label.fill(0);
-        let mut next_label = 0u32;
+        let base = self.next_label;
+        let mut next_label = base;
         let mut removed = 0.0f64;
-        for start in 0..n {
-            if self.label[start] != 0 || grid.density[start] < threshold || grid.flags[start] & WALL != 0 {
+        let nx = grid.dims.x as usize;
+        let live: Vec<usize> = (0..grid.rows.len()).filter(|&r| grid.rows[r] != 0).collect();
+        for start in live.into_iter().flat_map(|r| r * nx..(r + 1) * nx) {
+            if self.label[start] > base || grid.density[start] < threshold || grid.flags[start] & WALL != 0 {
                 continue;
             }
             next_label += 1;
@@ -133,7 +155,7 @@ impl Tension {
                 k += 1;
                 for dir in 0..6 {
                     let j = grid.neighbour(c, dir);
-                    if self.label[j] == 0 && grid.density[j] >= threshold && grid.flags[j] & WALL == 0 {
+                    if self.label[j] <= base && grid.density[j] >= threshold && grid.flags[j] & WALL == 0 {
                         self.label[j] = next_label;
                         self.component.push(j as u32);
                     }
@@ -152,6 +174,7 @@ impl Tension {
             }
             removed += self.eat(grid, next_label, threshold, give_back);
         }
+        self.next_label = next_label;
         removed
     }
 
@@ -189,6 +212,7 @@ impl Tension {
         }
         if let Some(t) = target {
             grid.density[t] += mass;
+            grid.mark_around(t);
         }
         f64::from(mass)
     }

@@ -82,7 +82,8 @@ pub enum Action {
     /// dents it while conserving its matter. Stamping does nothing with it.
     Push,
     /// Holds the clay still where it touches it, as a support for pushes
-    /// (`crate::clay`). Stamping does nothing with it.
+    /// (`crate::clay`), while the hand holding it keeps it still. Stamping does nothing
+    /// with it.
     Support,
 }
 
