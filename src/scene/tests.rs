@@ -128,7 +128,7 @@ fn every_tool_scene_of_the_tests_folder_loads() {
             actions.insert(std::mem::discriminant(&t.action));
         }
     }
-    assert_eq!(actions.len(), 10, "a scene for each of the ten actions");
+    assert_eq!(actions.len(), 12, "a scene for each of the twelve actions (push and support included)");
 }
 
 #[test]
