@@ -362,7 +362,7 @@ pub(super) fn shape_cycle(s: f32) -> [(ToolShape, &'static str); 5] {
         (ToolShape::Solid(Solid::Torus { major_m: 2.0 * s, minor_m: s }), "torus"),
         (
             ToolShape::Ellipsoid(Ellipsoid { radii_m: Vec3::new(2.0 * s, s, s), falloff: Falloff::Wyvill }),
-            "soft ellipsoid",
+            "ellipsoid",
         ),
     ]
 }

@@ -655,6 +655,14 @@ mod tests {
         frame(&mut s, [HandState::default(), flick]);
         frame(&mut s, [HandState::default(), flick]);
         assert_eq!(shape_name(&s.tool().shape), "box", "one flick, one step");
+        let rest = HandState::default();
+        let mut names = Vec::new();
+        for _ in 0..4 {
+            frame(&mut s, [rest, rest]);
+            frame(&mut s, [rest, flick]);
+            names.push(shape_name(&s.tool().shape));
+        }
+        assert_eq!(names, ["cylinder", "torus", "ellipsoid", "sphere"], "round the cycle");
         let action = s.tool().action;
         let click = HandState { thumbstick_click: true, ..HandState::default() };
         frame(&mut s, [HandState::default(), click]);
