@@ -7,6 +7,7 @@
 layout(push_constant) uniform Glyph {
     mat4 model;
     vec4 colour;
+    vec4 shape;
 } glyph;
 
 layout(location = 0) in vec3 world_position;

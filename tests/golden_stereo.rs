@@ -462,3 +462,79 @@ fn push_print_matches_golden_through_its_timeline() {
 fn poke_hole_matches_golden_through_its_timeline() {
     golden_timeline_case("scenes/poke-hole.toml");
 }
+
+/// The four glyph shapes side by side — sphere, box, cylinder, torus (a tube half the ring's
+/// radius) — the first two as tools, the other two as controllers, over a black background:
+/// each is drawn with its own shape, and the torus shows its hole.
+#[test]
+fn the_glyph_shapes_match_golden() {
+    use argile::math::{Mat4, Quat, Vec3};
+    use argile::render::{Environment, Frame, GlyphShape, Light, Renderer, RendererDesc, ToolGlyph};
+    let (width, height) = (256u32, 128u32);
+    let desc = RendererDesc { width, height, samples: 4, validation: true, view_passes: None };
+    let mut renderer = Renderer::new(&desc, &Environment::Studio, 1.0).expect("a Vulkan device");
+    let validation = renderer.validation_log();
+    let rig = argile::stereo::StereoRig {
+        eye_m: Vec3::new(0.0, 0.12, 0.5),
+        target_m: Vec3::ZERO,
+        up: Vec3::Y,
+        fov_y_deg: 30.0,
+        interaxial_m: 0.02,
+        convergence_m: 0.5,
+        near_m: 0.05,
+        far_m: 10.0,
+    };
+    let glyph = |shape, x: f32, turn: Quat, colour: [f32; 3]| ToolGlyph {
+        shape,
+        model: Mat4::from_scale_rotation_translation(Vec3::splat(0.04), turn, Vec3::new(x, 0.0, 0.0)),
+        colour: Vec3::from(colour).extend(0.9),
+    };
+    let torus = glyph(GlyphShape::Torus { tube: 0.5 }, 0.165, Quat::from_rotation_x(1.2), [0.8, 0.2, 0.8]);
+    let frame = Frame {
+        views: rig.views(width as f32 / height as f32),
+        lights: vec![Light::Directional {
+            direction: Vec3::new(0.4, -0.8, -0.5),
+            radiance: Vec3::splat(2.0),
+        }],
+        material: Default::default(),
+        tools: vec![
+            glyph(GlyphShape::Sphere, -0.165, Quat::IDENTITY, [0.9, 0.5, 0.2]),
+            glyph(GlyphShape::Box, -0.055, Quat::from_rotation_y(0.6), [0.3, 0.8, 0.3]),
+        ],
+        controllers: vec![
+            glyph(GlyphShape::Cylinder, 0.055, Quat::from_rotation_x(0.3), [0.3, 0.5, 1.0]),
+            torus,
+        ],
+        stage: None,
+        show_environment: false,
+        background: Vec3::ZERO,
+        hud: Vec::new(),
+    };
+    renderer.draw(&frame).unwrap();
+    let image = renderer.read_back().unwrap();
+    drop(renderer);
+    let messages = validation.take();
+    assert!(messages.is_empty(), "the validation layer reported {messages:#?}");
+
+    let eye = frame.views.eyes[0];
+    let pixel = |p: Vec3| {
+        let clip = eye.projection * eye.view * p.extend(1.0);
+        let ndc = clip.truncate() / clip.w;
+        (((ndc.x + 1.0) * 0.5 * width as f32) as u32, ((ndc.y + 1.0) * 0.5 * height as f32) as u32)
+    };
+    let lit =
+        |(x, y): (u32, u32)| image.left.get_pixel(x, y).0[..3].iter().map(|&c| u32::from(c)).sum::<u32>();
+    for g in frame.tools.iter().chain(&frame.controllers).filter(|g| g.shape != torus.shape) {
+        assert!(lit(pixel(g.model.w_axis.truncate())) > 100, "{:?} is drawn at its centre", g.shape);
+    }
+    assert_eq!(lit(pixel(torus.model.w_axis.truncate())), 0, "the torus's hole shows the background");
+    let on_ring = torus.model.transform_point3(Vec3::X);
+    assert!(lit(pixel(on_ring)) > 100, "the torus's ring is drawn");
+    // The box covers its corners, beyond the sphere a box glyph used to be.
+    let cube = frame.tools[1];
+    for corner in [Vec3::new(0.9, 0.9, 0.9), Vec3::new(-0.9, -0.9, 0.9)] {
+        assert!(lit(pixel(cube.model.transform_point3(corner))) > 100, "the box's corner {corner}");
+    }
+    check_against_golden("glyph-shapes", "left", &image.left);
+    check_against_golden("glyph-shapes", "right", &image.right);
+}

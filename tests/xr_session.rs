@@ -130,8 +130,9 @@ fn difference(a: &image::RgbaImage, b: &image::RgbaImage) -> (u8, f64) {
 /// The head standing at the stage origin, looking down at the work point.
 const HEAD: &str = "head = { position = [0.0, 1.6, 0.0], orientation = [-0.2898, 0.0, 0.0, 0.9571] }";
 
-/// The right hand carves a groove across the slab's front face (frames 4 to 12), then both
-/// hands go behind the viewer (out of view) before the captured frame.
+/// The right hand carves a groove across the slab's front face (frames 4 to 12) while the left
+/// hand holds its palette up beside the slab (captured at frame 8), then both hands go behind
+/// the viewer (out of view) before the frame captured at 24.
 fn carving_script() -> String {
     format!(
         r#"
@@ -140,7 +141,7 @@ interaction_profile = "/interaction_profiles/oculus/touch_controller"
 recommended_size = [128, 128]
 fov_deg = [-25.0, 25.0, 25.0, -25.0]
 ipd_m = 0.064
-capture = [24]
+capture = [8, 24]
 [[key]]
 frame = 0
 {HEAD}
@@ -151,15 +152,18 @@ frame = 3
 right = {{ grip = {{ position = [0.05, 1.33, -0.43] }}, trigger = 0.0 }}
 [[key]]
 frame = 4
+left = {{ grip = {{ position = [-0.16, 1.34, -0.36] }} }}
 right = {{ trigger = 1.0 }}
 [[key]]
 frame = 12
+left = {{ grip = {{ position = [-0.16, 1.34, -0.36] }} }}
 right = {{ grip = {{ position = [-0.05, 1.33, -0.43] }}, trigger = 1.0 }}
 [[key]]
 frame = 13
 right = {{ trigger = 0.0 }}
 [[key]]
 frame = 16
+left = {{ grip = {{ position = [-0.3, 1.9, 0.6] }} }}
 right = {{ grip = {{ position = [0.3, 1.9, 0.6] }} }}
 "#
     )
@@ -224,6 +228,13 @@ fn a_headset_session_submits_what_the_offscreen_renderer_draws_of_the_same_views
         let (max, mean) = difference(&captured, expected);
         assert!(max <= 1 && mean <= 0.01, "{eye} eye: submitted image differs from the offscreen render (max {max}, mean {mean:.4}); see {}", dir.display());
         check_against_golden("xr-session", eye, &captured);
+    }
+    // Mid-groove, the gouge is drawn in the right hand, a handle in each, the palette in
+    // front of the left controller.
+    for eye in ["left", "right"] {
+        let path = dir.join(format!("runtime/frame-0008-{eye}.png"));
+        let captured = image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgba8();
+        check_against_golden("xr-session-hands", eye, &captured);
     }
 }
 

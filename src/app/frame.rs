@@ -1,8 +1,10 @@
 //! Building the renderer's per-frame snapshot from the scene and the playback state.
 
-use crate::math::{Mat4, Vec4};
-use crate::render::{Frame, Light, Material, Stage, ToolGlyph};
-use crate::scene::{Attachment, Scene, SceneLight};
+use super::glyphs::tool_glyph;
+use crate::math::Vec4;
+use crate::render::{Frame, Light, Material, Stage};
+use crate::scene::{Attachment, Scene, SceneLight, SceneToolShape};
+use crate::tool::ToolShape;
 
 /// Resolves the scene's lights into world space for the current viewer.
 pub fn world_lights(scene: &Scene) -> Vec<Light> {
@@ -30,6 +32,17 @@ pub fn world_lights(scene: &Scene) -> Vec<Light> {
         .collect()
 }
 
+/// The shape a scene tool is drawn with: its own, or for a freeform tool (whose samples are
+/// copied only when playback starts) the box it is copied from, which its glyph spans.
+fn scene_tool_shape(shape: &SceneToolShape) -> ToolShape {
+    match shape {
+        SceneToolShape::Shape(s) => s.clone(),
+        SceneToolShape::Freeform { min_m, max_m } => {
+            ToolShape::Solid(crate::tool::Solid::Box { half_m: 0.5 * (*max_m - *min_m) })
+        }
+    }
+}
+
 /// The frame to draw: views for the output's aspect, lights, material, stage, and a glyph for
 /// each tool held in `hands` (`(tool index, pose)` pairs) when `show_tools`.
 pub fn build_frame(scene: &Scene, hands: &[(usize, crate::math::Pose)], show_tools: bool) -> Frame {
@@ -39,10 +52,8 @@ pub fn build_frame(scene: &Scene, hands: &[(usize, crate::math::Pose)], show_too
             .iter()
             .map(|&(tool, pose)| {
                 let t = &scene.tools[tool];
-                ToolGlyph {
-                    model: pose.to_matrix() * Mat4::from_scale(t.half_extents_m()),
-                    colour: Vec4::from(t.colour).truncate().extend(t.glyph_opacity),
-                }
+                let colour = Vec4::from(t.colour).truncate().extend(t.glyph_opacity);
+                tool_glyph(&scene_tool_shape(&t.shape), pose, t.scale, colour)
             })
             .collect()
     } else {
@@ -59,6 +70,7 @@ pub fn build_frame(scene: &Scene, hands: &[(usize, crate::math::Pose)], show_too
             ambient: m.ambient,
         },
         tools,
+        controllers: Vec::new(),
         stage: scene.stage.map(|s| Stage { min_m: s.min_m, max_m: s.max_m, colour: s.colour }),
         show_environment: scene.environment.show,
         background: scene.environment.background,

@@ -11,6 +11,7 @@ mod comfort;
 mod environment;
 mod export;
 mod frame;
+mod glyphs;
 mod playback;
 mod sculpt;
 mod station;

@@ -408,9 +408,22 @@ impl<'s> Playback<'s> {
         self.strokes[slot(hand)].as_ref().map(|(_, s)| s)
     }
 
-    /// Where each hand holds which tool now: `(tool index, pose)` for the hands with keys.
+    /// Where each hand holds which tool now: `(tool index, pose)` for the hands with keys (or
+    /// live), as [`Playback::hand`] says.
     pub fn hands(&self) -> Vec<(usize, Pose)> {
-        Hand::BOTH.iter().filter_map(|&h| self.state_at(h, self.time_s)).map(|s| (s.tool, s.pose)).collect()
+        Hand::BOTH.iter().filter_map(|&h| self.hand(h)).collect()
+    }
+
+    /// Where `hand`'s tool is now: `(tool index, pose)`. A live hand's support that holds the
+    /// clay in a push is where the hand put it, wherever the hand has gone since.
+    pub fn hand(&self, hand: Hand) -> Option<(usize, Pose)> {
+        let state = self.state_at(hand, self.time_s)?;
+        let placed = self.live.is_some() && state.active && self.tools[state.tool].action == Action::Support;
+        let put = self.push.as_ref().filter(|_| placed).and_then(|push| {
+            let body = push.bodies.iter().position(|&b| b == (Some(hand), state.tool))?;
+            push.clay.poses().get(body).copied()
+        });
+        Some((state.tool, put.unwrap_or(state.pose)))
     }
 }
 

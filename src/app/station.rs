@@ -28,6 +28,7 @@ use winit::window::{Window, WindowId};
 
 use super::environment::load_environment;
 use super::frame::build_frame;
+use super::glyphs::tool_glyph;
 use super::playback::Playback;
 use crate::config::{Chord, KeyBindings, Modifiers, StationAction};
 use crate::input::clutch::{Clutch, ClutchGains};
@@ -40,9 +41,9 @@ use crate::input::reader::{HidSource, Mailbox, ReaderConfig, ReaderHandle};
 use crate::input::settings::InputSettings;
 use crate::input::spacenav::{Protocol, SpacenavSource, DEFAULT_SOCKET};
 use crate::io::autosave::{Autosave, AutosaveConfig};
-use crate::math::{Mat4, Pose, Quat, Vec2, Vec3, Vec4};
+use crate::math::{Pose, Quat, Vec2, Vec3, Vec4};
 use crate::mesh::remesh_dirty;
-use crate::render::{Light, Presented, Renderer, RendererDesc, ToolGlyph, ValidationLog};
+use crate::render::{Light, Presented, Renderer, RendererDesc, ValidationLog};
 use crate::scene::ScreenCalibration;
 use crate::scene::{line_column, FileError, Scene};
 use crate::stereo::comfort::AutoConvergence;
@@ -361,7 +362,7 @@ pub(super) fn shape_cycle(s: f32) -> [(ToolShape, &'static str); 5] {
         (ToolShape::Solid(Solid::Torus { major_m: 2.0 * s, minor_m: s }), "torus"),
         (
             ToolShape::Ellipsoid(Ellipsoid { radii_m: Vec3::new(2.0 * s, s, s), falloff: Falloff::Wyvill }),
-            "soft ellipsoid",
+            "ellipsoid",
         ),
     ]
 }
@@ -1192,17 +1193,13 @@ impl<'s> Station<'s> {
         }
         self.place_key_light(&mut frame.lights);
         frame.hud = self.hud_lines();
-        frame.tools.push(ToolGlyph {
-            model: pose.to_matrix() * Mat4::from_scale(self.desk_tool.half_extents_m()),
-            colour: Vec4::from(self.desk_tool.colour).truncate().extend(0.35),
-        });
+        let tool = &self.desk_tool;
+        let colour = Vec4::from(tool.colour).truncate().extend(0.35);
+        frame.tools.push(tool_glyph(&tool.shape, pose, tool.scale, colour));
         let second = self.desk.poses.get(Target::SecondTool);
         if second != self.home.get(Target::SecondTool) {
-            // The second tool, once a device has moved it: the desk tool's size, in blue.
-            frame.tools.push(ToolGlyph {
-                model: second.to_matrix() * Mat4::from_scale(self.desk_tool.half_extents_m()),
-                colour: Vec4::new(0.3, 0.5, 1.0, 0.35),
-            });
+            // The second tool, once a device has moved it: the desk tool's shape and size, in blue.
+            frame.tools.push(tool_glyph(&tool.shape, second, tool.scale, Vec4::new(0.3, 0.5, 1.0, 0.35)));
         }
         frame
     }

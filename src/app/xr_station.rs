@@ -6,6 +6,10 @@
 //! [`XrSculptor::step`] runs the stages of the data flow: controls (buttons, thumbstick,
 //! grips) → tools (the scene's scripted hands, the dominant hand's stroke) → field →
 //! incremental mesh → the frame to draw, with haptic pulses where the tool meets the clay.
+//! The frame shows the dominant hand's tool (its own shape and size, in its action's colour),
+//! the support where the other hand holds or put it, each tracked controller, and the palette
+//! of the current shape, action and size in front of the other controller (see
+//! `super::glyphs`); a hand that is not tracked shows nothing.
 //!
 //! Controls (right-handed; mirrored in left-handed mode):
 //! - right trigger: apply the tool (its pressure sets the rate of soft actions);
@@ -19,13 +23,14 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 
 use super::frame::build_frame;
+use super::glyphs::{action_colour, controller_glyph, palette, tool_glyph};
 use super::playback::Playback;
 use super::station::{action_cycle, shape_cycle, shape_name};
 use crate::field::{Field, FieldReader};
 use crate::io::autosave::AutosaveConfig;
-use crate::math::{Mat4, Pose, Vec3, Vec4};
+use crate::math::{Pose, Vec3};
 use crate::mesh::{remesh_dirty, MeshDiff};
-use crate::render::ToolGlyph;
+use crate::render::{Frame, ToolGlyph};
 use crate::scene::{Hand, HandState as PlaybackHand, Scene};
 use crate::tool::{Action, Stroke, Tool, ToolShape};
 use crate::xr::{
@@ -345,15 +350,45 @@ impl<'s> XrSculptor<'s> {
             apply(&diff);
         }
         self.times = (tools_ms, meshing.elapsed().as_secs_f64() * 1e3);
-        let mut frame = build_frame(self.scene, &self.playback.hands(), true);
-        if let Some(pose) = tool_pose.filter(|_| pushing_tool.is_none()) {
-            frame.tools.push(ToolGlyph {
-                model: pose.to_matrix() * Mat4::from_scale(tool.half_extents_m()),
-                colour: Vec4::from(tool.colour).truncate().extend(if applying { 0.6 } else { 0.35 }),
-            });
-        }
+        let frame = self.frame(&input.hands, tool_pose.map(|pose| (pose, applying)), &tool);
         self.previous = input.hands;
         FrameOutput { frame, placement: self.placement, haptics }
+    }
+}
+
+impl XrSculptor<'_> {
+    /// The frame to draw, in scene metres: the clay; the dominant hand's tool at `dominant`
+    /// (its pose, and whether it is applied) with its shape and size as it acts (`acting`, or
+    /// the scene's push tool, which acts through the playback) in its action's colour; the
+    /// support where the other hand holds or put it; and, room-sized, each tracked controller's
+    /// handle and the palette of the current tool beside the other hand.
+    fn frame(&self, hands: &[HandState; 2], dominant: Option<(Pose, bool)>, acting: &Tool) -> Frame {
+        let mut frame = build_frame(self.scene, &[], true);
+        let tools = self.playback.tools();
+        if let Some((pose, applying)) = dominant {
+            let tool = match self.tool_index.filter(|_| self.tool.action == Action::Push) {
+                Some(i) => &tools[i],
+                None => acting,
+            };
+            let colour = action_colour(&tool.action).extend(if applying { 0.6 } else { 0.35 });
+            frame.tools.push(tool_glyph(&tool.shape, pose, tool.scale, colour));
+        }
+        let other = if self.dominant == 0 { Hand::Right } else { Hand::Left };
+        if let Some((i, pose)) = self.playback.hand(other) {
+            let t = &tools[i];
+            let colour = action_colour(&t.action).extend(self.scene.tools[i].glyph_opacity);
+            frame.tools.push(tool_glyph(&t.shape, pose, t.scale, colour));
+        }
+        let room_to_scene = self.placement.matrix().inverse();
+        let in_scene = |g: ToolGlyph| ToolGlyph { model: room_to_scene * g.model, ..g };
+        for (i, hand) in hands.iter().enumerate() {
+            let Some(grip) = hand.grip else { continue };
+            frame.controllers.push(in_scene(controller_glyph(grip)));
+            if i != self.dominant {
+                frame.controllers.extend(palette(grip, &self.tool).map(in_scene));
+            }
+        }
+        frame
     }
 }
 
@@ -620,6 +655,14 @@ mod tests {
         frame(&mut s, [HandState::default(), flick]);
         frame(&mut s, [HandState::default(), flick]);
         assert_eq!(shape_name(&s.tool().shape), "box", "one flick, one step");
+        let rest = HandState::default();
+        let mut names = Vec::new();
+        for _ in 0..4 {
+            frame(&mut s, [rest, rest]);
+            frame(&mut s, [rest, flick]);
+            names.push(shape_name(&s.tool().shape));
+        }
+        assert_eq!(names, ["cylinder", "torus", "ellipsoid", "sphere"], "round the cycle");
         let action = s.tool().action;
         let click = HandState { thumbstick_click: true, ..HandState::default() };
         frame(&mut s, [HandState::default(), click]);
@@ -678,5 +721,205 @@ mod tests {
         assert_eq!(out.haptics.len(), 1);
         assert_eq!(out.haptics[0].hand, Hand::Left);
         assert_eq!((out.haptics[0].amplitude, out.haptics[0].duration_ns), TOUCH_PULSE);
+    }
+
+    /// The ball with a support block the left hand holds (a box of 4 × 2 × 3 cm).
+    fn ball_and_block() -> Scene {
+        Scene::parse(
+            "[field]\nvoxel_size_m = 0.004\n[camera]\neye_m = [0.0, 0.0, 0.5]\ntarget_m = [0.0, 0.0, 0.0]\n\
+             [[clay]]\nshape = \"sphere\"\nradius_m = 0.05\n\
+             [[tool]]\nname = \"gouge\"\nradius_m = 0.012\naction = \"remove\"\n\
+             [[tool]]\nname = \"block\"\nshape = \"box\"\nsize_m = [0.04, 0.02, 0.03]\naction = \"support\"\n",
+            "ball-and-block",
+            None,
+        )
+        .unwrap()
+    }
+
+    /// A glyph's centre in the room.
+    fn room_centre(s: &XrSculptor<'_>, g: &ToolGlyph) -> Vec3 {
+        s.placement().to_stage(g.model.w_axis.truncate())
+    }
+
+    fn near(a: Vec3, b: Vec3) -> bool {
+        (a - b).length() < 1e-5
+    }
+
+    /// The controllers' handles, and the palette's items `[shape, action, size]` when drawn.
+    fn split_controllers(frame: &Frame) -> (Vec<ToolGlyph>, Option<[ToolGlyph; 3]>) {
+        use super::super::glyphs::HANDLE_COLOUR;
+        let (handles, palette): (Vec<ToolGlyph>, Vec<ToolGlyph>) =
+            frame.controllers.iter().copied().partition(|g| g.colour == HANDLE_COLOUR);
+        (handles, palette.try_into().ok())
+    }
+
+    /// The size bar's length, room metres.
+    fn bar_length_m(s: &XrSculptor<'_>, bar: &ToolGlyph) -> f32 {
+        let (a, b) = (bar.model.transform_point3(-Vec3::Y), bar.model.transform_point3(Vec3::Y));
+        s.placement().to_stage(a).distance(s.placement().to_stage(b))
+    }
+
+    #[test]
+    fn the_headset_draws_the_tool_the_support_each_controller_and_the_palette() {
+        use super::super::glyphs::{PALETTE_ABOVE_M, PALETTE_AHEAD_M};
+        use crate::render::GlyphShape;
+        let scene = ball_and_block();
+        let mut s = sculptor(&scene, false);
+        let (left, right) = (Vec3::new(-0.1, 1.3, -0.2), Vec3::new(0.1, 1.3, -0.2));
+        let hold = |p: Vec3| HandState { grip: at(p.x, p.y, p.z), ..HandState::default() };
+        let out = frame(&mut s, [hold(left), hold(right)]);
+        let f = &out.frame;
+        assert_eq!(f.tools.len(), 2, "the tool and the support");
+        let (tool, support) = (f.tools[0], f.tools[1]);
+        assert_eq!(tool.shape, GlyphShape::Sphere);
+        assert!(near(room_centre(&s, &tool), right), "the tool is in the dominant hand");
+        assert!((tool.model.x_axis.truncate().length() - 0.012).abs() < 1e-6, "its size");
+        assert_eq!(tool.colour, action_colour(&Action::Remove).extend(0.35), "its action's colour");
+        assert_eq!(support.shape, GlyphShape::Box, "the support block is drawn as a box");
+        assert!(near(room_centre(&s, &support), left), "in the other hand");
+        let half = Vec3::new(
+            support.model.x_axis.length(),
+            support.model.y_axis.length(),
+            support.model.z_axis.length(),
+        );
+        assert!(near(half, Vec3::new(0.02, 0.01, 0.015)), "{half}");
+        assert_eq!(support.colour.truncate(), action_colour(&Action::Support));
+
+        let (handles, palette) = split_controllers(f);
+        assert_eq!(handles.len(), 2, "a handle per controller");
+        assert!(near(room_centre(&s, &handles[0]), left) && near(room_centre(&s, &handles[1]), right));
+        assert!(handles.iter().all(|h| h.shape == GlyphShape::Cylinder));
+        let [shape, action, size] = palette.expect("the palette is drawn");
+        for g in [&shape, &action] {
+            let p = room_centre(&s, g) - left;
+            assert!((p.y - PALETTE_ABOVE_M).abs() < 1e-5 && (p.z + PALETTE_AHEAD_M).abs() < 1e-5, "{p}");
+        }
+        assert!(room_centre(&s, &size).x > room_centre(&s, &action).x, "beside the left hand, in a row");
+        assert_eq!(shape.shape, GlyphShape::Sphere);
+        assert_eq!(action.colour.truncate(), action_colour(&Action::Remove));
+        assert!((bar_length_m(&s, &size) - 0.024).abs() < 1e-5, "the bar spans the tool's 2.4 cm");
+
+        // The trigger makes the tool more opaque; an untracked hand draws nothing.
+        let out = frame(&mut s, [HandState::default(), HandState { trigger: 1.0, ..hold(right) }]);
+        assert_eq!(out.frame.tools.len(), 1, "no support without the left hand");
+        assert_eq!(out.frame.tools[0].colour.w, 0.6);
+        let (handles, palette) = split_controllers(&out.frame);
+        assert!(handles.len() == 1 && palette.is_none(), "no handle nor palette for the untracked hand");
+        let out = frame(&mut s, [hold(left), HandState::default()]);
+        assert_eq!(out.frame.tools.len(), 1, "only the support");
+        assert_eq!(out.frame.tools[0].shape, GlyphShape::Box);
+        let (handles, palette) = split_controllers(&out.frame);
+        assert!(handles.len() == 1 && palette.is_some());
+
+        // Glyphs follow the sculpture's placement: scaled twice, the room-sized ones keep
+        // their room size, the tool keeps its room size as it acts.
+        let grip = |x: f32| HandState { grip: at(x, 1.3, -0.4), squeeze: 1.0, ..HandState::default() };
+        frame(&mut s, [grip(-0.1), grip(0.1)]);
+        let out = frame(&mut s, [grip(-0.2), grip(0.2)]);
+        assert!((s.placement().scale - 2.0).abs() < 1e-4);
+        let (handles, _) = split_controllers(&out.frame);
+        let end = s.placement().to_stage(handles[1].model.transform_point3(Vec3::Y));
+        assert!(
+            (end.distance(Vec3::new(0.2, 1.3, -0.4)) - super::super::glyphs::HANDLE_HALF_LENGTH_M).abs()
+                < 1e-5
+        );
+        let tool = out.frame.tools[0];
+        let rim = s.placement().to_stage(tool.model.transform_point3(Vec3::X));
+        assert!((rim.distance(Vec3::new(0.2, 1.3, -0.4)) - 0.012).abs() < 1e-5, "the tool's room size");
+    }
+
+    #[test]
+    fn the_palette_follows_the_thumbstick_and_left_handed_it_is_on_the_right_hand() {
+        use crate::render::GlyphShape;
+        let scene = ball();
+        let mut s = sculptor(&scene, false);
+        let left = Vec3::new(-0.1, 1.3, -0.2);
+        let hold = |stick: Vec2, click: bool| HandState {
+            grip: at(0.1, 1.3, -0.2),
+            thumbstick: stick,
+            thumbstick_click: click,
+            ..HandState::default()
+        };
+        let other = HandState { grip: at(left.x, left.y, left.z), ..HandState::default() };
+        let palette = |out: &FrameOutput| split_controllers(&out.frame).1.expect("the palette");
+        let first = palette(&frame(&mut s, [other, hold(Vec2::ZERO, false)]));
+        let bar = bar_length_m(&s, &first[2]);
+        // A flick: the next shape, on the palette and in the hand.
+        frame(&mut s, [other, hold(Vec2::X, false)]);
+        let out = frame(&mut s, [other, hold(Vec2::ZERO, false)]);
+        assert_eq!(palette(&out)[0].shape, GlyphShape::Box);
+        assert_eq!(out.frame.tools[0].shape, GlyphShape::Box);
+        // Two flicks more: a cylinder, then a torus.
+        for expected in [GlyphShape::Cylinder, GlyphShape::Torus { tube: 0.5 }] {
+            frame(&mut s, [other, hold(Vec2::X, false)]);
+            let out = frame(&mut s, [other, hold(Vec2::ZERO, false)]);
+            assert_eq!(palette(&out)[0].shape, expected);
+            assert_eq!(out.frame.tools[0].shape, expected);
+        }
+        // A click: the next action's colour.
+        let out = frame(&mut s, [other, hold(Vec2::ZERO, true)]);
+        let action = s.tool().action;
+        assert_ne!(action, Action::Remove);
+        assert_eq!(palette(&out)[1].colour.truncate(), action_colour(&action));
+        assert_eq!(out.frame.tools[0].colour.truncate(), action_colour(&action));
+        // A second of the stick pushed up doubles the tool, and the bar with it.
+        let sized = s.tool().half_extents_m().max_element();
+        for _ in 0..90 {
+            frame(&mut s, [other, hold(Vec2::Y, false)]);
+        }
+        let out = frame(&mut s, [other, hold(Vec2::ZERO, false)]);
+        let grown = s.tool().half_extents_m().max_element() / sized;
+        assert!((grown - RESIZE_PER_S).abs() < 0.05, "{grown}");
+        let now = bar_length_m(&s, &palette(&out)[2]);
+        assert!((now - 2.0 * s.tool().half_extents_m().max_element()).abs() < 1e-5, "{now}");
+        assert!(now > bar, "{now} > {bar}");
+
+        // Left-handed: the palette is beside the right hand.
+        let mut s = sculptor(&scene, true);
+        let right = Vec3::new(0.1, 1.3, -0.2);
+        let out =
+            frame(&mut s, [other, HandState { grip: at(right.x, right.y, right.z), ..HandState::default() }]);
+        let items = palette(&out);
+        let ahead = room_centre(&s, &items[1]) - right;
+        assert!(ahead.z < -0.05 && ahead.x.abs() < 1e-5, "in front of the right controller: {ahead}");
+        assert!(near(room_centre(&s, &out.frame.tools[0]), left), "the tool is in the left hand");
+    }
+
+    #[test]
+    fn a_support_holding_the_clay_is_drawn_where_it_was_put() {
+        // The headset bend (scenes/tests/xr-bend.toml): scene → room is +(0, 1.32, −0.45).
+        let scene = Scene::parse(
+            "[field]\nvoxel_size_m = 0.003\n[camera]\neye_m = [0.0, 0.04, 0.32]\ntarget_m = [0.0, -0.02, 0.0]\n\
+             [virtual_clay]\nfluidity = 1.0\n\
+             [[clay]]\nshape = \"bar\"\nlength_m = 0.2\nradius_m = 0.012\n\
+             [[tool]]\nname = \"ball\"\nshape = \"sphere\"\nradius_m = 0.012\naction = \"push\"\n\
+             [[tool]]\nname = \"block\"\nshape = \"box\"\nsize_m = [0.08, 0.024, 0.04]\naction = \"support\"\n",
+            "bend",
+            None,
+        )
+        .unwrap();
+        let mut s = sculptor(&scene, false);
+        let put = Vec3::new(-0.056, 1.296, -0.45);
+        let support = |p: Vec3| HandState { grip: at(p.x, p.y, p.z), trigger: 1.0, ..HandState::default() };
+        let push = HandState { grip: at(0.075, 1.348, -0.45), trigger: 1.0, ..HandState::default() };
+        let out = frame(&mut s, [support(put), push]);
+        let block =
+            *out.frame.tools.iter().find(|g| g.shape == crate::render::GlyphShape::Box).expect("the block");
+        assert!(near(room_centre(&s, &block), put));
+        assert_eq!(out.frame.tools[0].colour.truncate(), action_colour(&Action::Push), "the ball pushes");
+        // The hand moves away with the trigger held: the block stays where it was put, the
+        // controller goes with the hand.
+        let away = put + Vec3::new(-0.03, 0.0, 0.0);
+        let out = frame(&mut s, [support(away), push]);
+        let block =
+            *out.frame.tools.iter().find(|g| g.shape == crate::render::GlyphShape::Box).expect("the block");
+        assert!(near(room_centre(&s, &block), put), "{}", room_centre(&s, &block));
+        let (handles, _) = split_controllers(&out.frame);
+        assert!(near(room_centre(&s, &handles[0]), away));
+        // Let go: the block is in the hand again.
+        let out = frame(&mut s, [HandState { trigger: 0.0, ..support(away) }, push]);
+        let block =
+            *out.frame.tools.iter().find(|g| g.shape == crate::render::GlyphShape::Box).expect("the block");
+        assert!(near(room_centre(&s, &block), away));
     }
 }

@@ -42,14 +42,46 @@ pub enum Light {
     },
 }
 
-/// The translucent glyph that shows where a tool is: a unit sphere (radius 1, centred at the
-/// origin) placed by `model` (which carries the tool's size and pose).
+/// The unit shapes a glyph is drawn with, each centred at the origin with half extents 1 (the
+/// renderer makes one small closed mesh of each when it is created).
+///
+/// ```text
+///   Sphere         Box            Cylinder          Torus { tube }
+///   radius 1       [-1, 1]³       radius 1 about Y, ring radius 1 about Y (in XZ),
+///                                 y in [-1, 1]      tube radius `tube`
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GlyphShape {
+    /// The unit ball.
+    Sphere,
+    /// The box `[-1, 1]³`.
+    Box,
+    /// The capped cylinder of radius 1 along Y, from y = −1 to 1.
+    Cylinder,
+    /// The ring of radius 1 around Y, lying in the XZ plane.
+    Torus {
+        /// Radius of the tube, in units of the ring's radius (a tool's minor / major radius).
+        tube: f32,
+    },
+}
+
+/// A translucent glyph: a tool where it acts, a controller, an item of the palette. A unit
+/// [`GlyphShape`] placed by `model` (which carries the size and pose).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ToolGlyph {
-    /// Unit sphere → world.
+    /// The unit shape drawn.
+    pub shape: GlyphShape,
+    /// Unit shape → world.
     pub model: Mat4,
     /// Linear RGBA; alpha is the opacity of the glyph.
     pub colour: Vec4,
+}
+
+impl ToolGlyph {
+    /// A unit sphere placed by `model`.
+    pub fn sphere(model: Mat4, colour: Vec4) -> Self {
+        Self { shape: GlyphShape::Sphere, model, colour }
+    }
 }
 
 /// The workspace box, drawn as a stage: only its back faces (seen from inside), as in
@@ -93,8 +125,12 @@ pub struct Frame {
     pub lights: Vec<Light>,
     /// Clay material.
     pub material: Material,
-    /// Tools to draw translucent, after the opaque clay.
+    /// Tools to draw translucent, after the opaque clay; the stage marks the first
+    /// two with crosshairs.
     pub tools: Vec<ToolGlyph>,
+    /// Controllers and what they carry besides tools (a headset's palette): drawn like the
+    /// tools, after them, and never marked on the stage.
+    pub controllers: Vec<ToolGlyph>,
     /// The workspace stage, if shown.
     pub stage: Option<Stage>,
     /// Whether the environment is drawn as the background (otherwise `background` is).

@@ -19,12 +19,12 @@ use super::gpu::image::{read_layers, record_copy_to_buffer, transition, Image, I
 use super::gpu::instance::Instance;
 use super::gpu::pipeline::{DescriptorPool, Layout, Pipeline, PipelineDesc, PUSH_CONSTANT_BYTES};
 use super::gpu::swapchain::{color_range, surface_extensions, Surface, SwapchainDesc};
-use super::shapes::{full_screen_quad, icosphere, unit_box};
+use super::shapes::{centred_box, full_screen_quad, icosphere, torus_spine, unit_box, unit_cylinder};
 use super::target::{begin_pass, StereoTarget, ViewPass};
 pub use super::target::{ViewPasses, VIEW_PASSES_VARIABLE};
 use super::window::{to_rgba, Presented, WindowHandles, WindowOutput};
 use super::xr_target::{SwapchainImages, SwapchainTarget};
-use super::{Environment, Frame, Light, RenderError, ValidationLog, MAX_LIGHTS};
+use super::{Environment, Frame, GlyphShape, Light, RenderError, ValidationLog, MAX_LIGHTS};
 use crate::math::Vec3;
 use crate::mesh::{MeshDiff, Vertex};
 use crate::stereo::display::{DisplayMode, Parity};
@@ -100,6 +100,8 @@ struct StagePush {
 struct GlyphPush {
     model: [[f32; 4]; 4],
     colour: [f32; 4],
+    /// x: the torus's tube radius (each vertex moves that far along its normal); 0 otherwise.
+    shape: [f32; 4],
 }
 
 const _: () = assert!(std::mem::size_of::<FrameUniforms>() == 640);
@@ -171,6 +173,9 @@ impl ShapeMesh {
 
 struct Shapes {
     sphere: ShapeMesh,
+    glyph_box: ShapeMesh,
+    cylinder: ShapeMesh,
+    torus: ShapeMesh,
     cube: ShapeMesh,
     quad: ShapeMesh,
 }
@@ -260,7 +265,7 @@ pub struct Renderer {
     target: StereoTarget,
     arena_buffers: ArenaBuffers,
     arena: ChunkArena,
-    /// The fixed meshes: glyph sphere, stage box, full-screen quad.
+    /// The fixed meshes: the glyph shapes, stage box, full-screen quad.
     shapes: Shapes,
     uniforms: Buffer,
     readback: Buffer,
@@ -415,6 +420,9 @@ impl Renderer {
 
         let shapes = Shapes {
             sphere: ShapeMesh::new(&device, icosphere(3))?,
+            glyph_box: ShapeMesh::new(&device, centred_box())?,
+            cylinder: ShapeMesh::new(&device, unit_cylinder(32))?,
+            torus: ShapeMesh::new(&device, torus_spine(48, 16))?,
             cube: ShapeMesh::new(&device, unit_box())?,
             quad: ShapeMesh::new(&device, full_screen_quad())?,
         };
@@ -832,13 +840,22 @@ impl Renderer {
             }
             d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, pipelines.background.raw);
             self.draw_shape(cb, &self.shapes.quad);
-            if !frame.tools.is_empty() {
+            if !(frame.tools.is_empty() && frame.controllers.is_empty()) {
                 d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, pipelines.glyph.raw);
-                for tool in &frame.tools {
-                    let push =
-                        GlyphPush { model: tool.model.to_cols_array_2d(), colour: tool.colour.to_array() };
+                for glyph in frame.tools.iter().chain(&frame.controllers) {
+                    let (mesh, tube) = match glyph.shape {
+                        GlyphShape::Sphere => (&self.shapes.sphere, 0.0),
+                        GlyphShape::Box => (&self.shapes.glyph_box, 0.0),
+                        GlyphShape::Cylinder => (&self.shapes.cylinder, 0.0),
+                        GlyphShape::Torus { tube } => (&self.shapes.torus, tube),
+                    };
+                    let push = GlyphPush {
+                        model: glyph.model.to_cols_array_2d(),
+                        colour: glyph.colour.to_array(),
+                        shape: [tube, 0.0, 0.0, 0.0],
+                    };
                     self.push(cb, &push);
-                    self.draw_shape(cb, &self.shapes.sphere);
+                    self.draw_shape(cb, mesh);
                 }
             }
             if self.hud.index_count > 0 {
@@ -1351,6 +1368,7 @@ mod tests {
             lights: Vec::new(),
             material: Default::default(),
             tools: Vec::new(),
+            controllers: Vec::new(),
             stage: None,
             show_environment: true,
             background: Vec3::ZERO,

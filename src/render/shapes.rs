@@ -1,5 +1,5 @@
-//! The fixed meshes the renderer draws besides the clay: the tool glyph's sphere, the stage
-//! box and the background's full-screen quad.
+//! The fixed meshes the renderer draws besides the clay: the glyphs' sphere, box, cylinder and
+//! torus, the stage box and the background's full-screen quad.
 //!
 //! Each is drawn whole from buffers of its own (see `ShapeMesh` in the renderer).
 
@@ -107,6 +107,85 @@ pub(crate) fn unit_box() -> (Vec<Vertex>, Vec<u32>) {
     (vertices, indices)
 }
 
+/// The box `[-1, 1]³` (the glyph box: half extents 1, centred like every glyph shape).
+pub(crate) fn centred_box() -> (Vec<Vertex>, Vec<u32>) {
+    let (mut vertices, indices) = unit_box();
+    for v in &mut vertices {
+        v.position = v.position.map(|x| 2.0 * x - 1.0);
+    }
+    (vertices, indices)
+}
+
+/// The capped cylinder of radius 1 along Y, `y` in [-1, 1], with `segments` sides: smooth
+/// normals on the side, flat ones on the caps; counter-clockwise seen from outside.
+pub(crate) fn unit_cylinder(segments: u32) -> (Vec<Vertex>, Vec<u32>) {
+    let vertex = |p: Vec3, n: Vec3| Vertex { position: p.to_array(), normal: n.to_array(), colour: [1.0; 4] };
+    let ring = |k: u32| {
+        let a = std::f32::consts::TAU * k as f32 / segments as f32;
+        Vec3::new(a.cos(), 0.0, -a.sin())
+    };
+    let mut vertices = Vec::new();
+    let mut indices = Vec::new();
+    // The side: a bottom and a top vertex per segment boundary (the seam repeats, `segments + 1`).
+    for k in 0..=segments {
+        let r = ring(k);
+        vertices.push(vertex(r - Vec3::Y, r));
+        vertices.push(vertex(r + Vec3::Y, r));
+    }
+    for k in 0..segments {
+        let (b0, t0, b1, t1) = (2 * k, 2 * k + 1, 2 * k + 2, 2 * k + 3);
+        indices.extend([b0, b1, t1, b0, t1, t0]);
+    }
+    // The caps: a fan around a centre vertex each.
+    for y in [1.0f32, -1.0] {
+        let normal = Vec3::Y * y;
+        let centre = vertices.len() as u32;
+        vertices.push(vertex(normal, normal));
+        for k in 0..segments {
+            vertices.push(vertex(ring(k) + normal, normal));
+        }
+        for k in 0..segments {
+            let (a, b) = (centre + 1 + k, centre + 1 + (k + 1) % segments);
+            indices.extend(if y > 0.0 { [centre, a, b] } else { [centre, b, a] });
+        }
+    }
+    (vertices, indices)
+}
+
+/// The spine of the torus around Y of ring radius 1: each vertex lies on the unit ring in the
+/// XZ plane and its normal points from there across the tube, so that `position + t·normal`
+/// is the torus of tube radius `t` (the glyph vertex shader adds it, so one mesh draws every
+/// tube/ring ratio). `ring` segments around Y, `tube` around the tube; counter-clockwise seen
+/// from outside.
+///
+/// ```text
+///        Y                       ring point r(θ) = (cos θ, 0, −sin θ)
+///        │   ╭──╮    ╭──╮        tube normal n(θ, φ) = cos φ · r(θ) + sin φ · Y
+///     ───┼───○──┼────○──┼──►     vertex = r(θ) + t · n(θ, φ)
+///        │   ╰──╯    ╰──╯
+/// ```
+pub(crate) fn torus_spine(ring: u32, tube: u32) -> (Vec<Vertex>, Vec<u32>) {
+    let mut vertices = Vec::with_capacity((ring * tube) as usize);
+    for i in 0..ring {
+        let theta = std::f32::consts::TAU * i as f32 / ring as f32;
+        let r = Vec3::new(theta.cos(), 0.0, -theta.sin());
+        for j in 0..tube {
+            let phi = std::f32::consts::TAU * j as f32 / tube as f32;
+            let n = phi.cos() * r + phi.sin() * Vec3::Y;
+            vertices.push(Vertex { position: r.to_array(), normal: n.to_array(), colour: [1.0; 4] });
+        }
+    }
+    let at = |i: u32, j: u32| (i % ring) * tube + j % tube;
+    let mut indices = Vec::with_capacity((6 * ring * tube) as usize);
+    for i in 0..ring {
+        for j in 0..tube {
+            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+            indices.extend([a, b, c, a, c, d]);
+        }
+    }
+    (vertices, indices)
+}
+
 /// A quad exactly covering clip space, corners at (±1, ±1) in normalised device coordinates.
 pub(crate) fn full_screen_quad() -> (Vec<Vertex>, Vec<u32>) {
     let vertices = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]].map(|[x, y]| Vertex {
@@ -155,6 +234,61 @@ mod tests {
             assert!(p.iter().all(|q| ((*q - centre).dot(normal) - 0.5).abs() < 1e-6), "on the face {normal}");
         }
         assert!((area - 6.0).abs() < 1e-4, "six unit faces, no overlap: area {area}");
+    }
+
+    /// Welds `vertices` by position (after `offset`, the torus's tube) and checks that every
+    /// edge is used once each way (closed and consistently oriented); returns the signed
+    /// volume, positive when the faces turn counter-clockwise seen from outside.
+    fn closed_volume((v, i): &(Vec<Vertex>, Vec<u32>), offset: f32) -> f32 {
+        let at = |k: u32| {
+            let x = &v[k as usize];
+            Vec3::from(x.position) + offset * Vec3::from(x.normal)
+        };
+        let key = |p: Vec3| (p * 1e4).round().as_ivec3().to_array();
+        let mut edges: HashMap<([i32; 3], [i32; 3]), i32> = HashMap::new();
+        let mut volume = 0.0;
+        for t in i.chunks(3) {
+            let p = [at(t[0]), at(t[1]), at(t[2])];
+            volume += p[0].dot(p[1].cross(p[2])) / 6.0;
+            for e in 0..3 {
+                let (a, b) = (key(p[e]), key(p[(e + 1) % 3]));
+                if a < b {
+                    *edges.entry((a, b)).or_default() += 1;
+                } else {
+                    *edges.entry((b, a)).or_default() -= 1;
+                }
+            }
+        }
+        assert!(edges.values().all(|&c| c == 0), "every edge used once each way: closed and oriented");
+        volume
+    }
+
+    #[test]
+    fn the_glyph_shapes_are_closed_outward_meshes_of_their_unit_size() {
+        let sphere = closed_volume(&icosphere(3), 0.0);
+        assert!((sphere - 4.0 / 3.0 * std::f32::consts::PI).abs() < 0.05, "sphere volume {sphere}");
+        let cube = centred_box();
+        assert!((closed_volume(&cube, 0.0) - 8.0).abs() < 1e-5, "the box [-1, 1]³");
+        assert!(cube.0.iter().all(|x| x.position.iter().all(|c| c.abs() == 1.0)));
+        let cylinder = unit_cylinder(32);
+        let expected = 2.0 * 16.0 * (std::f32::consts::TAU / 32.0).sin();
+        assert!((closed_volume(&cylinder, 0.0) - expected).abs() < 1e-4, "the 32-gon prism, height 2");
+        for x in &cylinder.0 {
+            let [px, py, pz] = x.position;
+            assert!(((px * px + pz * pz).sqrt() - 1.0).abs() < 1e-6 || py.abs() == 1.0);
+            assert!(py.abs() <= 1.0);
+        }
+        let torus = torus_spine(48, 16);
+        for tube in [0.25f32, 0.5] {
+            let volume = closed_volume(&torus, tube);
+            let exact = 2.0 * std::f32::consts::PI.powi(2) * tube * tube;
+            assert!((volume / exact - 1.0).abs() < 0.05, "tube {tube}: volume {volume}, exact {exact}");
+        }
+        for x in &torus.0 {
+            let p = Vec3::from(x.position);
+            assert!((p.length() - 1.0).abs() < 1e-6 && p.y == 0.0, "the spine is the unit ring");
+            assert!((Vec3::from(x.normal).length() - 1.0).abs() < 1e-6);
+        }
     }
 
     #[test]

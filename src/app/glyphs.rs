@@ -1,0 +1,270 @@
+//! How tools, controllers and a headset's palette are drawn: the glyph of a tool's own shape at
+//! its pose and size, a colour per action, a controller's handle, and the palette beside the
+//! hand that holds no tool.
+//!
+//! A tool is drawn as the renderer's glyph shape that matches it:
+//!
+//! | tool shape | glyph |
+//! | --- | --- |
+//! | sphere, ellipsoid (either falloff) | sphere scaled to its radii (the influence region) |
+//! | box, rounded box | box of its half sizes (the rounding is not drawn) |
+//! | cylinder | cylinder |
+//! | torus | torus of the same ring and tube radii |
+//! | bar (capsule along X) | cylinder along X over its whole length (flat ends) |
+//! | freeform | its bounding box (the region of clay it was copied from) |
+//!
+//! Controllers and the palette are sized in room metres; [`XrSculptor`] takes them into the
+//! scene with the sculpture's placement.
+//!
+//! ```text
+//!   palette, seen from above the hand that holds no tool (grip frame: −Z forward, +X right)
+//!
+//!        shape   action   size bar (its length: the tool's largest extent)
+//!        ( ◇ )    (●)     ══════════►  +X
+//!                  ▲  PALETTE_AHEAD_M in front of the grip, PALETTE_ABOVE_M above it
+//!                ┌─┴─┐
+//!                │   │  handle: a slim cylinder along the grip's Z axis
+//!                └───┘
+//! ```
+//!
+//! [`XrSculptor`]: super::XrSculptor
+
+use std::f32::consts::FRAC_PI_2;
+
+use crate::math::{Mat4, Pose, Vec3, Vec4};
+use crate::render::{GlyphShape, ToolGlyph};
+use crate::tool::{Action, Solid, Tool, ToolShape};
+
+/// A controller's handle: radius and half length, room metres.
+pub const HANDLE_RADIUS_M: f32 = 0.012;
+/// Half the length of a controller's handle along the grip's Z axis, room metres.
+pub const HANDLE_HALF_LENGTH_M: f32 = 0.055;
+/// A controller's colour (linear RGB) and opacity.
+pub const HANDLE_COLOUR: Vec4 = Vec4::new(0.1, 0.1, 0.12, 0.7);
+/// How far in front of the grip (along its −Z) the palette is, room metres.
+pub const PALETTE_AHEAD_M: f32 = 0.08;
+/// How far above the grip (along its +Y) the palette is, room metres.
+pub const PALETTE_ABOVE_M: f32 = 0.03;
+/// Distance between the palette's items along the grip's X axis, room metres.
+pub const PALETTE_STEP_M: f32 = 0.03;
+/// The largest half extent of the palette's shape item, room metres.
+pub const PALETTE_SHAPE_M: f32 = 0.011;
+/// Radius of the palette's action swatch, room metres.
+pub const PALETTE_SWATCH_M: f32 = 0.008;
+/// Radius of the palette's size bar, room metres.
+pub const PALETTE_BAR_RADIUS_M: f32 = 0.0025;
+/// The shortest and longest size bar, room metres (its length is the tool's largest extent).
+pub const PALETTE_BAR_RANGE_M: (f32, f32) = (0.004, 0.15);
+/// The colour and opacity of the palette's shape and size items.
+pub const PALETTE_COLOUR: Vec4 = Vec4::new(0.85, 0.85, 0.82, 0.8);
+
+/// The glyph of a tool of `shape` scaled by `scale` along its local axes at `pose` (see the
+/// module's table), in `colour`.
+pub fn tool_glyph(shape: &ToolShape, pose: Pose, scale: Vec3, colour: Vec4) -> ToolGlyph {
+    let placed =
+        |glyph: GlyphShape, local: Mat4| ToolGlyph { shape: glyph, model: pose.to_matrix() * local, colour };
+    let half = shape.half_extents_m() * scale;
+    match shape {
+        ToolShape::Solid(Solid::Sphere { .. }) | ToolShape::Ellipsoid(_) => {
+            placed(GlyphShape::Sphere, Mat4::from_scale(half))
+        }
+        ToolShape::Solid(Solid::Box { .. } | Solid::RoundedBox { .. }) | ToolShape::Freeform(_) => {
+            placed(GlyphShape::Box, Mat4::from_scale(half))
+        }
+        ToolShape::Solid(Solid::Cylinder { .. }) => placed(GlyphShape::Cylinder, Mat4::from_scale(half)),
+        ToolShape::Solid(Solid::Torus { major_m, minor_m }) => placed(
+            GlyphShape::Torus { tube: minor_m / major_m.max(f32::MIN_POSITIVE) },
+            Mat4::from_scale(scale * *major_m),
+        ),
+        // The unit cylinder turned from Y onto X, then stretched to the bar's half sizes.
+        ToolShape::Solid(Solid::Bar { .. }) => {
+            placed(GlyphShape::Cylinder, Mat4::from_scale(half) * Mat4::from_rotation_z(-FRAC_PI_2))
+        }
+    }
+}
+
+/// The colour (linear RGB) a headset shows an action in: on the tool and on the palette.
+pub fn action_colour(action: &Action) -> Vec3 {
+    let rgb = match action {
+        Action::Add => [0.25, 0.8, 0.3],
+        Action::Remove => [0.9, 0.2, 0.15],
+        Action::SoftRemove { .. } => [0.95, 0.5, 0.1],
+        Action::Build { .. } => [0.2, 0.75, 0.75],
+        Action::Paint => [0.85, 0.3, 0.9],
+        Action::SoftPaint { .. } => [0.95, 0.6, 0.8],
+        Action::Smooth { .. } => [0.35, 0.55, 1.0],
+        Action::Stamp { .. } => [0.95, 0.85, 0.2],
+        Action::Inflate { .. } => [0.65, 1.0, 0.45],
+        Action::Deflate { .. } => [0.5, 0.3, 0.8],
+        Action::Push => [0.9, 0.9, 0.95],
+        Action::Support => [0.45, 0.5, 0.6],
+    };
+    Vec3::from(rgb)
+}
+
+/// A controller held at `grip` (room): its handle, a slim cylinder along the grip's Z axis
+/// (OpenXR's grip space runs −Z forward through the closed hand), centred on the grip.
+pub fn controller_glyph(grip: Pose) -> ToolGlyph {
+    let along_z = Mat4::from_rotation_x(FRAC_PI_2);
+    let size = Vec3::new(HANDLE_RADIUS_M, HANDLE_HALF_LENGTH_M, HANDLE_RADIUS_M);
+    ToolGlyph {
+        shape: GlyphShape::Cylinder,
+        model: grip.to_matrix() * along_z * Mat4::from_scale(size),
+        colour: HANDLE_COLOUR,
+    }
+}
+
+/// The palette beside the hand at `grip` (room) for the tool the other hand holds, `tool`
+/// (room sizes): `[shape, action, size]`, in a row along the grip's X axis in front of the
+/// controller. The shape item is the tool's own shape shrunk to [`PALETTE_SHAPE_M`], the
+/// action item a ball in [`action_colour`], the size item a bar along X as long as the tool's
+/// largest extent (clamped to [`PALETTE_BAR_RANGE_M`]).
+pub fn palette(grip: Pose, tool: &Tool) -> [ToolGlyph; 3] {
+    let slot = |x: f32| Pose {
+        position_m: grip.position_m + grip.rotation * Vec3::new(x, PALETTE_ABOVE_M, -PALETTE_AHEAD_M),
+        rotation: grip.rotation,
+    };
+    let largest = tool.half_extents_m().max_element().max(f32::MIN_POSITIVE);
+    let shape = tool_glyph(
+        &tool.shape,
+        slot(-PALETTE_STEP_M),
+        tool.scale * (PALETTE_SHAPE_M / largest),
+        PALETTE_COLOUR,
+    );
+    let swatch = ToolGlyph::sphere(
+        slot(0.0).to_matrix() * Mat4::from_scale(Vec3::splat(PALETTE_SWATCH_M)),
+        action_colour(&tool.action).extend(0.9),
+    );
+    let (shortest, longest) = PALETTE_BAR_RANGE_M;
+    let length = (2.0 * largest).clamp(shortest, longest);
+    let bar = ToolGlyph {
+        shape: GlyphShape::Cylinder,
+        model: slot(PALETTE_STEP_M + 0.5 * length).to_matrix()
+            * Mat4::from_rotation_z(-FRAC_PI_2)
+            * Mat4::from_scale(Vec3::new(PALETTE_BAR_RADIUS_M, 0.5 * length, PALETTE_BAR_RADIUS_M)),
+        colour: PALETTE_COLOUR,
+    };
+    [shape, swatch, bar]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Quat;
+    use crate::tool::{Ellipsoid, Falloff};
+
+    fn at(x: f32) -> Pose {
+        Pose { position_m: Vec3::new(x, 0.0, 0.0), rotation: Quat::from_rotation_y(0.4) }
+    }
+
+    /// Where the glyph takes a local point of its unit shape.
+    fn local(g: &ToolGlyph, p: Vec3) -> Vec3 {
+        g.model.transform_point3(p)
+    }
+
+    #[test]
+    fn each_tool_shape_is_drawn_as_its_own_shape_and_size() {
+        let white = Vec4::ONE;
+        let scale = Vec3::new(1.0, 2.0, 1.0);
+        let pose = at(0.1);
+        let world = |p: Vec3| pose.position_m + pose.rotation * p;
+        let close = |a: Vec3, b: Vec3| (a - b).length() < 1e-6;
+
+        let sphere = tool_glyph(&ToolShape::sphere(0.01), pose, scale, white);
+        assert_eq!(sphere.shape, GlyphShape::Sphere);
+        assert_eq!(
+            sphere.model,
+            pose.to_matrix() * Mat4::from_scale(Vec3::new(0.01, 0.02, 0.01)),
+            "as before"
+        );
+
+        let cube = ToolShape::Solid(Solid::Box { half_m: Vec3::new(0.01, 0.02, 0.03) });
+        let g = tool_glyph(&cube, pose, scale, white);
+        assert_eq!(g.shape, GlyphShape::Box);
+        assert!(close(local(&g, Vec3::ONE), world(Vec3::new(0.01, 0.04, 0.03))), "the corner");
+
+        let cylinder = ToolShape::Solid(Solid::Cylinder { radius_m: 0.01, half_height_m: 0.03 });
+        let g = tool_glyph(&cylinder, pose, scale, white);
+        assert_eq!(g.shape, GlyphShape::Cylinder);
+        assert!(close(local(&g, Vec3::new(1.0, 1.0, 0.0)), world(Vec3::new(0.01, 0.06, 0.0))));
+
+        let torus = ToolShape::Solid(Solid::Torus { major_m: 0.02, minor_m: 0.005 });
+        let g = tool_glyph(&torus, pose, Vec3::ONE, white);
+        assert_eq!(g.shape, GlyphShape::Torus { tube: 0.25 });
+        assert!(close(local(&g, Vec3::X * 1.25), world(Vec3::X * 0.025)), "the outer rim");
+
+        let bar = ToolShape::Solid(Solid::Bar { half_length_m: 0.05, radius_m: 0.01 });
+        let g = tool_glyph(&bar, pose, Vec3::ONE, white);
+        assert_eq!(g.shape, GlyphShape::Cylinder);
+        assert!(close(local(&g, Vec3::Y), world(Vec3::X * 0.05)), "the cylinder's axis lies along the bar");
+        assert!(
+            close(local(&g, Vec3::X), world(Vec3::Y * 0.01))
+                || close(local(&g, Vec3::X), world(-Vec3::Y * 0.01))
+        );
+
+        let soft = ToolShape::Ellipsoid(Ellipsoid {
+            radii_m: Vec3::new(0.02, 0.01, 0.01),
+            falloff: Falloff::Wyvill,
+        });
+        let g = tool_glyph(&soft, pose, Vec3::ONE, white);
+        assert_eq!(g.shape, GlyphShape::Sphere);
+        assert!(close(local(&g, Vec3::X), world(Vec3::X * 0.02)), "the radii");
+    }
+
+    #[test]
+    fn actions_have_distinct_colours() {
+        let actions = [
+            Action::Add,
+            Action::Remove,
+            Action::SoftRemove { rate_per_s: 1.0 },
+            Action::Build { rate_per_s: 1.0 },
+            Action::Paint,
+            Action::SoftPaint { rate_per_s: 1.0 },
+            Action::Smooth { centre_weight: 6.0, rate_per_s: 1.0 },
+            Action::Inflate { speed_m_per_s: 0.01 },
+            Action::Deflate { speed_m_per_s: 0.01 },
+            Action::Push,
+            Action::Support,
+        ];
+        for (i, a) in actions.iter().enumerate() {
+            for b in &actions[i + 1..] {
+                let d = (action_colour(a) - action_colour(b)).abs().max_element();
+                assert!(d >= 0.1, "{} and {} look alike", a.name(), b.name());
+            }
+        }
+    }
+
+    #[test]
+    fn the_handle_lies_along_the_grip_z_axis_and_the_palette_in_front_of_the_controller() {
+        let grip = at(0.3);
+        let h = controller_glyph(grip);
+        assert_eq!(h.shape, GlyphShape::Cylinder);
+        let end = h.model.transform_point3(Vec3::Y);
+        let axis = grip.rotation * Vec3::Z;
+        assert!((end - grip.position_m).dot(axis).abs() > HANDLE_HALF_LENGTH_M - 1e-6, "{end}");
+
+        let tool = Tool::new(ToolShape::sphere(0.02), Action::Remove, [1.0; 4]);
+        let [shape, swatch, bar] = palette(grip, &tool);
+        let ahead = |g: &ToolGlyph| grip.world_to_local(g.model.w_axis.truncate());
+        for g in [&shape, &swatch] {
+            let p = ahead(g);
+            assert!((p.z + PALETTE_AHEAD_M).abs() < 1e-6 && (p.y - PALETTE_ABOVE_M).abs() < 1e-6, "{p}");
+        }
+        assert!(ahead(&shape).x < ahead(&swatch).x && ahead(&swatch).x < ahead(&bar).x, "in a row along X");
+        assert_eq!(swatch.colour.truncate(), action_colour(&Action::Remove));
+        // The bar is as long as the tool's diameter (4 cm), along the grip's X axis.
+        let (a, b) = (bar.model.transform_point3(-Vec3::Y), bar.model.transform_point3(Vec3::Y));
+        let along = grip.rotation.inverse() * (b - a);
+        assert!((along.length() - 0.04).abs() < 1e-6 && along.x.abs() > 0.04 - 1e-6, "{along}");
+        // The shape item is the tool's shape, small.
+        assert_eq!(shape.shape, GlyphShape::Sphere);
+        assert!((shape.model.x_axis.truncate().length() - PALETTE_SHAPE_M).abs() < 1e-7);
+        // A torus shows as a torus; a huge tool's bar stops at the longest.
+        let mut ring =
+            Tool::new(ToolShape::Solid(Solid::Torus { major_m: 0.02, minor_m: 0.01 }), Action::Add, [1.0; 4]);
+        ring.scale = Vec3::splat(10.0);
+        let [shape, _, bar] = palette(grip, &ring);
+        assert_eq!(shape.shape, GlyphShape::Torus { tube: 0.5 });
+        assert!((bar.model.y_axis.truncate().length() - 0.5 * PALETTE_BAR_RANGE_M.1).abs() < 1e-6);
+    }
+}
