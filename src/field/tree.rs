@@ -363,6 +363,69 @@ impl Field {
         changes: impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool,
         mut edit: impl FnMut(IVec3, &mut f32, &mut Colour),
     ) {
+        self.edit_bricks(lo, hi, create, changes, |brick, base, a, b, mut fresh| {
+            for z in a.z..=b.z {
+                for y in a.y..=b.y {
+                    for x in a.x..=b.x {
+                        let local = IVec3::new(x, y, z);
+                        let i = Brick::linear(local);
+                        let mut colour = brick.colour[i];
+                        edit(base + local, &mut brick.density[i], &mut colour);
+                        // An empty sample's colour means nothing: it is not stored.
+                        if brick.density[i] > 0.0 {
+                            if fresh {
+                                brick.colour = BrickColours::Uniform(colour);
+                                fresh = false;
+                            } else {
+                                brick.colour.set(i, colour);
+                            }
+                        }
+                    }
+                }
+            }
+        });
+    }
+
+    /// [`Field::edit_region`] for edits that only lower or reshape the matter where it is and
+    /// leave its colour alone (carving): `edit(point, density)` sees no colour, so the walk
+    /// neither reads nor writes one, and no brick is created.
+    pub fn edit_density(
+        &mut self,
+        lo: IVec3,
+        hi: IVec3,
+        reaches: impl Fn(IVec3, IVec3) -> bool,
+        mut edit: impl FnMut(IVec3, &mut f32),
+    ) {
+        self.edit_bricks(
+            lo,
+            hi,
+            false,
+            |a, b, _| reaches(a, b),
+            |brick, base, a, b, _| {
+                for z in a.z..=b.z {
+                    for y in a.y..=b.y {
+                        let row = Brick::linear(IVec3::new(0, y, z));
+                        for x in a.x..=b.x {
+                            edit(base + IVec3::new(x, y, z), &mut brick.density[row + x as usize]);
+                        }
+                    }
+                }
+            },
+        );
+    }
+
+    /// The brick walk under every edit: for each brick of `lo ..= hi` that `changes`, records
+    /// it for undo, copies it if shared, lets `samples(brick, base, a, b, fresh)` edit its
+    /// points `base + (a ..= b)` (`fresh`: the brick was made for this edit), then drops it if
+    /// empty, shares it as a tile if uniform, and keeps its density range.
+    fn edit_bricks(
+        &mut self,
+        lo: IVec3,
+        hi: IVec3,
+        create: bool,
+        changes: impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool,
+        mut samples: impl FnMut(&mut Brick, IVec3, IVec3, IVec3, bool),
+    ) {
         if lo.cmpgt(hi).any() {
             return;
         }
@@ -383,8 +446,8 @@ impl Field {
                     }
                     // A brick made by this edit holds no matter yet: its colour is that of the
                     // first matter the edit puts in it.
-                    let mut fresh = !self.bricks.contains_key(&key);
-                    // Copies the brick if the history or the journal shares it.
+                    let fresh = !self.bricks.contains_key(&key);
+                    // Copies the brick if the history, the journal or a tile shares it.
                     let brick = if create {
                         Arc::make_mut(self.bricks.entry(key).or_default())
                     } else {
@@ -393,38 +456,24 @@ impl Field {
                             None => continue,
                         }
                     };
-                    for z in a.z..=b.z {
-                        for y in a.y..=b.y {
-                            for x in a.x..=b.x {
-                                let local = IVec3::new(x, y, z);
-                                let i = Brick::linear(local);
-                                let mut colour = brick.colour[i];
-                                edit(base + local, &mut brick.density[i], &mut colour);
-                                // An empty sample's colour means nothing: it is not stored.
-                                if brick.density[i] > 0.0 {
-                                    if fresh {
-                                        brick.colour = BrickColours::Uniform(colour);
-                                        fresh = false;
-                                    } else {
-                                        brick.colour.set(i, colour);
-                                    }
-                                }
-                            }
-                        }
-                    }
+                    samples(brick, base, a, b, fresh);
                     brick.compact();
                     let range = density_range(brick);
                     if range.1 == 0.0 {
                         self.bricks.remove(&key);
                         self.ranges.remove(&key);
-                    } else if let Some(value) = brick.uniform_value() {
-                        let edited = self.bricks[&key].clone();
-                        let tile = self.tile(value, edited);
-                        self.bricks.insert(key, tile);
-                        self.ranges.insert(key, range);
-                    } else {
-                        self.ranges.insert(key, range);
+                        continue;
                     }
+                    // One density everywhere (the range says so without another pass) and one
+                    // colour: a constant tile.
+                    if let (true, &BrickColours::Uniform(colour)) =
+                        (range.0.to_bits() == range.1.to_bits(), &brick.colour)
+                    {
+                        let edited = self.bricks[&key].clone();
+                        let tile = self.tile((range.0, colour), edited);
+                        self.bricks.insert(key, tile);
+                    }
+                    self.ranges.insert(key, range);
                 }
             }
         }
@@ -534,6 +583,34 @@ mod tests {
         assert_eq!(f.tile_count(), 7);
         let painted = f.brick(IVec3::ZERO).unwrap();
         assert_eq!(painted.heap_bytes(), BRICK_VOLUME * 20, "two colours of matter: per-sample colours");
+    }
+
+    #[test]
+    fn carving_density_alone_equals_carving_through_the_colour_walk() {
+        let (red, blue) = ([1.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1.0, 1.0]);
+        let mut f = Field::new(0.001, 0.5);
+        f.edit_box(IVec3::splat(-8), IVec3::splat(23), true, |p, d, c| {
+            *d = 1.0;
+            *c = if p.x < 4 { red } else { blue };
+        });
+        let carve = |p: IVec3| ((p.x - 6).pow(2) + (p.y - 2).pow(2) + p.z.pow(2)) as f32 / 100.0;
+        let reaches = |a: IVec3, _: IVec3| a.x < 8;
+        let mut walked = f.clone();
+        walked.begin_stroke();
+        walked
+            .edit_region(IVec3::splat(-8), IVec3::splat(23), false, reaches, |p, d, _| *d = d.min(carve(p)));
+        walked.end_stroke();
+        f.begin_stroke();
+        f.edit_density(IVec3::splat(-8), IVec3::splat(23), reaches, |p, d| *d = d.min(carve(p)));
+        f.end_stroke();
+        assert!(f.same_samples(&walked));
+        assert_eq!((f.brick_count(), f.tile_count()), (walked.brick_count(), walked.tile_count()));
+        assert_eq!(f.density(IVec3::new(6, 2, 0)), 0.0);
+        assert_eq!((f.colour(IVec3::new(3, 9, 9)), f.colour(IVec3::new(5, 9, 9))), (red, blue));
+        assert_eq!(f.density(IVec3::new(9, 2, 0)), 1.0, "bricks beyond the reach are not walked");
+        f.undo().unwrap();
+        walked.undo().unwrap();
+        assert!(f.same_samples(&walked));
     }
 
     #[test]

@@ -110,7 +110,7 @@ pub fn stamp_sphere(
                 }
             },
         ),
-        Action::Remove => field.edit_region(lo, hi, false, reaches, |p, d, _| {
+        Action::Remove => field.edit_density(lo, hi, reaches, |p, d| {
             *d = d.min(1.0 - tool_at(p));
         }),
         other => {
@@ -160,11 +160,16 @@ pub fn rasterize_solid(field: &mut Field, solid: &PlacedSolid, op: CsgOp, colour
             mix_in(c, *d, new, colour);
             *d = new;
         }),
-        CsgOp::Difference => field.edit_box(lo, hi, false, |p, d, _| {
-            let world = transform.index_to_world(p.as_vec3());
-            let s = solid_density(solid.signed_distance(world) * inv_h);
-            *d = d.min(1.0 - s);
-        }),
+        CsgOp::Difference => field.edit_density(
+            lo,
+            hi,
+            |_, _| true,
+            |p, d| {
+                let world = transform.index_to_world(p.as_vec3());
+                let s = solid_density(solid.signed_distance(world) * inv_h);
+                *d = d.min(1.0 - s);
+            },
+        ),
     }
 }
 
