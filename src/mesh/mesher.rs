@@ -184,6 +184,11 @@ impl Mesher {
     pub fn remesh<I: IntoIterator<Item = BrickKey>>(&mut self, field: &Field, keys: I) -> &MeshDiff {
         self.begin();
         self.keys.extend(keys);
+        self.remesh_keys(field)
+    }
+
+    /// [`Self::remesh`] of the keys gathered in `keys`.
+    fn remesh_keys(&mut self, field: &Field) -> &MeshDiff {
         // A fixed order makes diffs (and so draw order and images) reproducible.
         self.keys.sort_unstable_by_key(|k| k.to_array());
         self.keys.dedup();
@@ -251,10 +256,12 @@ impl Mesher {
         &self.diff
     }
 
-    /// Meshes the bricks the field marked dirty since the last call, draining its dirty set.
+    /// Meshes the bricks the field marked dirty since the last call, draining its dirty set
+    /// (which keeps its memory: marking and re-meshing allocate nothing once both have grown).
     pub fn remesh_dirty(&mut self, field: &mut Field) -> &MeshDiff {
-        let dirty = field.take_dirty();
-        self.remesh(field, dirty)
+        self.begin();
+        self.keys.extend(field.drain_dirty());
+        self.remesh_keys(field)
     }
 
     /// The diff of the last call, left empty here (its vectors are then not reused).
