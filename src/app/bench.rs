@@ -10,7 +10,7 @@ use super::frame::build_frame;
 use super::playback::Playback;
 use crate::field::Field;
 use crate::math::{IVec3, Vec3};
-use crate::mesh::{mesh_all, remesh_dirty, ChunkMesh, MeshDiff};
+use crate::mesh::{mesh_all, ChunkMesh, MeshDiff, Mesher};
 use crate::render::ViewPasses;
 use crate::scene::Scene;
 use crate::stereo::display::{DisplayMode, Parity};
@@ -175,12 +175,14 @@ fn stroke_into(
 ) -> (f64, usize) {
     let voxel = field.transform().voxel_size_m;
     let mut triangles = 0;
+    // One mesher for the stroke, as the station keeps: its buffers are reused.
+    let mut mesher = Mesher::default();
     let begin = Instant::now();
     for i in 0..n {
         let centre = (start + Vec3::new(i as f32 * 0.5 * r, 0.0, 0.0)) * voxel;
         stamp_sphere(field, centre, r * voxel, action, [0.7, 0.4, 0.2, 1.0]);
         if remesh {
-            triangles += remesh_dirty(field).upserted_triangles();
+            triangles += mesher.remesh_dirty(field).upserted_triangles();
         }
     }
     (begin.elapsed().as_secs_f64() * 1e6 / n as f64, triangles)
@@ -316,7 +318,9 @@ fn bench_remesh_stamp(size: BenchSize, emit: &mut impl FnMut(Value)) {
     let radius = size.sphere_radius_voxels;
     for r in [4.0f32, 8.0, 16.0, 32.0] {
         let mut field = sphere_field(radius);
-        let _ = mesh_all(&field);
+        // One mesher for the stroke, as the station keeps: its buffers are reused.
+        let mut mesher = Mesher::default();
+        let _ = mesher.mesh_all(&field);
         field.take_dirty();
         let stamps = size.stamps.min(100);
         let mut times = Vec::with_capacity(stamps);
@@ -330,7 +334,7 @@ fn bench_remesh_stamp(size: BenchSize, emit: &mut impl FnMut(Value)) {
             stamp_sphere(&mut field, centre, r * 0.001, Action::Remove, [0.0; 4]);
             bricks += field.dirty().len();
             let t = Instant::now();
-            let diff = remesh_dirty(&mut field);
+            let diff = mesher.remesh_dirty(&mut field);
             times.push(t.elapsed().as_secs_f64() * 1e6);
             std::hint::black_box(diff);
         }

@@ -12,7 +12,7 @@ use super::playback::Playback;
 use crate::field::Field;
 use crate::io::autosave::AutosaveConfig;
 use crate::io::write_atomically;
-use crate::mesh::{mesh_all, remesh_dirty};
+use crate::mesh::{mesh_all, Mesher};
 use crate::render::{Renderer, RendererDesc, StereoImage, ViewPasses};
 use crate::scene::Scene;
 use crate::stereo::display::DisplayMode;
@@ -144,11 +144,12 @@ fn render_over(
 
     let end = scene.captures.last().map_or(0.0, |c| c.time_s);
     let bar = progress_bar(options.progress && end > 0.0, end);
+    let mut mesher = Mesher::default();
     let mut written = Vec::with_capacity(scene.captures.len());
     for capture in &scene.captures {
         playback.advance_to(capture.time_s, |t| bar.set_position((t * 1000.0) as u64));
-        let diff = remesh_dirty(playback.field_mut());
-        renderer.apply(&diff)?;
+        let diff = mesher.remesh_dirty(playback.field_mut());
+        renderer.apply(diff)?;
         let mut frame = build_frame(&viewed, &playback.hands(), capture.show_tools);
         if let (Some(head), Some(rig)) = (&viewed.head, viewed.head_tracked_rig()) {
             frame.views = rig.views(&head.pose_at(capture.time_s));

@@ -42,7 +42,7 @@ use crate::input::settings::InputSettings;
 use crate::input::spacenav::{Protocol, SpacenavSource, DEFAULT_SOCKET};
 use crate::io::autosave::{Autosave, AutosaveConfig};
 use crate::math::{Pose, Quat, Vec2, Vec3, Vec4};
-use crate::mesh::remesh_dirty;
+use crate::mesh::Mesher;
 use crate::render::{Light, Presented, Renderer, RendererDesc, ValidationLog};
 use crate::scene::ScreenCalibration;
 use crate::scene::{line_column, FileError, Scene};
@@ -468,6 +468,8 @@ pub struct Station<'s> {
     times: StepTimes,
     /// Messages for the user (saved, undo had nothing, ...).
     pub messages: Vec<String>,
+    /// Re-meshes what each frame's edits dirtied, reusing its buffers from frame to frame.
+    mesher: Mesher,
 }
 
 impl<'s> Station<'s> {
@@ -551,6 +553,7 @@ impl<'s> Station<'s> {
             frame_ms: 0.0,
             times: StepTimes::default(),
             messages: Vec::new(),
+            mesher: Mesher::default(),
         };
         station.set_calibration(station.calibration);
         station.resize(window_px);
@@ -1149,9 +1152,9 @@ impl<'s> Station<'s> {
 
         // Field → mesh → renderer.
         let mesh_started = Instant::now();
-        let diff = remesh_dirty(self.playback.field_mut());
+        let diff = self.mesher.remesh_dirty(self.playback.field_mut());
         if !diff.is_empty() {
-            apply(&diff);
+            apply(diff);
             self.clay_bounds = clay_bounds(self.playback.field());
         }
         self.times.mesh_ms = ms_since(mesh_started);
@@ -1601,6 +1604,7 @@ impl ApplicationHandler for WindowApp<'_, '_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::remesh_dirty;
 
     #[test]
     fn scripts_parse_every_event_and_name_the_line_of_a_mistake() {

@@ -29,7 +29,7 @@ use super::station::{action_cycle, shape_cycle, shape_name};
 use crate::field::{Field, FieldReader};
 use crate::io::autosave::AutosaveConfig;
 use crate::math::{Pose, Vec3};
-use crate::mesh::{remesh_dirty, MeshDiff};
+use crate::mesh::{MeshDiff, Mesher};
 use crate::render::{Frame, ToolGlyph};
 use crate::scene::{Hand, HandState as PlaybackHand, Scene};
 use crate::tool::{Action, Stroke, Tool, ToolShape};
@@ -124,6 +124,8 @@ pub struct XrSculptor<'s> {
     times: (f64, f64),
     /// Messages for the user.
     pub messages: Vec<String>,
+    /// Re-meshes what each frame's edits dirtied, reusing its buffers from frame to frame.
+    mesher: Mesher,
 }
 
 impl<'s> XrSculptor<'s> {
@@ -154,6 +156,7 @@ impl<'s> XrSculptor<'s> {
             saved: None,
             times: (0.0, 0.0),
             messages: Vec::new(),
+            mesher: Mesher::default(),
         }
     }
 
@@ -345,9 +348,9 @@ impl<'s> XrSculptor<'s> {
         }
         let tools_ms = started.elapsed().as_secs_f64() * 1e3;
         let meshing = std::time::Instant::now();
-        let diff = remesh_dirty(self.playback.field_mut());
+        let diff = self.mesher.remesh_dirty(self.playback.field_mut());
         if !diff.is_empty() {
-            apply(&diff);
+            apply(diff);
         }
         self.times = (tools_ms, meshing.elapsed().as_secs_f64() * 1e3);
         let frame = self.frame(&input.hands, tool_pose.map(|pose| (pose, applying)), &tool);

@@ -497,6 +497,12 @@ impl Field {
         std::mem::take(&mut self.dirty)
     }
 
+    /// The bricks marked dirty since the last call, leaving the set empty but keeping its
+    /// memory for the next marks.
+    pub fn drain_dirty(&mut self) -> impl Iterator<Item = BrickKey> + '_ {
+        self.dirty.drain()
+    }
+
     /// The dirty set, without draining it.
     pub fn dirty(&self) -> &DirtySet {
         &self.dirty

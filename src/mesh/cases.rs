@@ -121,9 +121,45 @@ pub fn case_table() -> &'static [CaseTriangles; 256] {
     TABLE.get_or_init(|| std::array::from_fn(build_case))
 }
 
+/// The case table flattened for the kernel: the edges of case `m`'s triangles, three per
+/// triangle, are `edges[start[m]..start[m + 1]]`, in [`case_table`]'s order.
+pub struct FlatCases {
+    start: [u16; 257],
+    edges: Vec<u8>,
+}
+
+impl FlatCases {
+    /// The triangles' edges of case `mask`, three per triangle.
+    #[inline]
+    pub fn edges(&self, mask: usize) -> &[u8] {
+        &self.edges[usize::from(self.start[mask])..usize::from(self.start[mask + 1])]
+    }
+}
+
+/// [`case_table`] as one flat array (no pointer chase per cell).
+pub fn flat_cases() -> &'static FlatCases {
+    static FLAT: OnceLock<FlatCases> = OnceLock::new();
+    FLAT.get_or_init(|| {
+        let mut flat = FlatCases { start: [0; 257], edges: Vec::new() };
+        for (mask, triangles) in case_table().iter().enumerate() {
+            flat.edges.extend(triangles.iter().flatten());
+            flat.start[mask + 1] = u16::try_from(flat.edges.len()).expect("small table");
+        }
+        flat
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_flat_table_lists_every_case_in_order() {
+        for (mask, triangles) in case_table().iter().enumerate() {
+            let edges: Vec<u8> = triangles.iter().flatten().copied().collect();
+            assert_eq!(flat_cases().edges(mask), &edges[..], "mask {mask}");
+        }
+    }
 
     #[test]
     fn trivial_cases_have_no_triangles() {

@@ -1,6 +1,6 @@
 //! The marching-cubes kernel over one brick's gathered block of samples.
 
-use super::cases::{case_table, CORNER_OFFSETS, EDGES};
+use super::cases::{flat_cases, CORNER_OFFSETS, EDGES};
 use super::types::{ChunkMesh, Vertex};
 use crate::field::{split_index, Brick, BrickKey, Colour, Field, BRICK_SIZE, DEFAULT_COLOUR};
 use crate::math::{IVec3, Vec3, VoxelTransform};
@@ -60,6 +60,19 @@ impl<'f> Neighbourhood<'f> {
         self.bricks[(d.x + 3 * (d.y + 3 * d.z)) as usize]
             .map_or(DEFAULT_COLOUR, |b| b.colour[Brick::linear(local)])
     }
+
+    /// The colour at block point `(x, y, z)` (each in `0..BLOCK`): the same as [`Self::colour`]
+    /// at the lattice point `key·S − 1 + (x, y, z)`, without dividing.
+    #[inline]
+    fn colour_in_block(&self, x: usize, y: usize, z: usize) -> Colour {
+        // Block coordinate 0 is the last sample of the lower brick, 1 ..= S the centre brick,
+        // S + 1 and S + 2 the first two of the upper one: brick (c + S − 1) / S, sample
+        // (c + S − 1) % S.
+        let s = BRICK_SIZE as usize;
+        let (x, y, z) = (x + s - 1, y + s - 1, z + s - 1);
+        let brick = x / s + 3 * (y / s + 3 * (z / s));
+        self.bricks[brick].map_or(DEFAULT_COLOUR, |b| b.colour[x % s + s * (y % s + s * (z % s))])
+    }
 }
 
 #[inline]
@@ -67,31 +80,55 @@ fn at(x: usize, y: usize, z: usize) -> usize {
     x + BLOCK * (y + BLOCK * z)
 }
 
-/// Reusable per-worker buffers: the edge → vertex map of the brick being meshed.
+/// Rows of cell corners classified per brick: `CORNERS_PER_AXIS`² rows of one bit per corner.
+const ROWS: usize = CORNERS_PER_AXIS * CORNERS_PER_AXIS;
+/// A row whose corners are all dense.
+const FULL_ROW: u16 = (1 << CORNERS_PER_AXIS) - 1;
+
+/// Reusable per-worker buffers: the edge → vertex map of the brick being meshed and the
+/// corners' classification.
 #[derive(Clone, Debug)]
 pub struct MarchScratch {
     edge_vertex: Vec<u32>,
+    /// Bit `x` of `dense[y + C·z]`: whether corner `(x, y, z)` (block point `(x, y, z) + 1`)
+    /// is at least the iso-level.
+    dense: [u16; ROWS],
 }
 
 impl Default for MarchScratch {
     fn default() -> Self {
-        Self { edge_vertex: vec![u32::MAX; CORNERS_PER_AXIS.pow(3) * 3] }
+        Self { edge_vertex: vec![u32::MAX; CORNERS_PER_AXIS.pow(3) * 3], dense: [0; ROWS] }
     }
 }
 
+/// For each cube edge: its lower corner's offset in the edge → vertex map (whose slot for
+/// corner `(x, y, z)` and axis `a` is `3·(x + C·(y + C·z)) + a`), plus its axis.
+const EDGE_SLOT: [usize; 12] = {
+    let mut slots = [0; 12];
+    let mut e = 0;
+    while e < 12 {
+        let (lower, axis) = EDGES[e];
+        let o = CORNER_OFFSETS[lower as usize];
+        let corner = o[0] as usize + CORNERS_PER_AXIS * (o[1] as usize + CORNERS_PER_AXIS * o[2] as usize);
+        slots[e] = 3 * corner + axis as usize;
+        e += 1;
+    }
+    slots
+};
+
 impl Block {
-    /// Whether the cells of the brick all lie on one side of `iso` (no triangle possible).
-    pub fn is_uniform(&self, iso: f32) -> bool {
-        let first = self.density[at(1, 1, 1)] >= iso;
-        for z in 1..=CORNERS_PER_AXIS {
-            for y in 1..=CORNERS_PER_AXIS {
-                let row = at(1, y, z);
-                if self.density[row..row + CORNERS_PER_AXIS].iter().any(|&d| (d >= iso) != first) {
-                    return false;
-                }
-            }
+    /// Classifies the cell corners into `dense` (see [`MarchScratch`]); returns whether they
+    /// are all on one side of `iso`.
+    fn classify(&self, iso: f32, dense: &mut [u16; ROWS]) -> bool {
+        let (mut any, mut all) = (0u16, FULL_ROW);
+        for (i, bits) in dense.iter_mut().enumerate() {
+            let row = at(1, 1 + i % CORNERS_PER_AXIS, 1 + i / CORNERS_PER_AXIS);
+            let samples = &self.density[row..row + CORNERS_PER_AXIS];
+            *bits = samples.iter().enumerate().fold(0, |b, (x, &d)| b | (u16::from(d >= iso) << x));
+            any |= *bits;
+            all &= *bits;
         }
-        true
+        any == 0 || all == FULL_ROW
     }
 
     /// Central-difference gradient at a block point (per lattice unit). Needs the point to be
@@ -99,10 +136,11 @@ impl Block {
     #[inline]
     fn gradient(&self, x: usize, y: usize, z: usize) -> Vec3 {
         let d = &self.density;
+        let p = at(x, y, z);
         Vec3::new(
-            d[at(x + 1, y, z)] - d[at(x - 1, y, z)],
-            d[at(x, y + 1, z)] - d[at(x, y - 1, z)],
-            d[at(x, y, z + 1)] - d[at(x, y, z - 1)],
+            d[p + 1] - d[p - 1],
+            d[p + BLOCK] - d[p - BLOCK],
+            d[p + BLOCK * BLOCK] - d[p - BLOCK * BLOCK],
         ) * 0.5
     }
 }
@@ -112,6 +150,9 @@ impl Block {
 /// Seam contract: a vertex on a cell edge is interpolated from the edge's lower-index endpoint
 /// towards the higher one, in lattice coordinates, from samples both neighbouring bricks gather
 /// identically; so a vertex on a shared face is bit-identical in both bricks' meshes.
+///
+/// Cells are visited in z, y, x order (x fastest) and each cell's triangles in case-table
+/// order; a vertex is made when an edge is first used.
 pub fn march_brick(
     block: &Block,
     colours: &Neighbourhood<'_>,
@@ -121,58 +162,75 @@ pub fn march_brick(
     out: &mut ChunkMesh,
 ) {
     out.reset();
-    if block.is_uniform(iso) {
+    if block.classify(iso, &mut scratch.dense) {
         return;
     }
     scratch.edge_vertex.fill(u32::MAX);
-    let table = case_table();
-    let s = BRICK_SIZE as usize;
-    for cz in 1..=s {
-        for cy in 1..=s {
-            for cx in 1..=s {
-                let mut mask = 0usize;
-                for (c, o) in CORNER_OFFSETS.iter().enumerate() {
-                    let p = at(cx + o[0] as usize, cy + o[1] as usize, cz + o[2] as usize);
-                    if block.density[p] >= iso {
-                        mask |= 1 << c;
-                    }
-                }
-                let triangles = &table[mask];
-                if triangles.is_empty() {
+    let cases = flat_cases();
+    let c = CORNERS_PER_AXIS;
+    let dense = &scratch.dense;
+    for cz in 0..BRICK_SIZE as usize {
+        for cy in 0..BRICK_SIZE as usize {
+            // The four rows of corners around this row of cells.
+            let rows = [
+                dense[cy + c * cz],
+                dense[cy + 1 + c * cz],
+                dense[cy + c * (cz + 1)],
+                dense[cy + 1 + c * (cz + 1)],
+            ];
+            let (any, all) = (rows[0] | rows[1] | rows[2] | rows[3], rows[0] & rows[1] & rows[2] & rows[3]);
+            if any == 0 || all == FULL_ROW {
+                continue;
+            }
+            for cx in 0..BRICK_SIZE as usize {
+                // Corner c = x + 2y + 4z: bits (x, x + 1) of each row, rows in (y, z) order.
+                let mask = usize::from(
+                    ((rows[0] >> cx) & 3)
+                        | (((rows[1] >> cx) & 3) << 2)
+                        | (((rows[2] >> cx) & 3) << 4)
+                        | (((rows[3] >> cx) & 3) << 6),
+                );
+                let edges = cases.edges(mask);
+                if edges.is_empty() {
                     continue;
                 }
-                for tri in triangles {
-                    for &e in tri {
-                        let index =
-                            edge_vertex(block, colours, iso, transform, scratch, out, [cx, cy, cz], e);
-                        out.indices.push(index);
+                let cell_slot = 3 * (cx + c * (cy + c * cz));
+                for &e in edges {
+                    let slot = cell_slot + EDGE_SLOT[usize::from(e)];
+                    let mut index = scratch.edge_vertex[slot];
+                    if index == u32::MAX {
+                        let (lower, axis) = EDGES[usize::from(e)];
+                        let o = CORNER_OFFSETS[usize::from(lower)];
+                        let corner = [cx + 1 + o[0] as usize, cy + 1 + o[1] as usize, cz + 1 + o[2] as usize];
+                        index = out.vertices.len() as u32;
+                        out.vertices.push(edge_vertex(
+                            block,
+                            colours,
+                            iso,
+                            transform,
+                            corner,
+                            usize::from(axis),
+                        ));
+                        scratch.edge_vertex[slot] = index;
                     }
+                    out.indices.push(index);
                 }
             }
         }
     }
 }
 
-/// The index of the vertex on edge `e` of the cell at block point `cell`, made on first use.
-#[allow(clippy::too_many_arguments)]
+/// The vertex on the edge from block point `corner` one step along `axis`.
+#[inline]
 fn edge_vertex(
     block: &Block,
     colours: &Neighbourhood<'_>,
     iso: f32,
     transform: &VoxelTransform,
-    scratch: &mut MarchScratch,
-    out: &mut ChunkMesh,
-    cell: [usize; 3],
-    e: u8,
-) -> u32 {
-    let (lower, axis) = EDGES[usize::from(e)];
-    let o = CORNER_OFFSETS[usize::from(lower)];
-    let (x, y, z) = (cell[0] + o[0] as usize, cell[1] + o[1] as usize, cell[2] + o[2] as usize);
-    let axis = usize::from(axis);
-    let key = (((x - 1) + CORNERS_PER_AXIS * ((y - 1) + CORNERS_PER_AXIS * (z - 1))) * 3) + axis;
-    if scratch.edge_vertex[key] != u32::MAX {
-        return scratch.edge_vertex[key];
-    }
+    corner: [usize; 3],
+    axis: usize,
+) -> Vertex {
+    let [x, y, z] = corner;
     let step = [usize::from(axis == 0), usize::from(axis == 1), usize::from(axis == 2)];
     let (x1, y1, z1) = (x + step[0], y + step[1], z + step[2]);
     let (a, b) = (at(x, y, z), at(x1, y1, z1));
@@ -195,8 +253,7 @@ fn edge_vertex(
     };
     // Colour is weighted by matter as well as by position: the empty end of an edge holds no
     // clay, so its (meaningless) colour must not tint the surface.
-    let corner = block.origin + IVec3::new(x as i32, y as i32, z as i32);
-    let (ca, cb) = (colours.colour(corner), colours.colour(corner + IVec3::from(step.map(|c| c as i32))));
+    let (ca, cb) = (colours.colour_in_block(x, y, z), colours.colour_in_block(x1, y1, z1));
     let (wa, wb) = (va.max(0.0) * (1.0 - t), vb.max(0.0) * t);
     let total = wa + wb;
     let colour = if total > 0.0 {
@@ -204,8 +261,5 @@ fn edge_vertex(
     } else {
         std::array::from_fn(|i| ca[i] + (cb[i] - ca[i]) * t)
     };
-    let index = out.vertices.len() as u32;
-    out.vertices.push(Vertex { position: position.to_array(), normal: normal.to_array(), colour });
-    scratch.edge_vertex[key] = index;
-    index
+    Vertex { position: position.to_array(), normal: normal.to_array(), colour }
 }

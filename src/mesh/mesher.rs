@@ -2,9 +2,12 @@
 
 use rayon::prelude::*;
 
+use std::sync::Mutex;
+
+use super::cases::flat_cases;
 use super::march::{march_brick, Block, MarchScratch, Neighbourhood, BLOCK};
 use super::types::{ChunkMesh, MeshDiff};
-use crate::field::{Brick, BrickKey, Field, BRICK_SIZE};
+use crate::field::{Brick, BrickKey, Field, BRICK_SIZE, BRICK_VOLUME};
 use crate::math::IVec3;
 
 /// Copies brick `key`'s densities and apron into `block`, row by row (within a brick and
@@ -55,71 +58,273 @@ pub fn mesh_brick(
     march_brick(block, &around, field.iso(), field.transform(), scratch, out);
 }
 
+/// How a stored brick's density range lies against the iso-level (absent bricks are empty).
+const OUTSIDE: u8 = 0;
+const INSIDE: u8 = 1;
+const CROSSING: u8 = 2;
+
+fn class(field: &Field, key: BrickKey) -> u8 {
+    match field.density_range(key) {
+        None => OUTSIDE,
+        Some((_, hi)) if hi < field.iso() => OUTSIDE,
+        Some((lo, _)) if lo >= field.iso() => INSIDE,
+        Some(_) => CROSSING,
+    }
+}
+
+/// Whether the eight bricks a brick's cells read, of these classes, surely hold no triangle.
+#[inline]
+fn group_is_empty(classes: impl IntoIterator<Item = u8>) -> bool {
+    let (any, all) = classes.into_iter().fold((OUTSIDE, INSIDE), |(any, all), c| (any | c, all & c));
+    any == OUTSIDE || (any == INSIDE && all == INSIDE)
+}
+
+/// Offsets of the eight bricks `key ..= key + 1` the cells of brick `key` read.
+const GROUP: [IVec3; 8] = {
+    let mut g = [IVec3::ZERO; 8];
+    let mut c = 0;
+    while c < 8 {
+        g[c] = IVec3::new((c & 1) as i32, ((c >> 1) & 1) as i32, ((c >> 2) & 1) as i32);
+        c += 1;
+    }
+    g
+};
+
 /// Whether brick `key` surely holds no triangle: the cells it meshes read bricks
 /// `key ..= key + 1` on each axis, and those are all inside the clay or all outside it.
 /// Decided from the field's per-brick density ranges, without reading a sample.
 pub fn surely_empty(field: &Field, key: BrickKey) -> bool {
-    let iso = field.iso();
-    let mut inside = 0;
-    for c in 0..8 {
-        let k = key + IVec3::new(c & 1, (c >> 1) & 1, (c >> 2) & 1);
-        match field.density_range(k) {
-            None => {}
-            Some((_, hi)) if hi < iso => {}
-            Some((lo, _)) if lo >= iso => inside += 1,
-            Some(_) => return false,
-        }
-        if inside != 0 && inside != c + 1 {
-            return false;
-        }
-    }
-    true
+    group_is_empty(GROUP.iter().map(|&o| class(field, key + o)))
 }
 
-/// Re-meshes the given bricks in parallel: bricks with triangles are upserted, the others
-/// removed (removing a chunk the renderer does not hold is harmless).
-pub fn remesh<I: IntoIterator<Item = BrickKey>>(field: &Field, keys: I) -> MeshDiff {
-    let mut keys: Vec<BrickKey> = keys.into_iter().collect();
-    // A fixed order makes diffs (and so draw order and images) reproducible.
-    keys.sort_unstable_by_key(|k| k.to_array());
-    keys.dedup();
-    let mut diff = MeshDiff::default();
-    keys.retain(|&k| {
-        let empty = surely_empty(field, k);
-        if empty {
-            diff.removed.push(k);
+/// The classes of the bricks of a box of keys, x-major (`z` fastest, the order of sorted
+/// keys), so that many keys are classified with one look-up per brick instead of eight.
+#[derive(Clone, Debug, Default)]
+struct ClassGrid {
+    lo: IVec3,
+    dims: IVec3,
+    classes: Vec<u8>,
+}
+
+impl ClassGrid {
+    /// Sizes the grid to `lo ..= hi`, all [`OUTSIDE`].
+    fn reset(&mut self, lo: IVec3, hi: IVec3) {
+        self.lo = lo;
+        self.dims = hi - lo + IVec3::ONE;
+        self.classes.clear();
+        self.classes.resize(volume(lo, hi), OUTSIDE);
+    }
+
+    #[inline]
+    fn index(&self, key: BrickKey) -> usize {
+        let q = (key - self.lo).as_uvec3();
+        (q.z + self.dims.z as u32 * (q.y + self.dims.y as u32 * q.x)) as usize
+    }
+
+    /// Whether brick `key` surely holds no triangle; `key + 1` must lie in the grid.
+    #[inline]
+    fn surely_empty(&self, key: BrickKey) -> bool {
+        group_is_empty(GROUP.iter().map(|&o| self.classes[self.index(key + o)]))
+    }
+}
+
+/// Number of keys in `lo ..= hi` (0 for an empty box), saturating.
+fn volume(lo: IVec3, hi: IVec3) -> usize {
+    let d = (hi.as_i64vec3() - lo.as_i64vec3() + glam::I64Vec3::ONE).max(glam::I64Vec3::ZERO);
+    usize::try_from(d.x.saturating_mul(d.y).saturating_mul(d.z)).unwrap_or(usize::MAX)
+}
+
+/// The buffers one worker thread marches with.
+#[derive(Debug)]
+struct Worker {
+    block: Block,
+    scratch: MarchScratch,
+    /// Sized for the largest chunk a brick can make, so it never grows.
+    mesh: ChunkMesh,
+}
+
+impl Default for Worker {
+    fn default() -> Self {
+        let cases = flat_cases();
+        let max_indices = (0..256).map(|m| cases.edges(m).len()).max().unwrap_or(0) * BRICK_VOLUME;
+        // Each vertex sits on a distinct edge from a corner of the brick's 9³ cell corners.
+        let max_vertices = 3 * (BRICK_SIZE as usize + 1).pow(3);
+        let mesh = ChunkMesh {
+            vertices: Vec::with_capacity(max_vertices),
+            indices: Vec::with_capacity(max_indices),
+        };
+        Self { block: Block::default(), scratch: MarchScratch::default(), mesh }
+    }
+}
+
+/// The incremental mesher: re-meshes sets of bricks into a [`MeshDiff`] it keeps, reusing
+/// every buffer from one call to the next.
+///
+/// Each worker thread marches with buffers of its own (kept by the mesher); each key of a call
+/// has a slot whose vectors the next call reuses: the chunks of the returned diff are those
+/// vectors, lent until the next call, which takes them back. Re-meshing a set of bricks no
+/// larger than before therefore allocates nothing once the buffers have grown (a thread
+/// outside the rayon pool handing it the work may still allocate inside rayon). Memory held:
+/// the chunks of the largest call so far.
+#[derive(Debug, Default)]
+pub struct Mesher {
+    /// One per thread of the pool, by thread index (locked by that thread only).
+    workers: Vec<Mutex<Worker>>,
+    keys: Vec<BrickKey>,
+    slots: Vec<ChunkMesh>,
+    /// The slot each chunk of `diff.upserted` came from.
+    upserted_slots: Vec<usize>,
+    grid: ClassGrid,
+    diff: MeshDiff,
+}
+
+impl Mesher {
+    /// Re-meshes the given bricks in parallel: bricks with triangles are upserted, the others
+    /// removed (removing a chunk the renderer does not hold is harmless), both in key order.
+    pub fn remesh<I: IntoIterator<Item = BrickKey>>(&mut self, field: &Field, keys: I) -> &MeshDiff {
+        self.begin();
+        self.keys.extend(keys);
+        self.remesh_keys(field)
+    }
+
+    /// [`Self::remesh`] of the keys gathered in `keys`.
+    fn remesh_keys(&mut self, field: &Field) -> &MeshDiff {
+        // A fixed order makes diffs (and so draw order and images) reproducible.
+        self.keys.sort_unstable_by_key(|k| k.to_array());
+        self.keys.dedup();
+        let (Some(&first), Some(&last)) = (self.keys.first(), self.keys.last()) else { return &self.diff };
+        let (lo, hi) = self.keys.iter().fold((first, last), |(lo, hi), &k| (lo.min(k), hi.max(k)));
+        let (diff, grid) = (&mut self.diff, &mut self.grid);
+        // Classify by a grid of the keys' box when that takes fewer look-ups than eight a key.
+        let use_grid = volume(lo, hi + IVec3::ONE) <= 8 * self.keys.len();
+        if use_grid {
+            grid.reset(lo, hi + IVec3::ONE);
+            for x in lo.x..=hi.x + 1 {
+                for y in lo.y..=hi.y + 1 {
+                    for z in lo.z..=hi.z + 1 {
+                        let key = IVec3::new(x, y, z);
+                        let i = grid.index(key);
+                        grid.classes[i] = class(field, key);
+                    }
+                }
+            }
         }
-        !empty
-    });
-    // Each worker marches into buffers it keeps across bricks (they grow once to the largest
-    // chunk), and a chunk leaves with vectors of exactly its size: one allocation each.
-    let meshes: Vec<(BrickKey, ChunkMesh)> = keys
-        .par_iter()
-        .map_init(
-            || (Block::default(), MarchScratch::default(), ChunkMesh::default()),
-            |(block, scratch, work), &key| {
-                mesh_brick(field, key, block, scratch, work);
-                (key, ChunkMesh { vertices: work.vertices.clone(), indices: work.indices.clone() })
-            },
-        )
-        .collect();
-    for (key, mesh) in meshes {
-        if mesh.is_empty() {
-            diff.removed.push(key);
+        self.keys.retain(|&k| {
+            let empty = if use_grid { grid.surely_empty(k) } else { surely_empty(field, k) };
+            if empty {
+                diff.removed.push(k);
+            }
+            !empty
+        });
+        self.march(field);
+        &self.diff
+    }
+
+    /// Meshes the whole field: upserts only.
+    pub fn mesh_all(&mut self, field: &Field) -> &MeshDiff {
+        self.begin();
+        let mut bounds: Option<(IVec3, IVec3)> = None;
+        for k in field.brick_keys() {
+            bounds = Some(bounds.map_or((k, k), |(lo, hi)| (lo.min(k), hi.max(k))));
+        }
+        let Some((lo, hi)) = bounds else { return &self.diff };
+        // Bricks `lo − 1 ..= hi` may hold triangles (a cell in brick K reads K ..= K + 1).
+        // A dense grid of the stored bricks' classes finds them with one look-up per stored
+        // brick, unless the field is too sparse for its box.
+        if volume(lo - IVec3::ONE, hi + IVec3::ONE) <= 64 * field.brick_count() {
+            let grid = &mut self.grid;
+            grid.reset(lo - IVec3::ONE, hi + IVec3::ONE);
+            for k in field.brick_keys() {
+                let i = grid.index(k);
+                grid.classes[i] = class(field, k);
+            }
+            for x in lo.x - 1..=hi.x {
+                for y in lo.y - 1..=hi.y {
+                    for z in lo.z - 1..=hi.z {
+                        let key = IVec3::new(x, y, z);
+                        if !grid.surely_empty(key) {
+                            self.keys.push(key);
+                        }
+                    }
+                }
+            }
         } else {
-            diff.upserted.push((key, mesh));
+            self.keys.extend(meshable_bricks(field).into_iter().filter(|&k| !surely_empty(field, k)));
+        }
+        self.march(field);
+        self.diff.removed.clear();
+        &self.diff
+    }
+
+    /// Meshes the bricks the field marked dirty since the last call, draining its dirty set
+    /// (which keeps its memory: marking and re-meshing allocate nothing once both have grown).
+    pub fn remesh_dirty(&mut self, field: &mut Field) -> &MeshDiff {
+        self.begin();
+        self.keys.extend(field.drain_dirty());
+        self.remesh_keys(field)
+    }
+
+    /// The diff of the last call, left empty here (its vectors are then not reused).
+    pub fn take_diff(&mut self) -> MeshDiff {
+        self.upserted_slots.clear();
+        std::mem::take(&mut self.diff)
+    }
+
+    /// Takes back the chunks lent in the last diff and empties it.
+    fn begin(&mut self) {
+        for ((_, mesh), &slot) in self.diff.upserted.drain(..).zip(&self.upserted_slots) {
+            self.slots[slot] = mesh;
+        }
+        self.upserted_slots.clear();
+        self.diff.removed.clear();
+        self.keys.clear();
+    }
+
+    /// Marches `keys` in parallel into their slots and lists the results in the diff.
+    fn march(&mut self, field: &Field) {
+        let n = self.keys.len();
+        if self.slots.len() < n {
+            self.slots.resize_with(n, ChunkMesh::default);
+        }
+        let threads = rayon::current_num_threads();
+        if self.workers.len() < threads {
+            self.workers.resize_with(threads, Mutex::default);
+        }
+        let workers = &self.workers;
+        self.keys.par_iter().zip(self.slots[..n].par_iter_mut()).for_each(|(&key, slot)| {
+            let index = rayon::current_thread_index().unwrap_or(0) % workers.len();
+            let mut worker = workers[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            let Worker { block, scratch, mesh } = &mut *worker;
+            mesh_brick(field, key, block, scratch, mesh);
+            // The slot keeps its vectors: they grow to the chunk once and are reused.
+            slot.reset();
+            slot.vertices.extend_from_slice(&mesh.vertices);
+            slot.indices.extend_from_slice(&mesh.indices);
+        });
+        for (i, (&key, slot)) in self.keys.iter().zip(&mut self.slots).enumerate() {
+            if slot.is_empty() {
+                self.diff.removed.push(key);
+            } else {
+                self.diff.upserted.push((key, std::mem::take(slot)));
+                self.upserted_slots.push(i);
+            }
         }
     }
-    diff
+}
+
+/// Re-meshes the given bricks in parallel (see [`Mesher::remesh`]; a mesher kept between
+/// calls reuses its buffers).
+pub fn remesh<I: IntoIterator<Item = BrickKey>>(field: &Field, keys: I) -> MeshDiff {
+    let mut mesher = Mesher::default();
+    mesher.remesh(field, keys);
+    mesher.take_diff()
 }
 
 /// Every brick that can hold triangles: a cell in brick `K` reads bricks `K ..= K + 1`, so
 /// each stored brick `B` may put triangles in bricks `B − 1 ..= B` on each axis.
 pub fn meshable_bricks(field: &Field) -> Vec<BrickKey> {
-    let mut keys: Vec<BrickKey> = field
-        .brick_keys()
-        .flat_map(|b| (0..8).map(move |c| b - IVec3::new(c & 1, (c >> 1) & 1, (c >> 2) & 1)))
-        .collect();
+    let mut keys: Vec<BrickKey> =
+        field.brick_keys().flat_map(|b| GROUP.iter().map(move |&o| b - o)).collect();
     keys.sort_unstable_by_key(|k| k.to_array());
     keys.dedup();
     keys
@@ -127,9 +332,9 @@ pub fn meshable_bricks(field: &Field) -> Vec<BrickKey> {
 
 /// Meshes the whole field; only upserts.
 pub fn mesh_all(field: &Field) -> MeshDiff {
-    let mut diff = remesh(field, meshable_bricks(field));
-    diff.removed.clear();
-    diff
+    let mut mesher = Mesher::default();
+    mesher.mesh_all(field);
+    mesher.take_diff()
 }
 
 /// Meshes the bricks the field marked dirty since the last call, draining its dirty set.
@@ -145,13 +350,66 @@ mod tests {
 
     fn ball(radius: i32) -> Field {
         let mut f = Field::new(0.001, 0.5);
+        add_ball(&mut f, IVec3::ZERO, radius);
+        f
+    }
+
+    fn add_ball(f: &mut Field, centre: IVec3, radius: i32) {
         let r = IVec3::splat(radius + 2);
         let grey: Colour = [0.5; 4];
-        f.edit_box(-r, r, true, |p, d, c| {
-            *d = (0.5 - (p.as_vec3().length() - radius as f32) / 4.0).clamp(0.0, 1.0);
+        f.edit_box(centre - r, centre + r, true, |p, d, c| {
+            *d = (0.5 - ((p - centre).as_vec3().length() - radius as f32) / 4.0).clamp(0.0, 1.0);
             *c = grey;
         });
-        f
+    }
+
+    #[test]
+    fn dense_and_sparse_classification_find_the_same_chunks() {
+        let dense = ball(30);
+        // A second ball far away: the field's box is too sparse for a grid of it.
+        let mut sparse = ball(30);
+        add_ball(&mut sparse, IVec3::new(900, -40, 300), 12);
+        for field in [&dense, &sparse] {
+            // The definition: every brick that can hold triangles, each classified alone.
+            let keys = meshable_bricks(field);
+            let mut reference = MeshDiff::default();
+            for &key in &keys {
+                let mut mesh = ChunkMesh::default();
+                mesh_brick(field, key, &mut Block::default(), &mut MarchScratch::default(), &mut mesh);
+                if !mesh.is_empty() {
+                    reference.upserted.push((key, mesh));
+                }
+            }
+            assert!(reference.upserted_triangles() > 1000);
+            assert_eq!(mesh_all(field).upserted, reference.upserted, "whole field");
+            // A compact set is classified on a grid, a scattered one key by key.
+            let far = IVec3::splat(10_000);
+            for extra in [None, Some(far)] {
+                let diff = remesh(field, keys.iter().copied().chain(extra));
+                assert_eq!(diff.upserted, reference.upserted, "extra key {extra:?}");
+                assert_eq!(
+                    diff.removed.len() + diff.upserted.len(),
+                    keys.len() + usize::from(extra.is_some())
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_mesher_lends_its_chunks_and_takes_them_back() {
+        let mut f = ball(20);
+        f.take_dirty();
+        let keys = meshable_bricks(&f);
+        let mut mesher = Mesher::default();
+        let first = mesher.remesh(&f, keys.iter().copied()).clone();
+        assert_eq!(mesher.mesh_all(&f).upserted, first.upserted);
+        // A smaller set after a larger one: only its chunks, each as a fresh mesher makes it.
+        f.edit_box(IVec3::new(18, -3, -3), IVec3::new(24, 3, 3), false, |_, d, _| *d = 0.0);
+        let dirty: Vec<BrickKey> = f.take_dirty().into_iter().collect();
+        let again = mesher.remesh(&f, dirty.iter().copied());
+        assert_eq!(again.upserted, remesh(&f, dirty.iter().copied()).upserted);
+        assert!(again.upserted.len() < first.upserted.len() && !again.is_empty());
+        assert!(mesher.remesh(&f, []).is_empty());
     }
 
     #[test]

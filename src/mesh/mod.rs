@@ -25,6 +25,19 @@
 //!
 //! Normals are the normalised negated field gradient (central differences), interpolated along
 //! the edge like the position; colour is interpolated from the samples likewise.
+//!
+//! ## Incremental meshing
+//!
+//! [`Mesher`] re-meshes a set of bricks (a stroke's dirty set) into chunk diffs. Bricks whose
+//! cells surely hold no triangle are told from the field's per-brick density ranges, without
+//! reading a sample, classified on a small grid of the set's box (one range look-up per brick
+//! instead of eight); the others are gathered and marched in parallel, each worker with
+//! buffers of its own. A mesher kept from call to call reuses every buffer, the chunks of its
+//! diff included: its steady state allocates nothing (`tests/mesh_alloc.rs`).
+//!
+//! The kernel classifies the brick's 9³ cell corners once, as one bit per corner in rows along
+//! x, so that a cell's case is a few shifts and rows of cells the surface does not cross are
+//! skipped whole.
 
 mod cases;
 pub mod export;
@@ -35,6 +48,6 @@ mod weld;
 
 pub use cases::{case_table, CORNER_OFFSETS, EDGES};
 pub use march::{march_brick, Block, MarchScratch, Neighbourhood, BLOCK, BLOCK_VOLUME};
-pub use mesher::{gather_block, mesh_all, mesh_brick, meshable_bricks, remesh, remesh_dirty};
+pub use mesher::{gather_block, mesh_all, mesh_brick, meshable_bricks, remesh, remesh_dirty, Mesher};
 pub use types::*;
 pub use weld::{weld, WeldedMesh};
