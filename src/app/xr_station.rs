@@ -712,6 +712,48 @@ mod tests {
     }
 
     #[test]
+    fn the_other_hands_menu_button_recentres_the_sculpture_in_front_of_the_head() {
+        let scene = ball();
+        let mut s = sculptor(&scene, false);
+        let grip = |x: f32, y: f32| HandState { grip: at(x, y, -0.4), squeeze: 1.0, ..HandState::default() };
+        // Drag and scale the sculpture away.
+        frame(&mut s, [grip(-0.1, 1.3), grip(0.1, 1.3)]);
+        frame(&mut s, [grip(-0.3, 1.5), grip(0.3, 1.5)]);
+        assert!(s.placement().scale > 2.0);
+        // Facing +X, the other hand's menu button brings it back in front of the head, at
+        // scale 1; holding the button does nothing more.
+        let head = Pose {
+            position_m: Vec3::new(0.5, 1.7, 0.2),
+            rotation: Quat::from_rotation_y(-0.5 * std::f32::consts::PI),
+        };
+        let menu = HandState { menu: true, ..HandState::default() };
+        let step = |s: &mut XrSculptor<'_>, hands| {
+            let input = FrameInput {
+                index: 0,
+                display_time_ns: 0,
+                period_s: 1.0 / 90.0,
+                focused: true,
+                head: Some(head),
+                hands,
+            };
+            s.step(&input, |_| {})
+        };
+        step(&mut s, [menu, HandState::default()]);
+        let centred = s.placement();
+        assert_eq!(centred, recentred(scene.rig.target_m, Some(head)));
+        assert_eq!(centred.scale, 1.0);
+        let target = centred.to_stage(scene.rig.target_m);
+        assert!(target.x > head.position_m.x + 0.2, "in front of a head facing +X: {target}");
+        assert!((target.z - head.position_m.z).abs() < 1e-5, "{target}");
+        // The dominant hand's menu button is not the recentre button.
+        frame(&mut s, [grip(-0.1, 1.3), HandState::default()]);
+        frame(&mut s, [grip(-0.1, 1.4), HandState::default()]);
+        let moved = s.placement();
+        step(&mut s, [HandState::default(), menu]);
+        assert_eq!(s.placement(), moved);
+    }
+
+    #[test]
     fn left_handed_the_left_trigger_sculpts_and_a_touch_pulses_that_hand() {
         let scene = ball();
         let mut s = sculptor(&scene, true);
