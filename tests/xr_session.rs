@@ -465,3 +465,49 @@ fn with_no_command_a_ready_headset_is_chosen() {
     assert!(dir.join("default.argile").is_file(), "the sculpt is saved where the station saves it: {said}");
     no_violations(&log(&dir));
 }
+
+#[test]
+fn a_sculpt_file_opened_in_the_headset_is_sculpted_and_saved_back_to_itself() {
+    let dir = case_dir("xr-open-sculpt");
+    let manifest = common::xr::test_runtime_manifest(&dir);
+    // Half a groove, saved by a session the runtime ends mid-stroke.
+    let out = run_xr(&dir, &manifest, &carving_with("exit"), &[], &[]);
+    assert!(out.status.success(), "argile failed:\n{}", text(&out));
+    half_a_groove_is_saved(&dir);
+    let sculpt = dir.join("kept/sculpt.argile");
+    std::fs::create_dir_all(sculpt.parent().unwrap()).unwrap();
+    std::fs::rename(dir.join("sculpt.argile"), &sculpt).unwrap();
+    std::fs::remove_dir_all(dir.join("runtime")).unwrap();
+
+    // Opened again in the headset, without --save-to: its clay is the file's, and it goes back
+    // to the file when the runtime ends the session.
+    let script = dir.join("open.toml");
+    std::fs::write(
+        &script,
+        format!("recommended_size = [64, 64]\n[[key]]\nframe = 0\n{HEAD}\n[[event]]\nframe = 6\nkind = \"exit\"\n"),
+    )
+    .unwrap();
+    let saved_before = std::fs::metadata(&sculpt).unwrap().modified().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_argile"))
+        .current_dir(&dir)
+        .args(["run", "--xr", "--validation"])
+        .arg(&sculpt)
+        .env("XR_RUNTIME_JSON", &manifest)
+        .env("ARGILE_XR_TEST_SCRIPT", &script)
+        .env("ARGILE_XR_TEST_OUT", dir.join("runtime"))
+        .env("XDG_STATE_HOME", dir.join("state"))
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env("RUST_LOG", "warn")
+        .output()
+        .expect("argile runs");
+    let said = text(&out);
+    assert!(out.status.success(), "{said}");
+    assert!(said.contains(&format!("saved the sculpt to {}", sculpt.display())), "{said}");
+    assert!(!dir.join("sculpt.argile").exists(), "nothing is written beside it: {said}");
+    assert!(std::fs::metadata(&sculpt).unwrap().modified().unwrap() >= saved_before);
+    no_violations(&log(&dir));
+    let field = argile::app::load_sculpt(&sculpt).expect("the sculpt was saved").field;
+    assert!(density(&field, Vec3::new(0.035, 0.03, 0.012)) < 0.5, "the file's groove, not the scene's clay");
+    assert!(density(&field, Vec3::new(-0.045, 0.03, 0.012)) > 0.5);
+}
