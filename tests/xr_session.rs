@@ -45,25 +45,32 @@ fn run_scene(
 ) -> Output {
     let script_path = dir.join("script.toml");
     std::fs::write(&script_path, script).expect("script written");
-    let mut c = Command::new(env!("CARGO_BIN_EXE_argile"));
-    c.current_dir(dir)
-        .arg("run")
+    let mut c = argile_in(dir, manifest, &script_path);
+    c.arg("run")
         .arg("--xr")
         .arg(root().join(scene))
         .args(["--validation", "--save-to"])
         .arg(dir.join("sculpt.argile"))
-        .args(args)
+        .args(args);
+    for (k, v) in env {
+        c.env(k, v);
+    }
+    c.output().expect("argile runs")
+}
+
+/// `argile` run in `dir` against the test runtime of `manifest` playing `script`, without a
+/// display, its state (recovery journal) in `dir`.
+fn argile_in(dir: &Path, manifest: &Path, script: &Path) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_argile"));
+    c.current_dir(dir)
         .env("XR_RUNTIME_JSON", manifest)
-        .env("ARGILE_XR_TEST_SCRIPT", &script_path)
+        .env("ARGILE_XR_TEST_SCRIPT", script)
         .env("ARGILE_XR_TEST_OUT", dir.join("runtime"))
         .env("XDG_STATE_HOME", dir.join("state"))
         .env_remove("DISPLAY")
         .env_remove("WAYLAND_DISPLAY")
         .env("RUST_LOG", "warn");
-    for (k, v) in env {
-        c.env(k, v);
-    }
-    c.output().expect("argile runs")
+    c
 }
 
 fn text(o: &Output) -> String {
@@ -448,17 +455,7 @@ fn with_no_command_a_ready_headset_is_chosen() {
         "recommended_size = [64, 64]\n[[key]]\nframe = 0\n{HEAD}\n[[event]]\nframe = 6\nkind = \"exit\"\n"
     );
     std::fs::write(&script, text_).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_argile"))
-        .current_dir(&dir)
-        .env("XR_RUNTIME_JSON", &manifest)
-        .env("ARGILE_XR_TEST_SCRIPT", &script)
-        .env("ARGILE_XR_TEST_OUT", dir.join("runtime"))
-        .env("XDG_STATE_HOME", dir.join("state"))
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .env("RUST_LOG", "warn")
-        .output()
-        .expect("argile runs");
+    let out = argile_in(&dir, &manifest, &script).output().expect("argile runs");
     let said = text(&out);
     assert!(out.status.success(), "{said}");
     assert!(said.contains("headset session on Argile XR test runtime"), "{said}");
@@ -488,17 +485,9 @@ fn a_sculpt_file_opened_in_the_headset_is_sculpted_and_saved_back_to_itself() {
     )
     .unwrap();
     let saved_before = std::fs::metadata(&sculpt).unwrap().modified().unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_argile"))
-        .current_dir(&dir)
+    let out = argile_in(&dir, &manifest, &script)
         .args(["run", "--xr", "--validation"])
         .arg(&sculpt)
-        .env("XR_RUNTIME_JSON", &manifest)
-        .env("ARGILE_XR_TEST_SCRIPT", &script)
-        .env("ARGILE_XR_TEST_OUT", dir.join("runtime"))
-        .env("XDG_STATE_HOME", dir.join("state"))
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .env("RUST_LOG", "warn")
         .output()
         .expect("argile runs");
     let said = text(&out);
