@@ -6,6 +6,16 @@ fn argile() -> Command {
     Command::new(env!("CARGO_BIN_EXE_argile"))
 }
 
+/// The station run in `dir` without a display, its state (recovery journal) in `dir`.
+fn headless_in(dir: &std::path::Path) -> Command {
+    let mut c = argile();
+    c.current_dir(dir)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env("XDG_STATE_HOME", dir.join("state"));
+    c
+}
+
 fn temp_dir(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("argile-cli-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -194,13 +204,7 @@ fn calibrate_prints_the_frusta_and_writes_the_test_pattern() {
 #[test]
 fn the_station_without_a_display_renders_the_default_scene_headless_and_says_where() {
     let dir = temp_dir("headless-station");
-    let out = argile()
-        .current_dir(&dir)
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .env("XDG_STATE_HOME", dir.join("state"))
-        .output()
-        .unwrap();
+    let out = headless_in(&dir).output().unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
     assert!(stdout.contains("No window can open here: no display"), "{stdout}");
@@ -293,15 +297,7 @@ fn render_and_save_take_a_sculpt_file_where_they_take_a_scene() {
         assert_eq!(read(&from_scene), read(&from_sculpt), "{eye} eye");
     }
     // The station without a display renders the sculpt headless, at the scene's size.
-    let out = argile()
-        .arg("run")
-        .arg(&copy)
-        .current_dir(&dir)
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .env("XDG_STATE_HOME", dir.join("state"))
-        .output()
-        .unwrap();
+    let out = headless_in(&dir).arg("run").arg(&copy).output().unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
     assert!(stdout.contains("Rendering the copy scene headless"), "{stdout}");
