@@ -255,3 +255,51 @@ fn the_wide_band_gives_truer_normals_than_the_papers_filter() {
     assert!(ours_rms * 4.0 < paper_rms, "rms {ours_rms:.2}° vs the paper's {paper_rms:.2}°");
     assert!(ours_max < 2.0, "max {ours_max:.2}°");
 }
+
+/// A sphere of radius 9 level-2 voxels (36 finest voxels) held on level 2 alone, meshed on the
+/// finest lattice from the interpolation; then a fine carve refines part of it.
+#[test]
+fn coarse_clay_meshes_closed_and_continuous_with_fine_clay_beside_it() {
+    let mut f = Field::new(0.001, 0.5);
+    f.edit_level(
+        2,
+        IVec3::splat(-12),
+        IVec3::splat(12),
+        true,
+        |_, _, _| true,
+        |q, d, _| {
+            *d = (9.5 - q.as_vec3().length()).clamp(0.0, 1.0);
+        },
+    );
+    assert_eq!(f.brick_count(), 0, "no finest brick yet");
+    let w = full_mesh(&f);
+    assert_closed_and_oriented(&w);
+    assert_eq!(euler_characteristic(&w), 2);
+    assert_on_iso_level(&f, &w);
+    let (_, volume) = area_and_volume(&w);
+    let want = 4.0 / 3.0 * std::f32::consts::PI * (9.0f32 * 4.0 * 0.001).powi(3);
+    assert!((volume / want - 1.0).abs() < 0.1, "volume {volume} against {want}");
+
+    // A fine carve across the surface: the finest bricks it makes meet the coarse clay
+    // without a crack, and re-meshing what it dirtied equals meshing everything again.
+    let mut chunks: HashMap<_, _> = mesh_all(&f).upserted.into_iter().collect();
+    f.take_dirty();
+    f.begin_stroke();
+    f.edit_box(IVec3::new(30, -6, -6), IVec3::new(40, 6, 6), false, |p, d, _| {
+        let r = (p - IVec3::new(36, 0, 0)).as_vec3().length();
+        *d = d.min(((r - 4.0) / 2.0).clamp(0.0, 1.0));
+    });
+    f.end_stroke();
+    assert!(f.brick_count() > 0, "the carve refined finest bricks");
+    let diff = remesh_dirty(&mut f);
+    for key in diff.removed {
+        chunks.remove(&key);
+    }
+    chunks.extend(diff.upserted);
+    let all: HashMap<ChunkKey, ChunkMesh> = mesh_all(&f).upserted.into_iter().collect();
+    assert_eq!(chunks, all);
+    let full = weld(all.values());
+    assert_closed_and_oriented(&full);
+    assert_eq!(euler_characteristic(&full), 2);
+    assert_on_iso_level(&f, &full);
+}

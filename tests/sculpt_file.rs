@@ -134,6 +134,8 @@ fn same_matter(a: &Field, b: &Field) -> bool {
 }
 
 const FIXTURE_V1: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/sculpt-v1.argile");
+/// The same sculpt as the version-1 fixture, written by format version 2.
+const FIXTURE_V2: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/sculpt-v2.argile");
 
 #[test]
 fn a_version_1_file_still_loads() {
@@ -147,14 +149,30 @@ fn a_version_1_file_still_loads() {
 }
 
 #[test]
+fn a_version_2_file_still_loads() {
+    let bytes = std::fs::read(FIXTURE_V2).unwrap();
+    assert_eq!(&bytes[4..8], &2u32.to_le_bytes(), "the fixture is format version 2");
+    let sculpt = load_sculpt(std::path::Path::new(FIXTURE_V2)).unwrap();
+    assert!(same_matter(&sculpt.field, &fixture_field()));
+    assert_eq!(sculpt.field.transform().voxel_size_m, 0.002);
+}
+
+#[test]
 fn convert_moves_sculpts_between_versions() {
     let dir = temp_dir("convert");
-    let (v2, v1) = (dir.join("v2.argile"), dir.join("back-to-v1.argile"));
-    let out = argile(&["convert", FIXTURE_V1, v2.to_str().unwrap()]);
+    let (v3, v2, v1) = (dir.join("v3.argile"), dir.join("v2.argile"), dir.join("back-to-v1.argile"));
+    let out = argile(&["convert", FIXTURE_V1, v3.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(String::from_utf8_lossy(&out.stdout).contains("format version 2"));
-    assert_eq!(&std::fs::read(&v2).unwrap()[4..8], &2u32.to_le_bytes());
-    assert!(same_matter(&load_sculpt(&v2).unwrap().field, &fixture_field()));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("format version 3"));
+    assert_eq!(&std::fs::read(&v3).unwrap()[4..8], &3u32.to_le_bytes());
+    assert!(same_matter(&load_sculpt(&v3).unwrap().field, &fixture_field()));
+    let out = argile(&["convert", v3.to_str().unwrap(), v2.to_str().unwrap(), "--format-version", "2"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        std::fs::read(&v2).unwrap(),
+        std::fs::read(FIXTURE_V2).unwrap(),
+        "the same bytes as version 2 wrote"
+    );
     let out = argile(&["convert", v2.to_str().unwrap(), v1.to_str().unwrap(), "--format-version", "1"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert_eq!(
@@ -167,7 +185,7 @@ fn convert_moves_sculpts_between_versions() {
         argile(&["convert", FIXTURE_V1, dir.join("v9.argile").to_str().unwrap(), "--format-version", "9"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("format version 9 cannot be written"));
-    let out = argile(&["convert", FIXTURE_V1, v2.to_str().unwrap()]);
+    let out = argile(&["convert", FIXTURE_V1, v3.to_str().unwrap()]);
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("pass --force"));
 
     // A scene converts to its clay at the end of its timeline, as `argile save` stores it.

@@ -108,7 +108,7 @@ impl<'s> Playback<'s> {
         self.strokes = [None, None];
         self.owns_stroke = false;
         self.push = None;
-        let keys: Vec<_> = self.field.brick_keys().chain(field.brick_keys()).collect();
+        let keys: Vec<_> = self.field.covered_keys().into_iter().chain(field.covered_keys()).collect();
         for key in keys {
             let lo = key * BRICK_SIZE;
             field.mark_dirty(lo, lo + crate::math::IVec3::splat(BRICK_SIZE - 1));

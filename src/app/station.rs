@@ -286,7 +286,12 @@ type BudgetKey = ([f32; 6], [f32; 3], f32, f32);
 fn clay_bounds(field: &crate::field::Field) -> crate::math::Aabb {
     use crate::field::BRICK_SIZE;
     let t = field.transform();
-    field.brick_keys().filter(|&k| field.density_range(k).is_some_and(|(_, max)| max > 0.0)).fold(
+    let keys: Box<dyn Iterator<Item = crate::field::BrickKey>> = if field.has_levels_above(0) {
+        Box::new(field.covered_keys().into_iter())
+    } else {
+        Box::new(field.brick_keys())
+    };
+    keys.filter(|&k| field.read_range(k).is_some_and(|(_, max)| max > 0.0)).fold(
         crate::math::Aabb::EMPTY,
         |b, k| {
             let lo = (k * BRICK_SIZE).as_vec3();

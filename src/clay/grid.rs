@@ -206,7 +206,7 @@ pub fn window_around(field: &Field, tools: &[Aabb], margin: i32) -> (IVec3, IVec
             for ky in ka.y..=kz.y {
                 for kx in ka.x..=kz.x {
                     let k = IVec3::new(kx, ky, kz_);
-                    if field.density_range(k).is_some_and(|r| r.1 > 0.0) && seen.insert(k) {
+                    if field.read_range(k).is_some_and(|r| r.1 > 0.0) && seen.insert(k) {
                         frontier.push(k);
                     }
                 }
@@ -218,7 +218,7 @@ pub fn window_around(field: &Field, tools: &[Aabb], margin: i32) -> (IVec3, IVec
         hi = hi.max(k * s + s - IVec3::ONE);
         for d in NEIGHBOURS {
             let n = k + d;
-            if field.density_range(n).is_some_and(|r| r.1 > 0.0) && seen.insert(n) {
+            if field.read_range(n).is_some_and(|r| r.1 > 0.0) && seen.insert(n) {
                 frontier.push(n);
             }
         }

@@ -23,6 +23,48 @@ pub const BRICK_VOLUME: usize = (BRICK_SIZE * BRICK_SIZE * BRICK_SIZE) as usize;
 /// Key of a brick: lattice point `p` lies in brick `p.div_euclid(BRICK_SIZE)`.
 pub type BrickKey = IVec3;
 
+/// Resolution levels of a field: level `l` has voxels `2^l` times the finest's (1x to 16x).
+pub const LEVELS: usize = 5;
+
+/// A brick of one resolution level: level `l`'s lattice point `q` sits where the finest
+/// level's point `q · 2^l` does, and its bricks are keyed on its own lattice like the finest's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct LevelKey {
+    /// The level (0: the finest).
+    pub level: u8,
+    /// The brick's key on that level's lattice.
+    pub key: BrickKey,
+}
+
+impl LevelKey {
+    /// Brick `key` of level `level`.
+    pub fn new(level: usize, key: BrickKey) -> Self {
+        debug_assert!(level < LEVELS);
+        Self { level: level as u8, key }
+    }
+
+    /// The key's coordinates, level first, for sorting.
+    pub fn sort_key(&self) -> (u8, [i32; 3]) {
+        (self.level, self.key.to_array())
+    }
+}
+
+impl From<BrickKey> for LevelKey {
+    /// A brick of the finest level.
+    fn from(key: BrickKey) -> Self {
+        Self { level: 0, key }
+    }
+}
+
+impl std::fmt::Display for LevelKey {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.level {
+            0 => write!(f, "{}", self.key),
+            l => write!(f, "{} of level {l}", self.key),
+        }
+    }
+}
+
 /// A linear RGBA colour.
 pub type Colour = [f32; 4];
 
@@ -187,6 +229,14 @@ impl Brick {
                 BrickColours::PerSample(_) => std::mem::size_of::<[Colour; BRICK_VOLUME]>(),
             }
     }
+}
+
+/// The keys of the bricks holding a point of `lo ..= hi`, x fastest.
+pub fn keys_over(lo: IVec3, hi: IVec3) -> impl Iterator<Item = BrickKey> {
+    let s = IVec3::splat(BRICK_SIZE);
+    let (a, b) = (lo.div_euclid(s), hi.div_euclid(s));
+    (a.z..=b.z)
+        .flat_map(move |z| (a.y..=b.y).flat_map(move |y| (a.x..=b.x).map(move |x| IVec3::new(x, y, z))))
 }
 
 /// The brick holding lattice point `p`, and `p`'s local coordinate in it.

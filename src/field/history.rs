@@ -17,7 +17,7 @@
 //!   undo reaches them; over the disk budget, or with no spill folder, the oldest steps are
 //!   dropped, and undo stops there.
 //! - A spilled step is one file: a header (`ARGH`, version, entry count), the entries (brick
-//!   key, present flag, densities and colours as little-endian `f32`), and a CRC-32 of all
+//!   key, flags (bit 0: present, bits 1–3: the level), densities and colours as little-endian `f32`), and a CRC-32 of all
 //!   that. A file that does not read back whole and intact is refused with its path.
 //! - Edits outside a stroke (building a scene's initial clay) are not journaled.
 
@@ -26,7 +26,7 @@ use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use super::brick::{Brick, BrickColours, BrickKey, BRICK_VOLUME};
+use super::brick::{Brick, BrickColours, BrickKey, LevelKey, BRICK_VOLUME, LEVELS};
 
 /// Bytes one brick's samples take written out in full (spill files, sculpt files, the
 /// journal): densities and RGBA colours as `f32`. In memory a brick takes
@@ -86,7 +86,7 @@ pub struct HistoryStats {
 /// The bricks one step saved: each key once, with its content before the step.
 #[derive(Debug, Default)]
 pub(crate) struct Step {
-    pub(crate) bricks: Vec<(BrickKey, Option<Arc<Brick>>)>,
+    pub(crate) bricks: Vec<(LevelKey, Option<Arc<Brick>>)>,
 }
 
 impl Step {
@@ -105,14 +105,14 @@ pub(crate) struct History {
     config: HistoryConfig,
     undo: VecDeque<Stored>,
     redo: Vec<Step>,
-    open: Option<(Step, HashSet<BrickKey>)>,
+    open: Option<(Step, HashSet<LevelKey>)>,
     memory_bytes: usize,
     disk_bytes: u64,
     dropped: usize,
     session_dir: Option<PathBuf>,
     next_file: u64,
     /// Bricks changed by closed strokes, undo and redo since the journal last took them.
-    changed: HashSet<BrickKey>,
+    changed: HashSet<LevelKey>,
 }
 
 impl std::fmt::Debug for History {
@@ -202,7 +202,7 @@ impl History {
 
     /// Saves `current` as the state of `key` before the open stroke, on its first touch (by
     /// sharing it: the field copies it when it writes).
-    pub(crate) fn touch(&mut self, key: BrickKey, current: Option<&Arc<Brick>>) {
+    pub(crate) fn touch(&mut self, key: LevelKey, current: Option<&Arc<Brick>>) {
         if let Some((step, seen)) = &mut self.open {
             if seen.insert(key) {
                 let saved = current.cloned();
@@ -242,12 +242,12 @@ impl History {
     }
 
     /// Notes that undo or redo replaced the brick at `key`.
-    pub(crate) fn note_changed(&mut self, key: BrickKey) {
+    pub(crate) fn note_changed(&mut self, key: LevelKey) {
         self.changed.insert(key);
     }
 
     /// The keys changed since the last call (see [`History::note_changed`]).
-    pub(crate) fn take_changed(&mut self) -> Vec<BrickKey> {
+    pub(crate) fn take_changed(&mut self) -> Vec<LevelKey> {
         self.changed.drain().collect()
     }
 
@@ -363,7 +363,7 @@ impl Drop for History {
 }
 
 const MAGIC: &[u8; 4] = b"ARGH";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 
 fn encode_step(step: &Step) -> Vec<u8> {
     let mut out = Vec::with_capacity(16 + step.bricks.len() * (13 + BRICK_BYTES) + 4);
@@ -371,13 +371,13 @@ fn encode_step(step: &Step) -> Vec<u8> {
     out.extend_from_slice(&VERSION.to_le_bytes());
     out.extend_from_slice(&(step.bricks.len() as u64).to_le_bytes());
     for (key, brick) in &step.bricks {
-        for c in key.to_array() {
+        for c in key.key.to_array() {
             out.extend_from_slice(&c.to_le_bytes());
         }
         match brick {
-            None => out.push(0),
+            None => out.push(key.level << 1),
             Some(b) => {
-                out.push(1);
+                out.push(1 | key.level << 1);
                 for d in b.density.iter() {
                     out.extend_from_slice(&d.to_le_bytes());
                 }
@@ -442,12 +442,18 @@ fn decode_step(bytes: &[u8]) -> Result<Step, String> {
             i32::from_le_bytes(k[4..8].try_into().expect("4 bytes")),
             i32::from_le_bytes(k[8..12].try_into().expect("4 bytes")),
         );
+        let flags = take(1)?[0];
+        let level = usize::from(flags >> 1);
+        if level >= LEVELS {
+            return Err(format!("brick {key} has an unknown level {level}"));
+        }
+        let key = LevelKey::new(level, key);
         if seen.insert(key, ()).is_some() {
             return Err(format!("brick {key} appears twice"));
         }
-        let brick = match take(1)?[0] {
+        let brick = match flags & 1 {
             0 => None,
-            1 => {
+            _ => {
                 let d = take(BRICK_VOLUME * 4)?;
                 let c = take(BRICK_VOLUME * 16)?;
                 let mut b = Brick::default();
@@ -457,7 +463,6 @@ fn decode_step(bytes: &[u8]) -> Result<Step, String> {
                 b.colour = BrickColours::from_samples(|i| std::array::from_fn(|j| f32_at(c, 4 * i + j)));
                 Some(Arc::new(b))
             }
-            flag => return Err(format!("brick {key} has an unknown presence flag {flag}")),
         };
         step.bricks.push((key, brick));
     }
@@ -476,7 +481,12 @@ mod tests {
         let mut b = Brick::default();
         b.density[3] = 0.25;
         b.colour[7] = [0.1, 0.2, 0.3, 1.0];
-        Step { bricks: vec![(IVec3::new(-1, 2, 3), Some(Arc::new(b))), (IVec3::new(4, -5, 6), None)] }
+        Step {
+            bricks: vec![
+                (IVec3::new(-1, 2, 3).into(), Some(Arc::new(b))),
+                (LevelKey::new(3, IVec3::new(4, -5, 6)), None),
+            ],
+        }
     }
 
     #[test]

@@ -8,7 +8,9 @@
 //!   stored values are samples of a band-limited characteristic function (Galyean–Hughes), so
 //!   a surface sits between samples with sub-voxel precision;
 //! - colour is linear RGBA per sample;
-//! - a lattice point without a brick is empty (density 0);
+//! - the field has [`LEVELS`] resolution levels, voxel sizes doubling from the finest; a point
+//!   of a level without a brick reads the coarser levels, and a point no level holds is empty
+//!   (density 0) (see the `levels` module);
 //! - a brick's colours are stored once while its matter has one colour, per sample otherwise;
 //!   a brick of one value throughout (solid inside) is a constant tile shared by every key that
 //!   holds it (see [`Brick`] and [`Field`]);
@@ -16,12 +18,15 @@
 
 mod brick;
 mod history;
+mod levels;
 mod sample;
 mod tree;
 
 pub use brick::{
-    split_index, Brick, BrickColours, BrickKey, Colour, BRICK_SIZE, BRICK_VOLUME, DEFAULT_COLOUR,
+    split_index, Brick, BrickColours, BrickKey, Colour, LevelKey, BRICK_SIZE, BRICK_VOLUME, DEFAULT_COLOUR,
+    LEVELS,
 };
 pub use history::{HistoryConfig, HistoryError, HistoryStats, BRICK_BYTES};
+pub use levels::DETAIL_TOLERANCE;
 pub use sample::FieldReader;
 pub use tree::{bricks_reading, DirtySet, Field, HistoryStep};

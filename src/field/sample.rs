@@ -10,27 +10,52 @@ use crate::math::{IVec3, Vec3};
 /// A read accessor that remembers the last brick it visited, so that coherent reads (a
 /// kernel walking neighbouring points) skip the hash lookup (OpenVDB's `ValueAccessor`).
 /// One per thread; it borrows the field immutably.
+///
+/// It reads the finest level; where that holds no brick, the coarser levels' interpolation,
+/// made once per brick visited.
 #[derive(Debug)]
 pub struct FieldReader<'f> {
     field: &'f Field,
-    cached: Option<(BrickKey, Option<&'f Brick>)>,
+    /// The last brick read: stored (borrowed), interpolated (in `refined`), or empty.
+    cached: Option<(BrickKey, Cached<'f>)>,
+    refined: Brick,
+    coarse: bool,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Cached<'f> {
+    Stored(&'f Brick),
+    Refined,
+    Empty,
 }
 
 impl<'f> FieldReader<'f> {
     /// A reader over `field`.
     pub fn new(field: &'f Field) -> Self {
-        Self { field, cached: None }
+        Self { field, cached: None, refined: Brick::default(), coarse: field.has_levels_above(0) }
     }
 
     #[inline]
-    fn brick(&mut self, key: BrickKey) -> Option<&'f Brick> {
-        match self.cached {
-            Some((k, b)) if k == key => b,
+    fn brick(&mut self, key: BrickKey) -> Option<&Brick> {
+        let cached = match self.cached {
+            Some((k, c)) if k == key => c,
             _ => {
-                let b = self.field.brick(key);
-                self.cached = Some((key, b));
-                b
+                let c = match self.field.brick(key) {
+                    Some(b) => Cached::Stored(b),
+                    None if self.coarse => match self.field.read_brick(key, &mut self.refined) {
+                        Some(_) => Cached::Refined,
+                        None => Cached::Empty,
+                    },
+                    None => Cached::Empty,
+                };
+                self.cached = Some((key, c));
+                c
             }
+        };
+        match cached {
+            Cached::Stored(b) => Some(b),
+            Cached::Refined => Some(&self.refined),
+            Cached::Empty => None,
         }
     }
 

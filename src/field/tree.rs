@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 
-use super::brick::{split_index, Brick, BrickColours, BrickKey, Colour, BRICK_SIZE, DEFAULT_COLOUR};
+use super::brick::{keys_over, Brick, BrickColours, BrickKey, Colour, LevelKey, BRICK_SIZE, LEVELS};
 use super::history::{History, HistoryConfig, HistoryError, HistoryStats, Step};
 use crate::math::{IVec3, VoxelTransform};
 
@@ -28,7 +28,16 @@ pub fn bricks_reading(lo: IVec3, hi: IVec3) -> (BrickKey, BrickKey) {
 }
 
 /// One step of the undo history: the bricks it puts back, each key once (`None`: absent).
-pub type HistoryStep = Vec<(BrickKey, Option<Arc<Brick>>)>;
+pub type HistoryStep = Vec<(LevelKey, Option<Arc<Brick>>)>;
+
+/// One resolution level's bricks, with the lowest and highest density of each.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Level {
+    pub(super) bricks: HashMap<BrickKey, Arc<Brick>>,
+    /// Lowest and highest density of each stored brick, kept with every edit, so that whole
+    /// bricks can be classified (inside, outside, crossing the surface) without reading them.
+    pub(super) ranges: HashMap<BrickKey, (f32, f32)>,
+}
 
 /// A sparse density + colour field on a regular lattice.
 ///
@@ -48,20 +57,20 @@ pub type HistoryStep = Vec<(BrickKey, Option<Arc<Brick>>)>;
 /// edit of such a key copies the tile into a brick of its own (copy-on-write), and an edit
 /// that leaves a brick uniform shares the tile again. Readers see bricks either way.
 ///
-/// This first version has a single resolution level; its API (lattice points, bricks, dirty
-/// set, world sampling) is the one the multi-level field keeps.
+/// Resolution levels: the field holds [`LEVELS`] lattices, level `l`'s voxels `2^l` times
+/// the finest's (see the `levels` module). The methods without a level in their name speak of
+/// the finest level, whose lattice is the one the mesher, the clay and sampling read; its
+/// points read the coarser levels where it holds no brick ([`Field::density`]).
 #[derive(Debug)]
 pub struct Field {
-    transform: VoxelTransform,
-    iso: f32,
-    bricks: HashMap<BrickKey, Arc<Brick>>,
+    pub(super) transform: VoxelTransform,
+    pub(super) iso: f32,
+    /// The levels, finest first.
+    pub(super) levels: Vec<Level>,
     /// The shared constant tiles, by the bits of their density and colour.
     tiles: HashMap<TileValue, Arc<Brick>>,
-    /// Lowest and highest density of each stored brick, kept with every edit, so that whole
-    /// bricks can be classified (inside, outside, crossing the surface) without reading them.
-    ranges: HashMap<BrickKey, (f32, f32)>,
     dirty: DirtySet,
-    history: History,
+    pub(super) history: History,
 }
 
 impl Clone for Field {
@@ -70,9 +79,8 @@ impl Clone for Field {
         Self {
             transform: self.transform,
             iso: self.iso,
-            bricks: self.bricks.clone(),
+            levels: self.levels.clone(),
             tiles: self.tiles.clone(),
-            ranges: self.ranges.clone(),
             dirty: self.dirty.clone(),
             history: History::new(self.history.config().clone()),
         }
@@ -86,9 +94,8 @@ impl Field {
         Self {
             transform: VoxelTransform::new(voxel_size_m),
             iso,
-            bricks: HashMap::default(),
+            levels: vec![Level::default(); LEVELS],
             tiles: HashMap::default(),
-            ranges: HashMap::default(),
             dirty: DirtySet::default(),
             history: History::new(HistoryConfig::default()),
         }
@@ -160,32 +167,20 @@ impl Field {
         for (key, brick) in step.bricks {
             let old = match brick {
                 Some(b) => self.store(key, b),
-                None => {
-                    self.ranges.remove(&key);
-                    self.bricks.remove(&key)
-                }
+                None => self.remove(key),
             };
             replaced.bricks.push((key, old));
             self.history.note_changed(key);
-            let base = key * BRICK_SIZE;
-            self.mark_dirty(base, base + IVec3::splat(BRICK_SIZE - 1));
+            let base = key.key * BRICK_SIZE;
+            self.mark_level_dirty(key.level.into(), base, base + IVec3::splat(BRICK_SIZE - 1));
         }
         replaced
     }
 
-    /// Whether both fields hold the same samples, bit for bit (same bricks, same values).
+    /// Whether both fields hold the same samples, bit for bit (same bricks on every level,
+    /// same values).
     pub fn same_samples(&self, other: &Field) -> bool {
-        self.bricks.len() == other.bricks.len()
-            && self.bricks.iter().all(|(k, b)| {
-                other.bricks.get(k).is_some_and(|o| {
-                    b.density.iter().zip(o.density.iter()).all(|(x, y)| x.to_bits() == y.to_bits())
-                        && b.colour
-                            .iter()
-                            .flatten()
-                            .zip(o.colour.iter().flatten())
-                            .all(|(x, y)| x.to_bits() == y.to_bits())
-                })
-            })
+        self.levels.iter().zip(&other.levels).all(|(mine, theirs)| same_level(mine, theirs))
     }
 
     /// Lattice ↔ world transform.
@@ -198,64 +193,92 @@ impl Field {
         self.iso
     }
 
-    /// Number of stored bricks.
+    /// Number of stored bricks of the finest level.
     pub fn brick_count(&self) -> usize {
-        self.bricks.len()
+        self.levels[0].bricks.len()
     }
 
-    /// The brick with this key, if stored.
+    /// Number of stored bricks of `level`.
+    pub fn level_brick_count(&self, level: usize) -> usize {
+        self.levels[level].bricks.len()
+    }
+
+    /// The finest level's brick with this key, if stored.
+    #[inline]
     pub fn brick(&self, key: BrickKey) -> Option<&Brick> {
-        self.bricks.get(&key).map(Arc::as_ref)
+        self.levels[0].bricks.get(&key).map(Arc::as_ref)
+    }
+
+    /// The brick with this level and key, if stored.
+    #[inline]
+    pub fn level_brick(&self, key: LevelKey) -> Option<&Brick> {
+        self.levels[usize::from(key.level)].bricks.get(&key.key).map(Arc::as_ref)
+    }
+
+    /// Keys of `level`'s stored bricks, in no particular order.
+    pub fn level_keys(&self, level: usize) -> impl Iterator<Item = BrickKey> + '_ {
+        self.levels[level].bricks.keys().copied()
+    }
+
+    /// Whether a level coarser than `level` holds a brick.
+    #[inline]
+    pub fn has_levels_above(&self, level: usize) -> bool {
+        self.levels.iter().skip(level + 1).any(|l| !l.bricks.is_empty())
     }
 
     /// The bricks that closed strokes, undo and redo changed since the last call, as they are
     /// now, in no particular order: shared, not copied (`None`: the brick is gone, its samples
     /// are empty). Edits outside strokes are not included. For the autosave journal; cost: one map lookup per
     /// changed brick.
-    pub fn take_changed_bricks(&mut self) -> Vec<(BrickKey, Option<Arc<Brick>>)> {
+    pub fn take_changed_bricks(&mut self) -> Vec<(LevelKey, Option<Arc<Brick>>)> {
         let keys = self.history.take_changed();
-        keys.into_iter().map(|k| (k, self.bricks.get(&k).cloned())).collect()
+        keys.into_iter().map(|k| (k, self.stored(k).cloned())).collect()
     }
 
-    /// Every stored brick, shared (not copied), in no particular order.
-    pub fn shared_bricks(&self) -> impl Iterator<Item = (BrickKey, &Arc<Brick>)> + '_ {
-        self.bricks.iter().map(|(k, b)| (*k, b))
+    /// Every stored brick of every level, shared (not copied), in no particular order.
+    pub fn shared_bricks(&self) -> impl Iterator<Item = (LevelKey, &Arc<Brick>)> + '_ {
+        self.levels
+            .iter()
+            .enumerate()
+            .flat_map(|(l, level)| level.bricks.iter().map(move |(k, b)| (LevelKey::new(l, *k), b)))
     }
 
-    /// Puts `brick` at `key`, replacing what was there (an all-empty brick removes it), and
-    /// marks what it changes dirty. For loading stored sculpts; not journaled.
-    pub fn insert_brick(&mut self, key: BrickKey, mut brick: Brick) {
+    /// The stored brick at `key`, shared.
+    fn stored(&self, key: LevelKey) -> Option<&Arc<Brick>> {
+        self.levels[usize::from(key.level)].bricks.get(&key.key)
+    }
+
+    /// Puts `brick` at `key` (a finest-level [`BrickKey`] or a [`LevelKey`]), replacing what
+    /// was there (an all-empty brick removes it), and marks what it changes dirty. For loading
+    /// stored sculpts; not journaled.
+    pub fn insert_brick(&mut self, key: impl Into<LevelKey>, mut brick: Brick) {
+        let key = key.into();
         brick.compact();
         if brick.is_empty() {
-            self.bricks.remove(&key);
-            self.ranges.remove(&key);
+            self.remove(key);
         } else {
             self.store(key, Arc::new(brick));
         }
-        let base = key * BRICK_SIZE;
-        self.mark_dirty(base, base + IVec3::splat(BRICK_SIZE - 1));
+        let base = key.key * BRICK_SIZE;
+        self.mark_level_dirty(key.level.into(), base, base + IVec3::splat(BRICK_SIZE - 1));
     }
 
-    /// The lowest and highest density of a stored brick (`None`: no brick, all samples 0).
+    /// The lowest and highest density of a stored brick of the finest level (`None`: no
+    /// brick; its samples read the coarser levels, see [`Field::read_range`]).
+    #[inline]
     pub fn density_range(&self, key: BrickKey) -> Option<(f32, f32)> {
-        self.ranges.get(&key).copied()
+        self.levels[0].ranges.get(&key).copied()
     }
 
-    /// Keys of every stored brick, in no particular order.
+    /// The lowest and highest density of a stored brick of any level.
+    #[inline]
+    pub fn level_density_range(&self, key: LevelKey) -> Option<(f32, f32)> {
+        self.levels[usize::from(key.level)].ranges.get(&key.key).copied()
+    }
+
+    /// Keys of every stored brick of the finest level, in no particular order.
     pub fn brick_keys(&self) -> impl Iterator<Item = BrickKey> + '_ {
-        self.bricks.keys().copied()
-    }
-
-    /// Density at a lattice point.
-    pub fn density(&self, p: IVec3) -> f32 {
-        let (key, local) = split_index(p);
-        self.bricks.get(&key).map_or(0.0, |b| b.density[Brick::linear(local)])
-    }
-
-    /// Colour at a lattice point.
-    pub fn colour(&self, p: IVec3) -> Colour {
-        let (key, local) = split_index(p);
-        self.bricks.get(&key).map_or(DEFAULT_COLOUR, |b| b.colour[Brick::linear(local)])
+        self.levels[0].bricks.keys().copied()
     }
 
     /// Bytes the samples take in memory: each distinct brick's samples once (a constant tile
@@ -266,30 +289,44 @@ impl Field {
             std::mem::size_of::<(BrickKey, Arc<Brick>)>() + std::mem::size_of::<(BrickKey, (f32, f32))>();
         let per_brick = std::mem::size_of::<Brick>() + 2 * std::mem::size_of::<usize>();
         let mut seen = HashSet::<*const Brick>::default();
+        let keys: usize = self.levels.iter().map(|l| l.bricks.len()).sum();
         let samples: usize = self
-            .bricks
-            .values()
+            .levels
+            .iter()
+            .flat_map(|l| l.bricks.values())
             .chain(self.tiles.values())
             .filter(|b| seen.insert(Arc::as_ptr(b)))
             .map(|b| per_brick + b.heap_bytes())
             .sum();
-        self.bricks.len() * per_key + self.tiles.len() * (per_key + 4) + samples
+        keys * per_key + self.tiles.len() * (per_key + 4) + samples
     }
 
-    /// Number of stored keys that share a constant tile.
+    /// Number of stored keys, on every level, that share a constant tile.
     pub fn tile_count(&self) -> usize {
-        self.bricks.values().filter(|b| self.tiles.values().any(|t| Arc::ptr_eq(b, t))).count()
+        self.levels
+            .iter()
+            .flat_map(|l| l.bricks.values())
+            .filter(|b| self.tiles.values().any(|t| Arc::ptr_eq(b, t)))
+            .count()
     }
 
     /// Puts `brick` at `key` (sharing the constant tile of its value, if it is uniform) and
     /// records its density range; returns what was there. `brick` holds matter.
-    fn store(&mut self, key: BrickKey, brick: Arc<Brick>) -> Option<Arc<Brick>> {
-        self.ranges.insert(key, density_range(&brick));
+    pub(super) fn store(&mut self, key: LevelKey, brick: Arc<Brick>) -> Option<Arc<Brick>> {
+        let level = &mut self.levels[usize::from(key.level)];
+        level.ranges.insert(key.key, density_range(&brick));
         let brick = match brick.uniform_value() {
             Some(value) => self.tile(value, brick),
             None => brick,
         };
-        self.bricks.insert(key, brick)
+        self.levels[usize::from(key.level)].bricks.insert(key.key, brick)
+    }
+
+    /// Removes the brick at `key`; returns what was there.
+    pub(super) fn remove(&mut self, key: LevelKey) -> Option<Arc<Brick>> {
+        let level = &mut self.levels[usize::from(key.level)];
+        level.ranges.remove(&key.key);
+        level.bricks.remove(&key.key)
     }
 
     /// The shared tile of `value`, made from `brick` (which holds it) if there is none yet.
@@ -311,13 +348,13 @@ impl Field {
 
     /// Samples strictly between empty and full: the band around the surface (what a narrow-band
     /// level set such as OpenVDB's stores as active voxels).
+    /// Stored samples of every level count.
     pub fn band_samples(&self) -> usize {
-        self.bricks.values().map(|b| b.density.iter().filter(|&&d| d > 0.0 && d < 1.0).count()).sum()
-    }
-
-    /// Total matter in the field, in sample units (sum of densities).
-    pub fn mass(&self) -> f64 {
-        self.bricks.values().map(|b| b.mass()).sum()
+        self.levels
+            .iter()
+            .flat_map(|l| l.bricks.values())
+            .map(|b| b.density.iter().filter(|&&d| d > 0.0 && d < 1.0).count())
+            .sum()
     }
 
     /// Calls `edit` on every lattice point of the box `lo ..= hi`, brick by brick.
@@ -361,9 +398,23 @@ impl Field {
         hi: IVec3,
         create: bool,
         changes: impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool,
+        edit: impl FnMut(IVec3, &mut f32, &mut Colour),
+    ) {
+        self.edit_samples(0, lo, hi, Walk { create, refine: true }, changes, edit);
+    }
+
+    /// The brick walk of [`Field::edit_where`] on `level`'s lattice, doing as `walk` says
+    /// where the level holds no brick.
+    pub(super) fn edit_samples(
+        &mut self,
+        level: usize,
+        lo: IVec3,
+        hi: IVec3,
+        walk: Walk,
+        changes: impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool,
         mut edit: impl FnMut(IVec3, &mut f32, &mut Colour),
     ) {
-        self.edit_bricks(lo, hi, create, changes, |brick, base, a, b, mut fresh| {
+        self.edit_bricks(level, lo, hi, walk, changes, |brick, base, a, b, mut fresh| {
             for z in a.z..=b.z {
                 for y in a.y..=b.y {
                     for x in a.x..=b.x {
@@ -397,9 +448,10 @@ impl Field {
         mut edit: impl FnMut(IVec3, &mut f32),
     ) {
         self.edit_bricks(
+            0,
             lo,
             hi,
-            false,
+            Walk { create: false, refine: true },
             |a, b, _| reaches(a, b),
             |brick, base, a, b, _| {
                 for z in a.z..=b.z {
@@ -414,70 +466,103 @@ impl Field {
         );
     }
 
-    /// The brick walk under every edit: for each brick of `lo ..= hi` that `changes`, records
-    /// it for undo, copies it if shared, lets `samples(brick, base, a, b, fresh)` edit its
-    /// points `base + (a ..= b)` (`fresh`: the brick was made for this edit), then drops it if
-    /// empty, shares it as a tile if uniform, and keeps its density range.
-    fn edit_bricks(
+    /// Edits the stored bricks of `level` over `lo ..= hi`, neither creating nor refining any
+    /// (see [`Field::edit_where`] for `edit`).
+    pub(super) fn edit_existing(
         &mut self,
+        level: usize,
         lo: IVec3,
         hi: IVec3,
-        create: bool,
+        edit: impl FnMut(IVec3, &mut f32, &mut Colour),
+    ) {
+        self.edit_samples(level, lo, hi, Walk { create: false, refine: false }, |_, _, _| true, edit);
+    }
+
+    /// The brick walk under every edit: for each brick of `level` over `lo ..= hi` that
+    /// `changes`, records it for undo, copies it if shared, lets `samples(brick, base, a, b,
+    /// fresh)` edit its points `base + (a ..= b)` (`fresh`: the brick was made empty for this
+    /// edit), then drops it if empty, shares it as a tile if uniform, and keeps its density
+    /// range. Where the level holds no brick, `walk` says whether to refine one from the
+    /// coarser levels (where they hold clay) and whether to create an empty one.
+    ///
+    /// Afterwards, the walked bricks that hold no detail over the coarser levels are dropped
+    /// (see the `levels` module).
+    pub(super) fn edit_bricks(
+        &mut self,
+        level: usize,
+        lo: IVec3,
+        hi: IVec3,
+        walk: Walk,
         changes: impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool,
         mut samples: impl FnMut(&mut Brick, IVec3, IVec3, IVec3, bool),
     ) {
         if lo.cmpgt(hi).any() {
             return;
         }
+        let above = self.has_levels_above(level);
+        let mut walked = Vec::new();
         let s = IVec3::splat(BRICK_SIZE);
-        let (k_lo, k_hi) = (lo.div_euclid(s), hi.div_euclid(s));
-        for kz in k_lo.z..=k_hi.z {
-            for ky in k_lo.y..=k_hi.y {
-                for kx in k_lo.x..=k_hi.x {
-                    let key = IVec3::new(kx, ky, kz);
-                    let base = key * s;
-                    let a = lo.max(base) - base;
-                    let b = hi.min(base + s - IVec3::ONE) - base;
-                    if !changes(base + a, base + b, self.ranges.get(&key).copied()) {
+        for key in keys_over(lo, hi) {
+            let level_key = LevelKey::new(level, key);
+            let base = key * s;
+            let a = lo.max(base) - base;
+            let b = hi.min(base + s - IVec3::ONE) - base;
+            let mut stored = self.levels[level].bricks.contains_key(&key);
+            if !stored && walk.refine && above && self.reads_above(level, key) {
+                // The coarser levels hold clay here: the level's brick is theirs first.
+                if let Some(refined) = self.interpolated_brick(level, key) {
+                    if !changes(base + a, base + b, Some(density_range(&refined))) {
                         continue;
                     }
-                    if create || self.bricks.contains_key(&key) {
-                        self.history.touch(key, self.bricks.get(&key));
-                    }
-                    // A brick made by this edit holds no matter yet: its colour is that of the
-                    // first matter the edit puts in it.
-                    let fresh = !self.bricks.contains_key(&key);
-                    // Copies the brick if the history, the journal or a tile shares it.
-                    let brick = if create {
-                        Arc::make_mut(self.bricks.entry(key).or_default())
-                    } else {
-                        match self.bricks.get_mut(&key) {
-                            Some(brick) => Arc::make_mut(brick),
-                            None => continue,
-                        }
-                    };
-                    samples(brick, base, a, b, fresh);
-                    brick.compact();
-                    let range = density_range(brick);
-                    if range.1 == 0.0 {
-                        self.bricks.remove(&key);
-                        self.ranges.remove(&key);
-                        continue;
-                    }
-                    // One density everywhere (the range says so without another pass) and one
-                    // colour: a constant tile.
-                    if let (true, &BrickColours::Uniform(colour)) =
-                        (range.0.to_bits() == range.1.to_bits(), &brick.colour)
-                    {
-                        let edited = self.bricks[&key].clone();
-                        let tile = self.tile((range.0, colour), edited);
-                        self.bricks.insert(key, tile);
-                    }
-                    self.ranges.insert(key, range);
+                    self.history.touch(level_key, None);
+                    self.store(level_key, Arc::new(refined));
+                    stored = true;
                 }
             }
+            if !changes(base + a, base + b, self.levels[level].ranges.get(&key).copied()) {
+                continue;
+            }
+            if !stored && !walk.create {
+                continue;
+            }
+            self.history.touch(level_key, self.levels[level].bricks.get(&key));
+            if above {
+                walked.push(key);
+            }
+            // A brick made by this edit holds no matter yet: its colour is that of the
+            // first matter the edit puts in it.
+            let fresh = !stored;
+            // Copies the brick if the history, the journal or a tile shares it.
+            let brick = Arc::make_mut(self.levels[level].bricks.entry(key).or_default());
+            samples(brick, base, a, b, fresh);
+            brick.compact();
+            let range = density_range(brick);
+            if range.1 == 0.0 {
+                self.remove(level_key);
+                continue;
+            }
+            // One density everywhere (the range says so without another pass) and one
+            // colour: a constant tile.
+            if let (true, &BrickColours::Uniform(colour)) =
+                (range.0.to_bits() == range.1.to_bits(), &brick.colour)
+            {
+                let edited = self.levels[level].bricks[&key].clone();
+                let tile = self.tile((range.0, colour), edited);
+                self.levels[level].bricks.insert(key, tile);
+            }
+            self.levels[level].ranges.insert(key, range);
         }
-        self.mark_dirty(lo, hi);
+        self.mark_level_dirty(level, lo, hi);
+        if above {
+            self.coarsen(level, &walked);
+        }
+    }
+
+    /// Marks dirty every finest-level brick whose mesh reads a point that level `level`'s
+    /// points `lo ..= hi` reach (finest points strictly within one of its voxels).
+    pub(super) fn mark_level_dirty(&mut self, level: usize, lo: IVec3, hi: IVec3) {
+        let scale = 1 << level;
+        self.mark_dirty((lo - IVec3::ONE) * scale + IVec3::ONE, (hi + IVec3::ONE) * scale - IVec3::ONE);
     }
 
     /// Marks dirty every brick whose mesh reads a lattice point of `lo ..= hi`.
@@ -509,6 +594,31 @@ impl Field {
     }
 }
 
+/// What the brick walk does where a level holds no brick.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Walk {
+    /// Make an empty brick (for edits that add matter).
+    pub(super) create: bool,
+    /// Store the brick the coarser levels give, where they hold clay (for every edit of the
+    /// clay; not for carrying a coarse edit down into the finer bricks that exist).
+    pub(super) refine: bool,
+}
+
+/// Whether two levels hold the same bricks, bit for bit.
+fn same_level(mine: &Level, theirs: &Level) -> bool {
+    mine.bricks.len() == theirs.bricks.len()
+        && mine.bricks.iter().all(|(k, b)| {
+            theirs.bricks.get(k).is_some_and(|o| {
+                b.density.iter().zip(o.density.iter()).all(|(x, y)| x.to_bits() == y.to_bits())
+                    && b.colour
+                        .iter()
+                        .flatten()
+                        .zip(o.colour.iter().flatten())
+                        .all(|(x, y)| x.to_bits() == y.to_bits())
+            })
+        })
+}
+
 /// The bits of a constant tile's density and RGBA colour.
 type TileValue = [u32; 5];
 
@@ -523,7 +633,7 @@ fn density_range(brick: &Brick) -> (f32, f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::field::BRICK_VOLUME;
+    use crate::field::{BRICK_VOLUME, DEFAULT_COLOUR};
 
     #[test]
     fn absent_points_are_empty() {

@@ -36,7 +36,7 @@ use serde::{Deserialize, Serialize};
 
 use super::journal::{self, Reader};
 use super::{decode, encode_bricks, write_atomically, Sculpt};
-use crate::field::{Brick, BrickKey, Field};
+use crate::field::{Brick, Field, LevelKey};
 
 /// When autosave syncs and checkpoints.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -222,7 +222,7 @@ struct Shared {
     problem: Mutex<Option<String>>,
 }
 
-type Changes = Vec<(BrickKey, Option<Arc<Brick>>)>;
+type Changes = Vec<(LevelKey, Option<Arc<Brick>>)>;
 
 enum Msg {
     Stroke(u64, Changes),
@@ -362,7 +362,7 @@ struct Journal {
 
 struct Job {
     stroke: u64,
-    bricks: Vec<(BrickKey, Arc<Brick>)>,
+    bricks: Vec<(LevelKey, Arc<Brick>)>,
 }
 
 struct Writer {
@@ -370,7 +370,7 @@ struct Writer {
     disk: Arc<dyn Disk>,
     config: AutosaveConfig,
     shared: Arc<Shared>,
-    mirror: HashMap<BrickKey, Arc<Brick>>,
+    mirror: HashMap<LevelKey, Arc<Brick>>,
     voxel_size_m: f32,
     iso: f32,
     scene_toml: Option<Arc<str>>,
@@ -484,7 +484,7 @@ impl Writer {
 
     fn stroke(&mut self, n: u64, mut changes: Changes) {
         // Sorted here, not on the sculpting thread: the same strokes give the same bytes.
-        changes.sort_unstable_by_key(|(k, _)| k.to_array());
+        changes.sort_unstable_by_key(|(k, _)| k.sort_key());
         let bytes = (self.journal.is_some()).then(|| journal::record(n, &changes));
         for (key, brick) in changes {
             match brick {

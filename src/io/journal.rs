@@ -5,7 +5,7 @@ use std::collections::HashSet;
 use std::sync::Arc;
 
 use super::{put_chunk, put_entries, read_chunk, read_entries, u32_at, BRICKS_PER_CHUNK};
-use crate::field::{Brick, BrickKey};
+use crate::field::{Brick, LevelKey};
 
 const MAGIC: &[u8; 4] = b"ARGJ";
 const VERSION: u32 = 1;
@@ -26,7 +26,7 @@ pub(crate) fn header(base: u64) -> [u8; HEADER] {
 
 /// The bytes of one record: stroke number `stroke`, the bricks it changed as they are now,
 /// in parts of at most [`BRICKS_PER_CHUNK`] bricks (each part a chunk, the last one flagged).
-pub(crate) fn record(stroke: u64, bricks: &[(BrickKey, Option<Arc<Brick>>)]) -> Vec<u8> {
+pub(crate) fn record(stroke: u64, bricks: &[(LevelKey, Option<Arc<Brick>>)]) -> Vec<u8> {
     let mut out = Vec::new();
     let mut raw = Vec::new();
     let parts = bricks.len().div_ceil(BRICKS_PER_CHUNK).max(1);
@@ -45,7 +45,7 @@ pub(crate) fn record(stroke: u64, bricks: &[(BrickKey, Option<Arc<Brick>>)]) -> 
 #[derive(Debug)]
 pub(crate) struct Record {
     pub(crate) stroke: u64,
-    pub(crate) bricks: Vec<(BrickKey, Option<Brick>)>,
+    pub(crate) bricks: Vec<(LevelKey, Option<Brick>)>,
 }
 
 /// Reads a journal's records in order. A journal whose header is not whole is refused; the
@@ -171,8 +171,8 @@ mod tests {
         let mut out = header(7).to_vec();
         for s in 1..=strokes {
             let bricks = vec![
-                (IVec3::new(s as i32, -1, 2), Some(brick(s as f32))),
-                (IVec3::new(0, 0, -(s as i32)), None),
+                (IVec3::new(s as i32, -1, 2).into(), Some(brick(s as f32))),
+                (LevelKey::new(2, IVec3::new(0, 0, -(s as i32))), None),
             ];
             out.extend_from_slice(&record(7 + s, &bricks));
         }
@@ -188,7 +188,7 @@ mod tests {
         assert!(reader.torn.is_none());
         assert_eq!(records.iter().map(|r| r.stroke).collect::<Vec<_>>(), [8, 9, 10]);
         assert_eq!(records[1].bricks[0].1.as_ref(), Some(&*brick(2.0)));
-        assert_eq!(records[2].bricks[1], (IVec3::new(0, 0, -3), None));
+        assert_eq!(records[2].bricks[1], (LevelKey::new(2, IVec3::new(0, 0, -3)), None));
     }
 
     #[test]
@@ -225,7 +225,7 @@ mod tests {
     #[test]
     fn a_record_of_many_parts_is_applied_whole_or_not_at_all() {
         let bricks: Vec<_> =
-            (0..BRICKS_PER_CHUNK as i32 * 2 + 5).map(|i| (IVec3::new(i, 0, 0), None)).collect();
+            (0..BRICKS_PER_CHUNK as i32 * 2 + 5).map(|i| (IVec3::new(i, 0, 0).into(), None)).collect();
         let mut bytes = header(0).to_vec();
         bytes.extend_from_slice(&record(1, &bricks[..3]));
         let first = bytes.len();

@@ -2,7 +2,7 @@
 //!
 //! Knows the field (it stores bricks) and nothing of Vulkan or devices.
 //!
-//! ## Layout, version 2
+//! ## Layout, version 3
 //!
 //! ```text
 //!  header  "ARGL" · version u32 · chunk count u32                      (little-endian)
@@ -11,18 +11,25 @@
 //!
 //!  chunks  META  (first, once)  JSON: format, voxel size, iso-level, brick size, brick count
 //!          SCNE  (at most once) the scene file's TOML text the sculpt was made in
-//!          BRKS  (any number)   up to 512 bricks: per brick its key (3 × i32), then
-//!                               512 densities (f32) and 512 linear RGBA colours (4 × f32)
+//!          BRKS  (any number)   up to 512 bricks of the finest level: per brick its key
+//!                               (3 × i32), then 512 densities (f32) and 512 linear RGBA
+//!                               colours (4 × f32)
+//!          BRKL  (any number)   up to 512 bricks of a coarser level: the level u8 (1 to 4),
+//!                               then the bricks as in BRKS, keyed on that level's lattice
 //!          HIST  (any number)   the undo history held in memory (optional): kind u8 (0 undo,
 //!                               1 redo) · step index u32 · entry count u32 (≤ 512) · entries:
-//!                               per brick, present u8 (0: absent) · key (3 × i32) · if present
-//!                               its densities and colours as in BRKS. Undo steps oldest first,
+//!                               per brick, flags u8 (bit 0: present; bits 1–3: the level,
+//!                               0 the finest) · key (3 × i32) · if present its densities and
+//!                               colours as in BRKS. Undo steps oldest first,
 //!                               then redo steps (the next redo last), each index from 0; a step
 //!                               of more than 512 bricks continues in chunks of the same index.
 //! ```
 //!
-//! Version 1 is version 2 without HIST chunks; this build reads both and writes either
-//! (`argile convert`).
+//! Version 2 is version 3 without BRKL chunks and with the finest level alone in entries;
+//! version 1 is version 2 without HIST chunks. This build reads all three and writes any
+//! (`argile convert`): a sculpt with coarse levels written as version 1 or 2 stores the
+//! finest lattice as its readers see it (the coarse clay refined into finest bricks, the same
+//! field to the eye and to the mesher), without its undo history.
 //!
 //! - Every chunk's bytes are LZ4-compressed (`lz4_flex` block format) and carry the CRC-32 of
 //!   the stored bytes; a reader checks the CRC before decompressing and the decompressed
@@ -37,7 +44,7 @@
 //! - Files are written atomically ([`write_atomically`]).
 //!
 //! Later versions (resolution levels, freeform tools) add chunk tags; a reader keeps reading
-//! every version it has shipped (`tests/fixtures/sculpt-v1.argile` is checked).
+//! every version it has shipped (`tests/fixtures/sculpt-v1.argile` and `sculpt-v2.argile` are checked).
 //!
 //! ## Fuzzing the loader
 //!
@@ -91,7 +98,9 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use crate::field::{Brick, BrickColours, BrickKey, Colour, Field, HistoryStep, BRICK_SIZE, BRICK_VOLUME};
+use crate::field::{
+    Brick, BrickColours, BrickKey, Colour, Field, HistoryStep, LevelKey, BRICK_SIZE, BRICK_VOLUME, LEVELS,
+};
 use crate::math::IVec3;
 
 mod atomic;
@@ -101,7 +110,7 @@ mod journal;
 pub use atomic::write_atomically;
 
 /// The format version this build writes.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 /// The largest raw chunk a reader accepts.
 pub const MAX_CHUNK_BYTES: usize = 64 << 20;
 /// The most chunks a file may declare.
@@ -148,7 +157,8 @@ struct Meta {
 /// What [`encode_with`] writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct EncodeOptions {
-    /// The format version to write (1 or 2; version 1 holds no history).
+    /// The format version to write (1 to 3; version 1 holds no history, versions 1 and 2 no
+    /// coarse levels).
     pub version: u32,
     /// Whether to store the undo history held in memory.
     pub history: bool,
@@ -176,8 +186,26 @@ pub fn encode_with(
     progress: &mut dyn FnMut(f32),
 ) -> Vec<u8> {
     assert!((1..=VERSION).contains(&options.version), "format version {} is not written", options.version);
-    let bricks: Vec<(BrickKey, &Brick)> = field.shared_bricks().map(|(k, b)| (k, &**b)).collect();
-    let history = (options.history && options.version >= 2).then(|| field.history_in_memory());
+    let levels = options.version >= 3 || !field.has_levels_above(0);
+    let mut refined = Vec::new();
+    let bricks: Vec<(LevelKey, &Brick)> = if levels {
+        field.shared_bricks().map(|(k, b)| (k, &**b)).collect()
+    } else {
+        // The finest lattice as readers see it: the coarse clay refined into finest bricks.
+        let mut scratch = Brick::default();
+        for key in field.covered_keys() {
+            if field.brick(key).is_none() {
+                if let Some(b) = field.read_brick(key, &mut scratch) {
+                    refined.push((key, b.clone()));
+                }
+            }
+        }
+        let stored = field.brick_keys().filter_map(|k| field.brick(k).map(|b| (LevelKey::from(k), b)));
+        stored.chain(refined.iter().map(|(k, b)| (LevelKey::from(*k), b))).collect()
+    };
+    // Undo steps speak of the bricks as stored, levels and all: with the levels folded into
+    // the finest, they would undo into holes.
+    let history = (options.history && options.version >= 2 && levels).then(|| field.history_in_memory());
     let settings = (field.transform().voxel_size_m, field.iso());
     encode_parts(options.version, settings, bricks, scene_toml, history.as_ref(), progress)
 }
@@ -186,7 +214,7 @@ pub fn encode_with(
 pub(crate) fn encode_bricks(
     voxel_size_m: f32,
     iso: f32,
-    bricks: Vec<(BrickKey, &Brick)>,
+    bricks: Vec<(LevelKey, &Brick)>,
     scene_toml: Option<&str>,
     progress: &mut dyn FnMut(f32),
 ) -> Vec<u8> {
@@ -198,12 +226,12 @@ type History = (Vec<HistoryStep>, Vec<HistoryStep>);
 fn encode_parts(
     version: u32,
     (voxel_size_m, iso): (f32, f32),
-    mut bricks: Vec<(BrickKey, &Brick)>,
+    mut bricks: Vec<(LevelKey, &Brick)>,
     scene_toml: Option<&str>,
     history: Option<&History>,
     progress: &mut dyn FnMut(f32),
 ) -> Vec<u8> {
-    bricks.sort_unstable_by_key(|(k, _)| k.to_array());
+    bricks.sort_unstable_by_key(|(k, _)| k.sort_key());
     let meta = Meta {
         format: "argile sculpt".into(),
         voxel_size_m,
@@ -211,7 +239,9 @@ fn encode_parts(
         brick_size: BRICK_SIZE,
         bricks: bricks.len() as u64,
     };
-    let groups = bricks.chunks(BRICKS_PER_CHUNK);
+    // Chunks of up to 512 bricks of one level.
+    let groups: Vec<&[(LevelKey, &Brick)]> =
+        bricks.chunk_by(|a, b| a.0.level == b.0.level).flat_map(|l| l.chunks(BRICKS_PER_CHUNK)).collect();
     let steps: Vec<(u8, u32, &HistoryStep)> = history.map_or_else(Vec::new, |(undo, redo)| {
         let undo = undo.iter().enumerate().map(|(i, s)| (0, i as u32, s));
         undo.chain(redo.iter().enumerate().map(|(i, s)| (1, i as u32, s))).collect()
@@ -228,13 +258,17 @@ fn encode_parts(
     }
     let group_count = groups.len().max(1);
     let mut raw = Vec::new();
-    for (i, group) in groups.enumerate() {
+    for (i, group) in groups.into_iter().enumerate() {
         raw.clear();
-        raw.reserve(group.len() * BRICK_RECORD);
-        for (key, brick) in group {
-            put_brick(&mut raw, *key, brick);
+        raw.reserve(1 + group.len() * BRICK_RECORD);
+        let level = group[0].0.level;
+        if level > 0 {
+            raw.push(level);
         }
-        put_chunk(&mut out, *b"BRKS", &raw);
+        for (key, brick) in group {
+            put_brick(&mut raw, key.key, brick);
+        }
+        put_chunk(&mut out, if level > 0 { *b"BRKL" } else { *b"BRKS" }, &raw);
         progress((i + 1) as f32 / group_count as f32);
     }
     for (kind, index, step) in steps {
@@ -250,18 +284,18 @@ fn encode_parts(
     out
 }
 
-/// Appends brick entries: per brick, present u8 (0: absent) · key (3 × i32) · if present,
-/// its densities and colours (as [`put_brick`]).
-pub(crate) fn put_entries(raw: &mut Vec<u8>, bricks: &[(BrickKey, Option<Arc<Brick>>)]) {
+/// Appends brick entries: per brick, flags u8 (bit 0: present; bits 1–3: the level) · key
+/// (3 × i32) · if present, its densities and colours (as [`put_brick`]).
+pub(crate) fn put_entries(raw: &mut Vec<u8>, bricks: &[(LevelKey, Option<Arc<Brick>>)]) {
     for (key, brick) in bricks {
         match brick {
             Some(b) => {
-                raw.push(1);
-                put_brick(raw, *key, b);
+                raw.push(1 | key.level << 1);
+                put_brick(raw, key.key, b);
             }
             None => {
-                raw.push(0);
-                for c in key.to_array() {
+                raw.push(key.level << 1);
+                for c in key.key.to_array() {
                     raw.extend_from_slice(&c.to_le_bytes());
                 }
             }
@@ -274,29 +308,34 @@ pub(crate) fn read_entries(
     raw: &[u8],
     at: &mut usize,
     count: usize,
-    seen: &mut HashSet<BrickKey>,
-) -> Result<Vec<(BrickKey, Option<Brick>)>, String> {
+    seen: &mut HashSet<LevelKey>,
+) -> Result<Vec<(LevelKey, Option<Brick>)>, String> {
     // Refuse counts the bytes cannot hold before allocating for them.
     if count > (raw.len() - *at) / MIN_ENTRY {
         return Err(format!("it claims {count} bricks, more than its {} bytes hold", raw.len() - *at));
     }
     let mut entries = Vec::with_capacity(count);
     for _ in 0..count {
-        let flag = raw.get(*at).copied();
+        let Some(flags) = raw.get(*at).copied() else { return Err("it ends inside a brick".into()) };
         *at += 1;
-        let entry = match flag {
-            Some(0) if raw.len() >= *at + 12 => {
+        let level = usize::from(flags >> 1);
+        if level >= LEVELS {
+            return Err(format!(
+                "a brick has the flags {flags}: level {level} is beyond the field's {LEVELS}"
+            ));
+        }
+        let entry = match flags & 1 {
+            0 if raw.len() >= *at + 12 => {
                 let key = read_key(&raw[*at..])?;
                 *at += 12;
-                (key, None)
+                (LevelKey::new(level, key), None)
             }
-            Some(1) if raw.len() >= *at + BRICK_RECORD => {
+            1 if raw.len() >= *at + BRICK_RECORD => {
                 let (key, brick) = read_brick(&raw[*at..])?;
                 *at += BRICK_RECORD;
-                (key, Some(brick))
+                (LevelKey::new(level, key), Some(brick))
             }
-            Some(0 | 1) | None => return Err("it ends inside a brick".into()),
-            Some(other) => return Err(format!("a brick has the presence flag {other}")),
+            _ => return Err("it ends inside a brick".into()),
         };
         if !seen.insert(entry.0) {
             return Err(format!("brick {} appears twice", entry.0));
@@ -529,7 +568,7 @@ fn decode_from(source: &mut dyn Source, progress: &mut dyn FnMut(f32)) -> Result
     let mut meta: Option<Meta> = None;
     let mut field: Option<Field> = None;
     let mut scene_toml = None;
-    let mut keys: HashSet<BrickKey> = HashSet::new();
+    let mut keys: HashSet<LevelKey> = HashSet::new();
     let mut raw = Vec::new();
     let (mut undo, mut redo): (Vec<HistoryStep>, Vec<HistoryStep>) = (Vec::new(), Vec::new());
     // The (kind, index) of the step the last HIST chunk added to, and its keys.
@@ -570,6 +609,27 @@ fn decode_from(source: &mut dyn Source, progress: &mut dyn FnMut(f32)) -> Result
                 let field = field.as_mut().expect("META came first");
                 for record in raw.chunks_exact(BRICK_RECORD) {
                     let (key, brick) = read_brick(record)?;
+                    if !keys.insert(key.into()) {
+                        return Err(format!("brick {key} is stored twice"));
+                    }
+                    field.insert_brick(key, brick);
+                }
+            }
+            (b"BRKL", Some(_)) if version >= 3 => {
+                let level = raw.first().map_or(0, |&l| usize::from(l));
+                if !(1..LEVELS).contains(&level) {
+                    return Err(format!(
+                        "chunk {index} (BRKL) is of level {level}, not one of 1 to {}",
+                        LEVELS - 1
+                    ));
+                }
+                if (raw.len() - 1) % BRICK_RECORD != 0 {
+                    return Err(format!("chunk {index} (BRKL) holds a partial brick"));
+                }
+                let field = field.as_mut().expect("META came first");
+                for record in raw[1..].chunks_exact(BRICK_RECORD) {
+                    let (key, brick) = read_brick(record)?;
+                    let key = LevelKey::new(level, key);
                     if !keys.insert(key) {
                         return Err(format!("brick {key} is stored twice"));
                     }
@@ -735,6 +795,78 @@ mod tests {
             let mut back = decode(&bytes, "n.argile", &mut |_| {}).unwrap();
             assert!(back.field.same_samples(&f));
             assert!(!back.field.undo().unwrap(), "{options:?} stores no history");
+        }
+    }
+
+    /// A field with a coarse sphere on level 2, a fine edit refining part of it, and the fine
+    /// edit's undo step.
+    fn levelled_field() -> Field {
+        let mut f = Field::new(0.001, 0.5);
+        f.edit_level(
+            2,
+            IVec3::splat(-12),
+            IVec3::splat(12),
+            true,
+            |_, _, _| true,
+            |q, d, c| {
+                *d = (8.0 - q.as_vec3().length()).clamp(0.0, 1.0);
+                *c = [0.2, 0.4, 0.6, 1.0];
+            },
+        );
+        f.begin_stroke();
+        f.edit_box(IVec3::new(20, -4, -4), IVec3::new(40, 4, 4), false, |p, d, c| {
+            *d = (*d - 0.05 * (p.y & 3) as f32).max(0.0);
+            *c = [0.9, 0.1, 0.1, 1.0];
+        });
+        f.end_stroke();
+        f
+    }
+
+    #[test]
+    fn every_level_and_its_history_read_back_bit_for_bit() {
+        let f = levelled_field();
+        assert!(f.level_brick_count(2) > 0 && f.brick_count() > 0);
+        let bytes = encode(&f, None, &mut |_| {});
+        let mut back = decode(&bytes, "l.argile", &mut |_| {}).unwrap().field;
+        assert!(back.same_samples(&f));
+        assert!(back.undo().unwrap());
+        let mut undone = levelled_field();
+        undone.undo().unwrap();
+        assert!(back.same_samples(&undone));
+    }
+
+    #[test]
+    fn older_versions_store_what_readers_of_the_finest_lattice_see() {
+        let f = levelled_field();
+        let bytes = encode_with(&f, None, EncodeOptions { version: 2, history: true }, &mut |_| {});
+        let mut back = decode(&bytes, "v2.argile", &mut |_| {}).unwrap().field;
+        assert_eq!(back.level_brick_count(2), 0, "version 2 holds the finest level alone");
+        for p in [IVec3::ZERO, IVec3::new(21, 1, 0), IVec3::new(-29, 3, 2), IVec3::new(33, -2, 1)] {
+            assert_eq!(back.sample(p), f.sample(p), "{p}");
+        }
+        assert!(!back.undo().unwrap(), "undo steps of the levelled bricks are left out");
+    }
+
+    #[test]
+    fn a_coarse_level_beyond_the_field_is_refused() {
+        let f = levelled_field();
+        let bytes = encode(&f, None, &mut |_| {});
+        // Rewrite the level byte of the first BRKL chunk to 9 through the chunk layer.
+        let mut at = 12;
+        loop {
+            let (raw_len, stored_len) = (u32_at(&bytes, at + 4) as usize, u32_at(&bytes, at + 8) as usize);
+            if &bytes[at..at + 4] == b"BRKL" {
+                let mut raw =
+                    lz4_flex::block::decompress(&bytes[at + 16..at + 16 + stored_len], raw_len).unwrap();
+                raw[0] = 9;
+                let mut bad = bytes[..at].to_vec();
+                put_chunk(&mut bad, *b"BRKL", &raw);
+                bad.extend_from_slice(&bytes[at + 16 + stored_len..]);
+                let e = decode(&bad, "l.argile", &mut |_| {}).unwrap_err().to_string();
+                assert!(e.contains("l.argile") && e.contains("level 9"), "{e}");
+                return;
+            }
+            at += 16 + stored_len;
         }
     }
 

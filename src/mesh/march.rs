@@ -24,11 +24,14 @@ pub struct Block {
     pub density: Vec<f32>,
     /// Lattice point of block point (0, 0, 0).
     pub origin: IVec3,
+    /// Spare bricks for neighbours the coarser levels give (see `gather_block`); made on
+    /// first need.
+    pub refined: Vec<Brick>,
 }
 
 impl Default for Block {
     fn default() -> Self {
-        Self { density: vec![0.0; BLOCK_VOLUME], origin: IVec3::ZERO }
+        Self { density: vec![0.0; BLOCK_VOLUME], origin: IVec3::ZERO, refined: Vec::new() }
     }
 }
 

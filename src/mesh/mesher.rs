@@ -12,16 +12,52 @@ use crate::math::IVec3;
 
 /// Copies brick `key`'s densities and apron into `block`, row by row (within a brick and
 /// within the block, the samples of one (y, z) row are contiguous, so each row is one slice
-/// copy). Returns the bricks it read, for the kernel's colour look-ups.
-pub fn gather_block<'f>(field: &'f Field, key: BrickKey, block: &mut Block) -> Neighbourhood<'f> {
-    let around = Neighbourhood::new(field, key);
+/// copy). Returns the bricks it read, for the kernel's colour look-ups, and the block.
+///
+/// Where the finest level holds no brick but coarser levels hold clay, the brick the coarser
+/// levels give is made in the block's spare bricks and read like a stored one: coarse clay
+/// is meshed on the finest lattice, continuous with the finest bricks around it.
+pub fn gather_block<'f>(
+    field: &'f Field,
+    key: BrickKey,
+    block: &'f mut Block,
+) -> (Neighbourhood<'f>, &'f Block) {
+    let mut around = Neighbourhood::new(field, key);
+    let mut made = [false; 27];
+    if field.has_levels_above(0) {
+        if block.refined.is_empty() {
+            block.refined.resize_with(27, Brick::default);
+        }
+        for (i, (brick, spare)) in around.bricks.iter().zip(block.refined.iter_mut()).enumerate() {
+            if brick.is_none() {
+                made[i] = field.read_brick(neighbour(key, i), spare).is_some();
+            }
+        }
+    }
+    let refined = &block.refined;
+    let stored = around.bricks;
+    let reading: [Option<&Brick>; 27] =
+        std::array::from_fn(|i| if made[i] { Some(&refined[i]) } else { stored[i] });
+    copy_block(key, &reading, &mut block.density);
+    block.origin = key * BRICK_SIZE - IVec3::ONE;
+    let block: &'f Block = block;
+    around.bricks = std::array::from_fn(|i| if made[i] { Some(&block.refined[i]) } else { stored[i] });
+    (around, block)
+}
+
+/// The key of neighbour `i` (as [`Neighbourhood::bricks`] orders them) of brick `key`.
+fn neighbour(key: BrickKey, i: usize) -> BrickKey {
+    let i = i as i32;
+    key + IVec3::new(i % 3 - 1, (i / 3) % 3 - 1, i / 9 - 1)
+}
+
+/// Copies the densities of brick `key`'s block from the bricks around it.
+fn copy_block(key: BrickKey, around: &[Option<&Brick>; 27], density: &mut [f32]) {
     let s = BRICK_SIZE;
-    block.origin = key * s - IVec3::ONE;
-    let lo = block.origin;
+    let lo = key * s - IVec3::ONE;
     let hi = lo + IVec3::splat(BLOCK as i32 - 1);
-    for (i, brick) in around.bricks.iter().enumerate() {
-        let i = i as i32;
-        let base = (key + IVec3::new(i % 3 - 1, (i / 3) % 3 - 1, i / 9 - 1)) * s;
+    for (i, brick) in around.iter().enumerate() {
+        let base = neighbour(key, i) * s;
         let a = lo.max(base);
         let b = hi.min(base + IVec3::splat(s - 1));
         if a.cmpgt(b).any() {
@@ -32,7 +68,7 @@ pub fn gather_block<'f>(field: &'f Field, key: BrickKey, block: &mut Block) -> N
             for y in a.y..=b.y {
                 let q = (IVec3::new(a.x, y, z) - lo).as_uvec3();
                 let dst = q.x as usize + BLOCK * (q.y as usize + BLOCK * q.z as usize);
-                let row = &mut block.density[dst..dst + len];
+                let row = &mut density[dst..dst + len];
                 match brick {
                     Some(brick) => {
                         let src = Brick::linear(IVec3::new(a.x, y, z) - base);
@@ -43,7 +79,6 @@ pub fn gather_block<'f>(field: &'f Field, key: BrickKey, block: &mut Block) -> N
             }
         }
     }
-    around
 }
 
 /// Meshes one brick into `out`, reusing the caller's buffers.
@@ -54,7 +89,7 @@ pub fn mesh_brick(
     scratch: &mut MarchScratch,
     out: &mut ChunkMesh,
 ) {
-    let around = gather_block(field, key, block);
+    let (around, block) = gather_block(field, key, block);
     march_brick(block, &around, field.iso(), field.transform(), scratch, out);
 }
 
@@ -64,7 +99,7 @@ const INSIDE: u8 = 1;
 const CROSSING: u8 = 2;
 
 fn class(field: &Field, key: BrickKey) -> u8 {
-    match field.density_range(key) {
+    match field.read_range(key) {
         None => OUTSIDE,
         Some((_, hi)) if hi < field.iso() => OUTSIDE,
         Some((lo, _)) if lo >= field.iso() => INSIDE,
@@ -227,11 +262,16 @@ impl Mesher {
         for k in field.brick_keys() {
             bounds = Some(bounds.map_or((k, k), |(lo, hi)| (lo.min(k), hi.max(k))));
         }
-        let Some((lo, hi)) = bounds else { return &self.diff };
+        let Some((lo, hi)) =
+            bounds.or_else(|| field.has_levels_above(0).then_some((IVec3::ZERO, IVec3::ZERO)))
+        else {
+            return &self.diff;
+        };
         // Bricks `lo − 1 ..= hi` may hold triangles (a cell in brick K reads K ..= K + 1).
         // A dense grid of the stored bricks' classes finds them with one look-up per stored
         // brick, unless the field is too sparse for its box.
-        if volume(lo - IVec3::ONE, hi + IVec3::ONE) <= 64 * field.brick_count() {
+        if !field.has_levels_above(0) && volume(lo - IVec3::ONE, hi + IVec3::ONE) <= 64 * field.brick_count()
+        {
             let grid = &mut self.grid;
             grid.reset(lo - IVec3::ONE, hi + IVec3::ONE);
             for k in field.brick_keys() {
@@ -321,10 +361,12 @@ pub fn remesh<I: IntoIterator<Item = BrickKey>>(field: &Field, keys: I) -> MeshD
 }
 
 /// Every brick that can hold triangles: a cell in brick `K` reads bricks `K ..= K + 1`, so
-/// each stored brick `B` may put triangles in bricks `B − 1 ..= B` on each axis.
+/// each brick `B` holding clay (stored, or given by the coarser levels) may put triangles in
+/// bricks `B − 1 ..= B` on each axis.
 pub fn meshable_bricks(field: &Field) -> Vec<BrickKey> {
+    let holding = if field.has_levels_above(0) { field.covered_keys() } else { field.brick_keys().collect() };
     let mut keys: Vec<BrickKey> =
-        field.brick_keys().flat_map(|b| GROUP.iter().map(move |&o| b - o)).collect();
+        holding.into_iter().flat_map(|b| GROUP.iter().map(move |&o| b - o)).collect();
     keys.sort_unstable_by_key(|k| k.to_array());
     keys.dedup();
     keys

@@ -25,19 +25,19 @@ fn march(c: &mut Criterion) {
     // A brick the surface crosses diagonally.
     let key = (Vec3::splat(0.02 / 3f32.sqrt() / 0.001 / 8.0)).as_ivec3();
     let mut block = Block::default();
-    let around = gather_block(&field, key, &mut block);
+    let (around, block) = gather_block(&field, key, &mut block);
     let mut scratch = MarchScratch::default();
     let mut mesh = ChunkMesh::default();
-    march_brick(&block, &around, 0.5, field.transform(), &mut scratch, &mut mesh);
+    march_brick(block, &around, 0.5, field.transform(), &mut scratch, &mut mesh);
     let tris = mesh.triangle_count();
     assert!(tris > 0, "the benchmarked brick holds surface");
     let mut group = c.benchmark_group("march_brick");
     group.throughput(Throughput::Elements(tris as u64));
     group.bench_function(BenchmarkId::from_parameter(format!("tris={tris}")), |b| {
-        b.iter(|| march_brick(&block, &around, 0.5, field.transform(), &mut scratch, &mut mesh))
+        b.iter(|| march_brick(block, &around, 0.5, field.transform(), &mut scratch, &mut mesh))
     });
     let mut other = Block::default();
-    group.bench_function("gather", |b| b.iter(|| gather_block(&field, key, &mut other).key));
+    group.bench_function("gather", |b| b.iter(|| gather_block(&field, key, &mut other).0.key));
     group.finish();
 }
 

@@ -1,0 +1,587 @@
+//! Resolution levels: how the coarser lattices are read, refined, edited and coarsened.
+//!
+//! ```text
+//!  level 2  ●───────────────●───────────────●      voxel 4h     point q sits at finest 4q
+//!  level 1  ●───────●───────●───────●───────●      voxel 2h     point q sits at finest 2q
+//!  level 0  ●───●───●───●───●───●───●───●───●      voxel h      (the finest, default 1 mm)
+//!                   └─ stored ──┘                   elsewhere: interpolated from level 1,
+//!                                                   where level 1 has no brick, from level 2, …
+//! ```
+//!
+//! - **The value at a point** of level `l` is its own brick's sample where level `l` holds a
+//!   brick, else the trilinear interpolation of level `l + 1`'s values (recursively); where
+//!   no level holds a brick it is empty. The finest level present wins, and the field seen on
+//!   the finest lattice is the trilinear interpolation of these values: continuous
+//!   everywhere, level boundaries included.
+//! - **Refinement on demand**: an edit of level `l` where that level holds no brick but a
+//!   coarser one does first stores the brick as the coarser levels give it (the field does
+//!   not change), then edits it. Edits of the finest level (tools, clay, scenes) thereby work
+//!   on coarse clay as on fine.
+//! - **Editing a coarse level over fine detail** ([`Field::edit_level`]): the edit sees, at
+//!   each of its points, the value of the finest level present there, writes the coarse
+//!   level, and adds the change, interpolated, to every finer brick under it: the fine detail
+//!   rides along instead of being erased. Where a change saturates (clay filled to 1,
+//!   emptied to 0), the detail goes with it.
+//! - **Coarsening**: after an edit, a brick of a level under a coarser one that equals the
+//!   coarser levels' interpolation within [`DETAIL_TOLERANCE`] holds no detail and is dropped.
+//! - Colours follow densities: matter that was there keeps its colour plus the interpolated
+//!   change; new matter takes the interpolated colour of the coarse matter that brought it.
+
+use super::brick::{
+    keys_over, Brick, BrickColours, BrickKey, Colour, LevelKey, BRICK_SIZE, DEFAULT_COLOUR, LEVELS,
+};
+use super::tree::{Field, Walk};
+use crate::math::IVec3;
+
+/// A sample: density and colour.
+type Sample = (f32, Colour);
+
+/// What an edit of a coarse level did at one of its points: the change of density and of
+/// colour (zero where there was no matter), and the new density and colour.
+type Change = (f32, Colour, f32, Colour);
+
+/// Marks a point no stored brick of the level holds, while a block is gathered.
+const MISSING: Sample = (-1.0, DEFAULT_COLOUR);
+
+/// Largest difference, in density and in each colour channel, between a brick and the
+/// coarser levels' interpolation for the brick to count as holding no detail.
+pub const DETAIL_TOLERANCE: f32 = 1e-6;
+
+/// Number of points of `lo ..= hi`.
+fn count(lo: IVec3, hi: IVec3) -> usize {
+    let d = (hi - lo + IVec3::ONE).max(IVec3::ZERO);
+    (d.x * d.y * d.z) as usize
+}
+
+/// Index of `p` in a block `lo ..= lo + dims − 1`, x fastest.
+#[inline]
+fn at(p: IVec3, lo: IVec3, dims: IVec3) -> usize {
+    let q = p - lo;
+    (q.x + dims.x * (q.y + dims.y * q.z)) as usize
+}
+
+/// The two level `l + 1` points around level `l`'s coordinate `c` on one axis, and the weight
+/// of the second (0 when `c` is even: it sits on a coarse point).
+#[inline]
+fn halves(c: i32) -> (i32, i32, f32) {
+    if c & 1 == 0 {
+        (c >> 1, c >> 1, 0.0)
+    } else {
+        (c >> 1, (c >> 1) + 1, 0.5)
+    }
+}
+
+impl Field {
+    /// The values of level `level`'s points `lo ..= hi` into `out` (x fastest): the level's
+    /// own samples where it holds a brick (unless `own` is false) and the coarser levels'
+    /// interpolation elsewhere (see the module docs).
+    pub(super) fn level_block(&self, level: usize, lo: IVec3, hi: IVec3, own: bool, out: &mut Vec<Sample>) {
+        let dims = hi - lo + IVec3::ONE;
+        out.clear();
+        out.resize(count(lo, hi), MISSING);
+        let mut missing = true;
+        if own && !self.levels[level].bricks.is_empty() {
+            for key in keys_over(lo, hi) {
+                let Some(brick) = self.levels[level].bricks.get(&key) else { continue };
+                let base = key * BRICK_SIZE;
+                let (a, b) = (lo.max(base), hi.min(base + IVec3::splat(BRICK_SIZE - 1)));
+                for z in a.z..=b.z {
+                    for y in a.y..=b.y {
+                        for x in a.x..=b.x {
+                            let p = IVec3::new(x, y, z);
+                            let i = Brick::linear(p - base);
+                            out[at(p, lo, dims)] = (brick.density[i], brick.colour[i]);
+                        }
+                    }
+                }
+            }
+            missing = out.iter().any(|s| s.0 < 0.0);
+        }
+        if !missing {
+            return;
+        }
+        if !self.has_levels_above(level) {
+            for s in out.iter_mut().filter(|s| s.0 < 0.0) {
+                *s = (0.0, DEFAULT_COLOUR);
+            }
+            return;
+        }
+        let (c_lo, c_hi) = (lo.div_euclid(IVec3::splat(2)), (hi + IVec3::ONE).div_euclid(IVec3::splat(2)));
+        let c_dims = c_hi - c_lo + IVec3::ONE;
+        let mut coarse = Vec::new();
+        self.level_block(level + 1, c_lo, c_hi, true, &mut coarse);
+        for z in lo.z..=hi.z {
+            let (z0, z1, wz) = halves(z);
+            for y in lo.y..=hi.y {
+                let (y0, y1, wy) = halves(y);
+                for x in lo.x..=hi.x {
+                    let p = IVec3::new(x, y, z);
+                    let slot = at(p, lo, dims);
+                    if out[slot].0 >= 0.0 {
+                        continue;
+                    }
+                    let (x0, x1, wx) = halves(x);
+                    if wx == 0.0 && wy == 0.0 && wz == 0.0 {
+                        // On a coarse point: its value, exactly.
+                        out[slot] = coarse[at(IVec3::new(x0, y0, z0), c_lo, c_dims)];
+                        continue;
+                    }
+                    let (mut d, mut plain, mut weighted) = (0.0f32, [0.0f32; 4], [0.0f32; 4]);
+                    for (cz, fz) in [(z0, 1.0 - wz), (z1, wz)] {
+                        for (cy, fy) in [(y0, 1.0 - wy), (y1, wy)] {
+                            for (cx, fx) in [(x0, 1.0 - wx), (x1, wx)] {
+                                let w = fx * fy * fz;
+                                if w == 0.0 {
+                                    continue;
+                                }
+                                let (cd, cc) = coarse[at(IVec3::new(cx, cy, cz), c_lo, c_dims)];
+                                d += w * cd;
+                                for k in 0..4 {
+                                    plain[k] += w * cc[k];
+                                    weighted[k] += w * cd * cc[k];
+                                }
+                            }
+                        }
+                    }
+                    // Colours weighed by matter (an empty sample's colour means nothing).
+                    let colour = if d > 0.0 { weighted.map(|c| c / d) } else { plain };
+                    out[slot] = (d, colour);
+                }
+            }
+        }
+    }
+
+    /// Brick `key` of `level` as the coarser levels give it, if it holds matter.
+    pub(super) fn interpolated_brick(&self, level: usize, key: BrickKey) -> Option<Brick> {
+        let base = key * BRICK_SIZE;
+        let mut samples = Vec::new();
+        self.level_block(level, base, base + IVec3::splat(BRICK_SIZE - 1), false, &mut samples);
+        if samples.iter().all(|s| s.0 == 0.0) {
+            return None;
+        }
+        let mut brick = Brick::default();
+        for (d, s) in brick.density.iter_mut().zip(&samples) {
+            *d = s.0;
+        }
+        brick.colour = BrickColours::from_samples(|i| samples[i].1);
+        brick.compact();
+        Some(brick)
+    }
+
+    /// Whether a coarser level holds a brick that level `level`'s brick `key` reads.
+    pub(super) fn reads_above(&self, level: usize, key: BrickKey) -> bool {
+        let base = key * BRICK_SIZE;
+        (level + 1..LEVELS).any(|m| {
+            let bricks = &self.levels[m].bricks;
+            if bricks.is_empty() {
+                return false;
+            }
+            let shift = (m - level) as i32;
+            let lo = IVec3::new(base.x >> shift, base.y >> shift, base.z >> shift);
+            let top = base + IVec3::splat(BRICK_SIZE - 1);
+            let hi = IVec3::new(top.x >> shift, top.y >> shift, top.z >> shift) + IVec3::ONE;
+            keys_over(lo, hi).any(|k| bricks.contains_key(&k))
+        })
+    }
+
+    /// The sample of the finest level finer than `level` holding level `level`'s point `q`
+    /// (`None`: no finer level holds it).
+    fn finer_sample(&self, level: usize, q: IVec3) -> Option<Sample> {
+        (0..level).find_map(|l| {
+            let bricks = &self.levels[l].bricks;
+            if bricks.is_empty() {
+                return None;
+            }
+            let p = q * (1 << (level - l));
+            let (key, local) = super::brick::split_index(p);
+            bricks.get(&key).map(|b| {
+                let i = Brick::linear(local);
+                (b.density[i], b.colour[i])
+            })
+        })
+    }
+
+    /// Density at a lattice point of the finest level: its sample, or the coarser levels'
+    /// interpolation where the finest level holds no brick.
+    pub fn density(&self, p: IVec3) -> f32 {
+        self.sample(p).0
+    }
+
+    /// Colour at a lattice point of the finest level (see [`Field::density`]).
+    pub fn colour(&self, p: IVec3) -> Colour {
+        self.sample(p).1
+    }
+
+    /// Density and colour at a lattice point of the finest level.
+    pub fn sample(&self, p: IVec3) -> Sample {
+        let (key, local) = super::brick::split_index(p);
+        match self.levels[0].bricks.get(&key) {
+            Some(b) => {
+                let i = Brick::linear(local);
+                (b.density[i], b.colour[i])
+            }
+            None if self.has_levels_above(0) => {
+                let mut out = Vec::with_capacity(1);
+                self.level_block(0, p, p, false, &mut out);
+                out[0]
+            }
+            None => (0.0, DEFAULT_COLOUR),
+        }
+    }
+
+    /// Brick `key` of the finest level as readers see it: the stored brick, or (written into
+    /// `scratch`) the coarser levels' interpolation where the finest level holds none; `None`
+    /// where the field is empty.
+    pub fn read_brick<'a>(&'a self, key: BrickKey, scratch: &'a mut Brick) -> Option<&'a Brick> {
+        if let Some(b) = self.levels[0].bricks.get(&key) {
+            return Some(b);
+        }
+        if !self.has_levels_above(0) || !self.reads_above(0, key) {
+            return None;
+        }
+        *scratch = self.interpolated_brick(0, key)?;
+        Some(scratch)
+    }
+
+    /// The lowest and highest density of finest-level brick `key` as readers see it (see
+    /// [`Field::read_brick`]): its own range where it is stored, else a range that holds the
+    /// coarser levels' interpolation there; `None` where the field is surely empty.
+    pub fn read_range(&self, key: BrickKey) -> Option<(f32, f32)> {
+        if let Some(r) = self.levels[0].ranges.get(&key) {
+            return Some(*r);
+        }
+        let base = key * BRICK_SIZE;
+        let top = base + IVec3::splat(BRICK_SIZE - 1);
+        let mut range: Option<(f32, f32)> = None;
+        for m in 1..LEVELS {
+            if self.levels[m].bricks.is_empty() {
+                continue;
+            }
+            // The level-m points the interpolation reads, and the bricks that hold them.
+            let shift = m as i32;
+            let lo = IVec3::new(base.x >> shift, base.y >> shift, base.z >> shift);
+            let hi = IVec3::new(top.x >> shift, top.y >> shift, top.z >> shift) + IVec3::ONE;
+            let mut all = true;
+            for k in keys_over(lo, hi) {
+                match self.levels[m].ranges.get(&k) {
+                    Some(&(a, b)) => range = Some(range.map_or((a, b), |(lo, hi)| (lo.min(a), hi.max(b)))),
+                    None => all = false,
+                }
+            }
+            if all {
+                return range;
+            }
+        }
+        // Some points read no level: they are empty.
+        range.map(|(_, hi)| (0.0, hi))
+    }
+
+    /// Every finest-level brick that holds matter as readers see it: the stored ones and
+    /// those the coarser levels cover, sorted.
+    pub fn covered_keys(&self) -> Vec<BrickKey> {
+        let mut keys: Vec<BrickKey> = self.brick_keys().collect();
+        for m in 1..LEVELS {
+            let scale = 1 << m;
+            for key in self.level_keys(m) {
+                // Level-m points key·S ..= key·S + S − 1 reach finest points strictly within
+                // one level-m voxel of them.
+                let lo = (key * BRICK_SIZE - IVec3::ONE) * scale + IVec3::ONE;
+                let hi = (key * BRICK_SIZE + IVec3::splat(BRICK_SIZE)) * scale - IVec3::ONE;
+                keys.extend(keys_over(lo, hi));
+            }
+        }
+        keys.sort_unstable_by_key(|k| k.to_array());
+        keys.dedup();
+        keys
+    }
+
+    /// Total matter as readers see it on the finest lattice, in finest-sample units (sum of
+    /// densities).
+    pub fn mass(&self) -> f64 {
+        let stored: f64 = self.levels[0].bricks.values().map(|b| b.mass()).sum();
+        if !self.has_levels_above(0) {
+            return stored;
+        }
+        let covered: f64 = self
+            .covered_keys()
+            .into_iter()
+            .filter(|k| !self.levels[0].bricks.contains_key(k))
+            .filter_map(|k| self.interpolated_brick(0, k))
+            .map(|b| b.mass())
+            .sum();
+        stored + covered
+    }
+
+    /// Edits level `level`'s points `lo ..= hi` as [`Field::edit_where`] edits the finest
+    /// level's, with that level's lattice (voxels `2^level` times the finest's, point `q` at
+    /// finest point `q · 2^level`): `edit` sees at each point the value of the finest level
+    /// present there, and the change it makes is carried, interpolated, into every finer brick
+    /// under it (the fine detail rides along; see the module docs). One undo step with the
+    /// rest of the stroke.
+    pub fn edit_level(
+        &mut self,
+        level: usize,
+        lo: IVec3,
+        hi: IVec3,
+        create: bool,
+        changes: impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool,
+        mut edit: impl FnMut(IVec3, &mut f32, &mut Colour),
+    ) {
+        assert!(level < LEVELS, "level {level} is beyond the field's {LEVELS}");
+        if lo.cmpgt(hi).any() {
+            return;
+        }
+        let finer = (0..level).any(|l| !self.levels[l].bricks.is_empty());
+        let dims = hi - lo + IVec3::ONE;
+        // Per point of the box: the change of density and colour, and the new matter.
+        // (`None`: the edit did not reach the point.)
+        let mut change: Vec<Option<Change>> = if finer { vec![None; count(lo, hi)] } else { Vec::new() };
+        // The finest value present under each point, read before the walk writes.
+        let truth: Vec<Option<Sample>> = if finer {
+            let mut t = Vec::with_capacity(count(lo, hi));
+            for z in lo.z..=hi.z {
+                for y in lo.y..=hi.y {
+                    for x in lo.x..=hi.x {
+                        t.push(self.finer_sample(level, IVec3::new(x, y, z)));
+                    }
+                }
+            }
+            t
+        } else {
+            Vec::new()
+        };
+        let walk = Walk { create, refine: true };
+        self.edit_samples(level, lo, hi, walk, changes, |p, d, c| {
+            if finer {
+                if let Some(s) = truth[at(p, lo, dims)] {
+                    (*d, *c) = s;
+                }
+            }
+            let (d0, c0) = (*d, *c);
+            edit(p, d, c);
+            if finer {
+                let dc = if d0 > 0.0 { std::array::from_fn(|k| c[k] - c0[k]) } else { [0.0; 4] };
+                change[at(p, lo, dims)] = Some((*d - d0, dc, *d, *c));
+            }
+        });
+        if finer {
+            self.carry_down(level, lo, hi, &change);
+        }
+    }
+
+    /// Adds level `level`'s changes over `lo ..= hi`, interpolated, to every finer brick.
+    fn carry_down(&mut self, level: usize, lo: IVec3, hi: IVec3, change: &[Option<Change>]) {
+        let dims = hi - lo + IVec3::ONE;
+        let get = |q: IVec3| -> Option<Change> {
+            if q.cmpge(lo).all() && q.cmple(hi).all() {
+                change[at(q, lo, dims)]
+            } else {
+                None
+            }
+        };
+        for l in (0..level).rev() {
+            if self.levels[l].bricks.is_empty() {
+                continue;
+            }
+            let scale = 1 << (level - l);
+            let inv = 1.0 / scale as f32;
+            // Finer points strictly within one coarse voxel of the changed ones.
+            let f_lo = (lo - IVec3::ONE) * scale + IVec3::ONE;
+            let f_hi = (hi + IVec3::ONE) * scale - IVec3::ONE;
+            self.edit_existing(l, f_lo, f_hi, |p, d, c| {
+                let q0 = p.div_euclid(IVec3::splat(scale));
+                let f = (p - q0 * scale).as_vec3() * inv;
+                let (mut dd, mut dc, mut nd, mut nc) = (0.0f32, [0.0f32; 4], 0.0f32, [0.0f32; 4]);
+                // Whether every coarse point around holds, after the edit, full or no clay.
+                let (mut full, mut empty) = (true, true);
+                for corner in 0..8 {
+                    let o = IVec3::new(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+                    let w = (if o.x == 1 { f.x } else { 1.0 - f.x })
+                        * (if o.y == 1 { f.y } else { 1.0 - f.y })
+                        * (if o.z == 1 { f.z } else { 1.0 - f.z });
+                    if w == 0.0 {
+                        continue;
+                    }
+                    let Some((cd, cdc, cn, cnc)) = get(q0 + o) else {
+                        (full, empty) = (false, false);
+                        continue;
+                    };
+                    full &= cn >= 1.0;
+                    empty &= cn <= 0.0;
+                    dd += w * cd;
+                    nd += w * cn;
+                    for k in 0..4 {
+                        dc[k] += w * cdc[k];
+                        nc[k] += w * cn * cnc[k];
+                    }
+                }
+                if dd == 0.0 && dc == [0.0; 4] {
+                    return;
+                }
+                let old = *d;
+                // Clay filled or emptied all around takes the detail with it.
+                *d = if full {
+                    1.0
+                } else if empty {
+                    0.0
+                } else {
+                    (old + dd).clamp(0.0, 1.0)
+                };
+                if old > 0.0 {
+                    *c = std::array::from_fn(|k| (c[k] + dc[k]).clamp(0.0, 1.0));
+                } else if nd > 0.0 {
+                    *c = nc.map(|v| v / nd);
+                }
+            });
+        }
+    }
+
+    /// Drops level `level`'s bricks among `keys` that hold no detail: equal to the coarser
+    /// levels' interpolation within [`DETAIL_TOLERANCE`].
+    pub(super) fn coarsen(&mut self, level: usize, keys: &[BrickKey]) {
+        if !self.has_levels_above(level) {
+            return;
+        }
+        let mut samples = Vec::new();
+        for &key in keys {
+            let Some(brick) = self.levels[level].bricks.get(&key) else { continue };
+            let base = key * BRICK_SIZE;
+            self.level_block(level, base, base + IVec3::splat(BRICK_SIZE - 1), false, &mut samples);
+            let close = |a: f32, b: f32| (a - b).abs() <= DETAIL_TOLERANCE;
+            let plain = samples.iter().enumerate().all(|(i, &(d, c))| {
+                let (bd, bc) = (brick.density[i], brick.colour[i]);
+                close(bd, d) && (bd == 0.0 && d == 0.0 || (0..4).all(|k| close(bc[k], c[k])))
+            });
+            if plain {
+                let key = LevelKey::new(level, key);
+                let current = self.levels[level].bricks.get(&key.key).cloned();
+                self.history.touch(key, current.as_ref());
+                self.remove(key);
+                self.mark_level_dirty(level, base, base + IVec3::splat(BRICK_SIZE - 1));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A field whose level 2 holds a ramp along x over a slab, and nothing finer.
+    fn coarse_ramp() -> Field {
+        let mut f = Field::new(0.001, 0.5);
+        f.edit_level(
+            2,
+            IVec3::new(-8, -8, -8),
+            IVec3::new(8, 8, 8),
+            true,
+            |_, _, _| true,
+            |q, d, _| {
+                *d = ((q.x + 8) as f32 / 16.0).clamp(0.0, 1.0);
+            },
+        );
+        f
+    }
+
+    #[test]
+    fn the_finest_lattice_reads_coarse_levels_by_interpolation() {
+        let f = coarse_ramp();
+        assert_eq!(f.brick_count(), 0);
+        assert!(f.level_brick_count(2) > 0);
+        // Level-2 point q sits at finest 4q: the ramp (q.x + 8) / 16 is (p.x / 4 + 8) / 16.
+        for x in -28..=28 {
+            let p = IVec3::new(x, 3, -5);
+            let want = (x as f32 / 4.0 + 8.0) / 16.0;
+            assert!((f.density(p) - want).abs() < 1e-6, "{p}: {} vs {want}", f.density(p));
+        }
+        // Beyond the coarse bricks the field is empty.
+        assert_eq!(f.density(IVec3::new(0, 0, 4 * 30)), 0.0);
+    }
+
+    #[test]
+    fn a_fine_edit_refines_on_demand_without_changing_the_rest() {
+        let mut f = coarse_ramp();
+        let before: Vec<f32> = (-20..20).map(|x| f.density(IVec3::new(x, 1, 1))).collect();
+        f.begin_stroke();
+        f.edit_box(IVec3::new(2, 1, 1), IVec3::new(2, 1, 1), false, |_, d, _| *d = 1.0);
+        f.end_stroke();
+        assert_eq!(f.brick_count(), 1, "one finest brick holds the edit");
+        for (i, x) in (-20..20).enumerate() {
+            let p = IVec3::new(x, 1, 1);
+            let want = if x == 2 { 1.0 } else { before[i] };
+            assert_eq!(f.density(p), want, "{p}");
+        }
+        // Undo restores the coarse-only field.
+        f.undo().unwrap();
+        assert_eq!(f.brick_count(), 0);
+        assert!(f.same_samples(&coarse_ramp()));
+    }
+
+    #[test]
+    fn fine_detail_rides_along_a_coarse_edit() {
+        let mut f = coarse_ramp();
+        // A fine dent, then a coarse edit that raises the whole ramp by 0.1.
+        f.edit_box(IVec3::new(0, 0, 0), IVec3::new(0, 0, 0), false, |_, d, _| *d -= 0.2);
+        let dent = f.density(IVec3::ZERO) - f.density(IVec3::new(1, 0, 0));
+        f.begin_stroke();
+        f.edit_level(2, IVec3::splat(-3), IVec3::splat(3), false, |_, _, _| true, |_, d, _| *d += 0.1);
+        f.end_stroke();
+        let after = f.density(IVec3::ZERO) - f.density(IVec3::new(1, 0, 0));
+        assert!((after - dent).abs() < 1e-5, "the dent keeps its depth: {dent} then {after}");
+        assert!((f.density(IVec3::new(1, 0, 0)) - (0.5 + 0.25 / 16.0 + 0.1)).abs() < 1e-5);
+        // Undo brings back both levels.
+        let mut g = coarse_ramp();
+        g.edit_box(IVec3::new(0, 0, 0), IVec3::new(0, 0, 0), false, |_, d, _| *d -= 0.2);
+        f.undo().unwrap();
+        assert!(f.same_samples(&g));
+    }
+
+    #[test]
+    fn a_coarse_edit_that_fills_the_detail_drops_the_fine_bricks() {
+        let mut f = coarse_ramp();
+        f.edit_box(IVec3::new(0, 0, 0), IVec3::new(3, 3, 3), false, |_, d, _| *d *= 0.5);
+        assert!(f.brick_count() > 0);
+        f.edit_level(2, IVec3::splat(-4), IVec3::splat(4), false, |_, _, _| true, |_, d, _| *d = 1.0);
+        assert_eq!(f.brick_count(), 0, "no detail is left under solid clay");
+        assert_eq!(f.density(IVec3::new(1, 2, 3)), 1.0);
+    }
+
+    #[test]
+    fn values_are_continuous_across_a_level_boundary() {
+        let mut f = coarse_ramp();
+        f.edit_box(IVec3::new(-3, -3, -3), IVec3::new(3, 3, 3), false, |p, d, _| {
+            *d = (*d + 0.01 * (p.y as f32)).clamp(0.0, 1.0);
+        });
+        assert_eq!(f.brick_count(), 8, "the edit refined the eight bricks around the origin");
+        // Across the fine bricks' faces (between x = −9 and −8, and x = 7 and 8) neighbouring
+        // points differ by the ramp's slope, as they do everywhere the edit did not reach: the
+        // level boundary shows no step.
+        for x in [-11, -10, -9, -8, 6, 7, 8, 9] {
+            for y in [-9, -8, -1, 0, 7, 8] {
+                let (a, b) = (f.density(IVec3::new(x, y, 2)), f.density(IVec3::new(x + 1, y, 2)));
+                assert!((b - a - 1.0 / 64.0).abs() <= 1e-6, "x {x}, y {y}: {a} then {b}");
+            }
+        }
+    }
+
+    #[test]
+    fn covered_keys_and_ranges_describe_the_coarse_clay() {
+        let f = coarse_ramp();
+        let keys = f.covered_keys();
+        // The level-2 bricks cover finest points −35 ..= 35 and more on each axis.
+        assert!(keys.contains(&IVec3::new(-4, 0, 3)) && keys.contains(&IVec3::new(3, -4, 0)));
+        let mut scratch = Brick::default();
+        for &k in &keys {
+            let (lo, hi) = f.read_range(k).expect("covered");
+            let brick = f.read_brick(k, &mut scratch);
+            if let Some(b) = brick {
+                for &d in b.density.iter() {
+                    assert!(d >= lo && d <= hi, "{k}: {d} outside {lo}..{hi}");
+                }
+            }
+        }
+        assert_eq!(f.read_range(IVec3::new(100, 0, 0)), None);
+        // The mass seen on the finest lattice is the interpolated ramp's.
+        assert!(f.mass() > 0.0);
+    }
+}
