@@ -24,6 +24,11 @@ pub enum Workload {
     /// A stroke of removing sphere stamps of radius 4, 8, 16 and 32 voxels across the surface
     /// of a solid sphere of radius 100 voxels.
     StampCarve,
+    /// The same straight stroke into empty space with a 4 mm and a 40 mm sphere tool on a
+    /// 1 mm finest level, each editing the level its size chooses (at most
+    /// [`crate::tool::MAX_SIZE_SAMPLES`] voxels across its radius), and the 40 mm one on the
+    /// finest level for comparison.
+    StampAdaptive,
     /// Full extraction of the surface of a solid sphere of radius 100 voxels and of the field
     /// a stroke of radius-16 stamps leaves, on one thread and on all.
     MeshFull,
@@ -61,9 +66,10 @@ pub enum Workload {
 
 impl Workload {
     /// Every workload, in the order `argile bench` runs them.
-    pub const ALL: [Workload; 13] = [
+    pub const ALL: [Workload; 14] = [
         Workload::Stamp,
         Workload::StampCarve,
+        Workload::StampAdaptive,
         Workload::MeshFull,
         Workload::RemeshStamp,
         Workload::RenderStereo,
@@ -146,6 +152,7 @@ pub fn run(workloads: &[Workload], size: BenchSize, mut emit: impl FnMut(Value))
         match w {
             Workload::Stamp => bench_stamp(size, &mut emit),
             Workload::StampCarve => bench_stamp_carve(size, &mut emit),
+            Workload::StampAdaptive => bench_stamp_adaptive(size, &mut emit),
             Workload::MeshFull => bench_mesh_full(size, &mut emit)?,
             Workload::RemeshStamp => bench_remesh_stamp(size, &mut emit),
             Workload::RenderStereo => bench_render(size, &mut emit)?,
@@ -252,6 +259,62 @@ fn bench_stamp_carve(size: BenchSize, emit: &mut impl FnMut(Value)) {
             "repetitions": size.repetitions,
             "field_us_per_stamp_median": median(times),
             "carved_samples": carved,
+        }));
+    }
+}
+
+/// Strokes of `size.stamps` sphere stamps along +X, spacing half the radius, into an empty
+/// field of 1 mm voxels, with tools of radius 4 mm and 40 mm editing by their size, and the
+/// 40 mm one on the finest level: µs per stamp (median, min, max of the repetitions), samples
+/// visited and computed, bricks walked, the level written, field memory; and the ratio of the
+/// 40 mm stroke's time to the 4 mm one's.
+fn bench_stamp_adaptive(size: BenchSize, emit: &mut impl FnMut(Value)) {
+    use crate::math::Pose;
+    use crate::tool::{apply_tool, StampCounters, Tool, ToolShape, MAX_SIZE_SAMPLES};
+    let run = |radius_m: f32, by_size: bool| -> (f64, StampCounters, Field) {
+        let mut field = Field::new(0.001, 0.5);
+        let tool = Tool {
+            level_samples: by_size.then_some(MAX_SIZE_SAMPLES),
+            ..Tool::new(ToolShape::sphere(radius_m), Action::Add, [0.7, 0.4, 0.2, 1.0])
+        };
+        let mut total = StampCounters::default();
+        let begin = Instant::now();
+        for i in 0..size.stamps {
+            let pose =
+                Pose { position_m: Vec3::new(i as f32 * 0.5 * radius_m, 0.0, 0.0), ..Default::default() };
+            total += apply_tool(&mut field, &tool, pose, 0.0);
+        }
+        (begin.elapsed().as_secs_f64() * 1e6 / size.stamps as f64, total, field)
+    };
+    let mut medians = Vec::new();
+    for (radius_m, by_size) in [(0.004f32, true), (0.04, true), (0.04, false)] {
+        let mut times = Vec::new();
+        let mut last = None;
+        for _ in 0..size.repetitions {
+            let (us, counters, field) = run(radius_m, by_size);
+            times.push(us);
+            last = Some((counters, field.memory_bytes()));
+        }
+        let (c, bytes) = last.expect("at least one repetition");
+        let (lo, hi) = times.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &t| (lo.min(t), hi.max(t)));
+        let med = median(times);
+        medians.push(med);
+        let n = size.stamps as f64;
+        emit(json!({
+            "workload": "stamp-adaptive",
+            "radius_mm": radius_m * 1000.0,
+            "by_size": by_size,
+            "level": c.level,
+            "stamps": size.stamps,
+            "repetitions": size.repetitions,
+            "us_per_stamp_median": med,
+            "us_per_stamp_min": lo,
+            "us_per_stamp_max": hi,
+            "visited_per_stamp": c.visited as f64 / n,
+            "computed_per_stamp": c.computed as f64 / n,
+            "bricks_per_stamp": c.bricks as f64 / n,
+            "field_bytes": bytes,
+            "ratio_to_4mm": med / medians[0],
         }));
     }
 }
@@ -846,6 +909,23 @@ mod tests {
             assert!(l["share_displacement"].as_f64().unwrap() > 0.0, "the ball moves the bar: {l}");
             assert!(l["mass_drift"].as_f64().unwrap().abs() < 1e-3, "{l}");
         }
+    }
+
+    #[test]
+    fn the_adaptive_stroke_reports_both_tools_and_their_levels() {
+        let mut lines = Vec::new();
+        run(&[Workload::StampAdaptive], BenchSize::QUICK, |v| lines.push(v)).unwrap();
+        let levels: Vec<u64> = lines.iter().map(|l| l["level"].as_u64().unwrap()).collect();
+        assert_eq!(levels, [0, 3, 0]);
+        for l in &lines {
+            assert_eq!(l["workload"], "stamp-adaptive");
+            assert!(
+                l["us_per_stamp_median"].as_f64().unwrap() > 0.0 && l["field_bytes"].as_u64().unwrap() > 0
+            );
+        }
+        // The finest-level 40 mm stroke computes far more samples than the one its size levels.
+        let computed = |i: usize| lines[i]["computed_per_stamp"].as_f64().unwrap();
+        assert!(computed(2) > 100.0 * computed(1), "{} against {}", computed(2), computed(1));
     }
 
     #[test]

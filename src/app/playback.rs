@@ -435,7 +435,14 @@ pub fn build_tool(t: &SceneTool, field: &Field) -> Tool {
             crate::tool::ToolShape::Freeform(Arc::new(Freeform::from_world_box(field, *min_m, *max_m)))
         }
     };
-    Tool { shape, scale: t.scale, action: t.action, colour: t.colour, spacing: t.spacing }
+    Tool {
+        shape,
+        scale: t.scale,
+        action: t.action,
+        colour: t.colour,
+        spacing: t.spacing,
+        level_samples: None,
+    }
 }
 
 #[cfg(test)]

@@ -43,9 +43,16 @@ type Change = (f32, Colour, f32, Colour);
 /// Marks a point no stored brick of the level holds, while a block is gathered.
 const MISSING: Sample = (-1.0, DEFAULT_COLOUR);
 
-/// Largest difference, in density and in each colour channel, between a brick and the
-/// coarser levels' interpolation for the brick to count as holding no detail.
-pub const DETAIL_TOLERANCE: f32 = 1e-6;
+/// Largest difference in density between a brick and the coarser levels' interpolation for
+/// the brick to count as holding no detail. Zero: dropping a brick never changes a density
+/// readers see, so the promises of the actions (painting keeps density, removing never adds)
+/// hold to the bit; the bricks a coarse edit fills, empties or leaves as refined are dropped
+/// all the same.
+pub const DETAIL_TOLERANCE: f32 = 0.0;
+
+/// Largest difference in each colour channel for a brick to count as holding no detail: far
+/// below a display's step (1/255), above the rounding of colours interpolated in another order.
+pub const COLOUR_DETAIL_TOLERANCE: f32 = 1e-5;
 
 /// Number of points of `lo ..= hi`.
 fn count(lo: IVec3, hi: IVec3) -> usize {
@@ -149,6 +156,47 @@ impl Field {
                 }
             }
         }
+    }
+
+    /// The lattice of level `level`: the finest's origin, voxels `2^level` times as large.
+    pub fn level_transform(&self, level: usize) -> crate::math::VoxelTransform {
+        let mut t = self.transform;
+        t.voxel_size_m *= (1u32 << level) as f32;
+        t
+    }
+
+    /// The values of level `level`'s points `lo ..= hi` as an edit of that level sees them
+    /// (see [`Field::edit_level`]): at each point, the finest level present there. x fastest.
+    pub fn level_samples(&self, level: usize, lo: IVec3, hi: IVec3, out: &mut Vec<(f32, Colour)>) {
+        self.level_block(level, lo, hi, true, out);
+        if (0..level).all(|l| self.levels[l].bricks.is_empty()) {
+            return;
+        }
+        let mut i = 0;
+        for z in lo.z..=hi.z {
+            for y in lo.y..=hi.y {
+                for x in lo.x..=hi.x {
+                    if let Some(s) = self.finer_sample(level, IVec3::new(x, y, z)) {
+                        out[i] = s;
+                    }
+                    i += 1;
+                }
+            }
+        }
+    }
+
+    /// The finest level, `level` or finer, holding a brick under level `level`'s points
+    /// `lo ..= hi` (`level` itself where no finer one does).
+    pub fn finest_level_under(&self, level: usize, lo: IVec3, hi: IVec3) -> usize {
+        (0..level)
+            .find(|&l| {
+                let scale = 1 << (level - l);
+                let bricks = &self.levels[l].bricks;
+                !bricks.is_empty()
+                    && keys_over(lo * scale, (hi + IVec3::ONE) * scale - IVec3::ONE)
+                        .any(|k| bricks.contains_key(&k))
+            })
+            .unwrap_or(level)
     }
 
     /// Brick `key` of `level` as the coarser levels give it, if it holds matter.
@@ -336,26 +384,18 @@ impl Field {
         // Per point of the box: the change of density and colour, and the new matter.
         // (`None`: the edit did not reach the point.)
         let mut change: Vec<Option<Change>> = if finer { vec![None; count(lo, hi)] } else { Vec::new() };
-        // The finest value present under each point, read before the walk writes.
-        let truth: Vec<Option<Sample>> = if finer {
-            let mut t = Vec::with_capacity(count(lo, hi));
-            for z in lo.z..=hi.z {
-                for y in lo.y..=hi.y {
-                    for x in lo.x..=hi.x {
-                        t.push(self.finer_sample(level, IVec3::new(x, y, z)));
-                    }
-                }
-            }
-            t
-        } else {
-            Vec::new()
-        };
-        let walk = Walk { create, refine: true };
+        // The finest value present at each point, read before the walk writes.
+        let mut truth = Vec::new();
+        if finer {
+            self.level_samples(level, lo, hi, &mut truth);
+            self.hold_finest_around(level, lo, hi, &truth);
+        }
+        // Where finer clay lies under the level, the level takes its values (they may change
+        // nothing: bricks that hold no detail are dropped again).
+        let walk = Walk { create: create || finer, refine: true };
         self.edit_samples(level, lo, hi, walk, changes, |p, d, c| {
             if finer {
-                if let Some(s) = truth[at(p, lo, dims)] {
-                    (*d, *c) = s;
-                }
+                (*d, *c) = truth[at(p, lo, dims)];
             }
             let (d0, c0) = (*d, *c);
             edit(p, d, c);
@@ -366,6 +406,43 @@ impl Field {
         });
         if finer {
             self.carry_down(level, lo, hi, &change);
+        }
+    }
+
+    /// Before an edit of level `level` over `lo ..= hi` writes `truth` (the finest values
+    /// present) into that level: where a point's value changes by it, the finest points that
+    /// read the point through the levels (no finest brick holds them) would change too; the
+    /// finest bricks around such points are stored as they read now, so that only the edit's
+    /// change reaches them.
+    fn hold_finest_around(&mut self, level: usize, lo: IVec3, hi: IVec3, truth: &[Sample]) {
+        let mut shown = Vec::new();
+        self.level_block(level, lo, hi, true, &mut shown);
+        let scale = 1 << level;
+        let mut keys = Vec::new();
+        let mut i = 0;
+        for z in lo.z..=hi.z {
+            for y in lo.y..=hi.y {
+                for x in lo.x..=hi.x {
+                    let ((td, tc), (sd, sc)) = (truth[i], shown[i]);
+                    i += 1;
+                    if td.to_bits() == sd.to_bits() && (td == 0.0 || tc == sc) {
+                        continue;
+                    }
+                    // Finest points strictly within one voxel of the level around q.
+                    let q = IVec3::new(x, y, z);
+                    let (f_lo, f_hi) =
+                        ((q - IVec3::ONE) * scale + IVec3::ONE, (q + IVec3::ONE) * scale - IVec3::ONE);
+                    keys.extend(keys_over(f_lo, f_hi).filter(|k| !self.levels[0].bricks.contains_key(k)));
+                }
+            }
+        }
+        keys.sort_unstable_by_key(|k| k.to_array());
+        keys.dedup();
+        for key in keys {
+            let brick = self.interpolated_brick(0, key).unwrap_or_default();
+            let key = LevelKey::new(0, key);
+            self.history.touch(key, None);
+            self.store(key, std::sync::Arc::new(brick));
         }
     }
 
@@ -447,10 +524,11 @@ impl Field {
             let Some(brick) = self.levels[level].bricks.get(&key) else { continue };
             let base = key * BRICK_SIZE;
             self.level_block(level, base, base + IVec3::splat(BRICK_SIZE - 1), false, &mut samples);
-            let close = |a: f32, b: f32| (a - b).abs() <= DETAIL_TOLERANCE;
             let plain = samples.iter().enumerate().all(|(i, &(d, c))| {
                 let (bd, bc) = (brick.density[i], brick.colour[i]);
-                close(bd, d) && (bd == 0.0 && d == 0.0 || (0..4).all(|k| close(bc[k], c[k])))
+                (bd - d).abs() <= DETAIL_TOLERANCE
+                    && (bd == 0.0 && d == 0.0
+                        || (0..4).all(|k| (bc[k] - c[k]).abs() <= COLOUR_DETAIL_TOLERANCE))
             });
             if plain {
                 let key = LevelKey::new(level, key);

@@ -27,6 +27,6 @@ pub use brick::{
     LEVELS,
 };
 pub use history::{HistoryConfig, HistoryError, HistoryStats, BRICK_BYTES};
-pub use levels::DETAIL_TOLERANCE;
+pub use levels::{COLOUR_DETAIL_TOLERANCE, DETAIL_TOLERANCE};
 pub use sample::FieldReader;
 pub use tree::{bricks_reading, DirtySet, Field, HistoryStep};

@@ -248,17 +248,23 @@ impl Field {
         self.levels[usize::from(key.level)].bricks.get(&key.key)
     }
 
-    /// Puts `brick` at `key` (a finest-level [`BrickKey`] or a [`LevelKey`]), replacing what
-    /// was there (an all-empty brick removes it), and marks what it changes dirty. For loading
-    /// stored sculpts; not journaled.
+    /// Puts `brick` at `key` (a finest-level [`BrickKey`] or a [`LevelKey`]) as it is,
+    /// replacing what was there, and marks what it changes dirty. An empty brick is stored too:
+    /// under coarser clay it says the clay is empty there. For loading stored sculpts; not
+    /// journaled.
     pub fn insert_brick(&mut self, key: impl Into<LevelKey>, mut brick: Brick) {
         let key = key.into();
         brick.compact();
-        if brick.is_empty() {
-            self.remove(key);
-        } else {
-            self.store(key, Arc::new(brick));
-        }
+        self.store(key, Arc::new(brick));
+        let base = key.key * BRICK_SIZE;
+        self.mark_level_dirty(key.level.into(), base, base + IVec3::splat(BRICK_SIZE - 1));
+    }
+
+    /// Removes the brick at `key` (its points read the coarser levels, or are empty), and marks
+    /// what it changes dirty. For loading stored sculpts; not journaled.
+    pub fn remove_brick(&mut self, key: impl Into<LevelKey>) {
+        let key = key.into();
+        self.remove(key);
         let base = key.key * BRICK_SIZE;
         self.mark_level_dirty(key.level.into(), base, base + IVec3::splat(BRICK_SIZE - 1));
     }
@@ -311,7 +317,7 @@ impl Field {
     }
 
     /// Puts `brick` at `key` (sharing the constant tile of its value, if it is uniform) and
-    /// records its density range; returns what was there. `brick` holds matter.
+    /// records its density range; returns what was there.
     pub(super) fn store(&mut self, key: LevelKey, brick: Arc<Brick>) -> Option<Arc<Brick>> {
         let level = &mut self.levels[usize::from(key.level)];
         level.ranges.insert(key.key, density_range(&brick));
@@ -532,12 +538,15 @@ impl Field {
             // A brick made by this edit holds no matter yet: its colour is that of the
             // first matter the edit puts in it.
             let fresh = !stored;
+            // An empty brick says nothing unless coarser clay would show through it (then the
+            // coarsening below drops it if that clay is empty there too).
+            let keep_empty = above && self.reads_above(level, key);
             // Copies the brick if the history, the journal or a tile shares it.
             let brick = Arc::make_mut(self.levels[level].bricks.entry(key).or_default());
             samples(brick, base, a, b, fresh);
             brick.compact();
             let range = density_range(brick);
-            if range.1 == 0.0 {
+            if range.1 == 0.0 && !keep_empty {
                 self.remove(level_key);
                 continue;
             }

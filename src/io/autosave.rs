@@ -787,7 +787,10 @@ pub fn recover(dir: &Path) -> Result<Recovered, RecoveryError> {
                 continue;
             }
             for (key, brick) in record.bricks {
-                sculpt.field.insert_brick(key, brick.unwrap_or_default());
+                match brick {
+                    Some(brick) => sculpt.field.insert_brick(key, brick),
+                    None => sculpt.field.remove_brick(key),
+                }
             }
             strokes = record.stroke;
         }

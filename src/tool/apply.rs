@@ -14,7 +14,7 @@ use super::shapes::ToolFrame;
 use super::shapes::ToolShape;
 use super::stamp::{mix_in, solid_density, SOLID_BAND_VOXELS};
 use super::stroke::Tool;
-use crate::field::{Colour, Field, FieldReader, BRICK_SIZE};
+use crate::field::{Colour, Field, BRICK_SIZE, LEVELS};
 use crate::math::{IVec3, Pose, Vec3};
 
 /// Work done by one stamp (or a sum of stamps), as in Ferley et al.'s performance table.
@@ -28,7 +28,7 @@ pub struct StampCounters {
     pub dirtied: u64,
     /// Bricks whose samples the stamp walked.
     pub bricks: u64,
-    /// Resolution level the stamp wrote (0: the finest; the only level so far).
+    /// Resolution level the stamp wrote (0: the finest; see [`edit_level_for`]).
     pub level: u32,
 }
 
@@ -40,6 +40,18 @@ impl AddAssign for StampCounters {
         self.bricks += o.bricks;
         self.level = self.level.max(o.level);
     }
+}
+
+/// A bound on the samples of its level across a tool's size (a sphere's radius, see
+/// [`Tool::size_m`]) for tools that edit by their size ([`Tool::level_samples`]): the cost of
+/// a stamp then stays about that of a tool this many samples across, whatever its size.
+pub const MAX_SIZE_SAMPLES: f32 = 8.0;
+
+/// The level a tool of size `size_m` (metres) edits when it may span at most `samples`
+/// voxels of it: the finest such level, or the coarsest.
+pub fn edit_level_for(field: &Field, size_m: f32, samples: f32) -> usize {
+    let across = field.transform().metres_to_voxels(size_m);
+    (0..LEVELS).find(|&l| across <= samples * (1u32 << l) as f32).unwrap_or(LEVELS - 1)
 }
 
 /// The lattice box a tool at `frame` may change, and the geometry to evaluate it.
@@ -55,8 +67,8 @@ struct Footprint {
     band_local: f32,
 }
 
-fn footprint(field: &Field, tool: &Tool, frame: &ToolFrame) -> Footprint {
-    let t = *field.transform();
+fn footprint(field: &Field, level: usize, tool: &Tool, frame: &ToolFrame) -> Footprint {
+    let t = field.level_transform(level);
     let h = t.voxel_size_m;
     let band_m = match tool.action {
         Action::Stamp { falloff_m, .. } => falloff_m.max(SOLID_BAND_VOXELS * h),
@@ -77,8 +89,9 @@ fn footprint(field: &Field, tool: &Tool, frame: &ToolFrame) -> Footprint {
     Footprint { lo, hi, origin, step, local_half, band_local }
 }
 
-/// A dense copy of density and colour over `lo − 1 ..= hi + 1`, for actions that read
-/// neighbours: they read the values before the stamp, whatever order the walk writes in.
+/// A dense copy of density and colour over `lo − 1 ..= hi + 1` of the level edited, for
+/// actions that read neighbours: they read the values before the stamp, whatever order the
+/// walk writes in.
 struct Snapshot {
     lo: IVec3,
     dims: IVec3,
@@ -87,21 +100,12 @@ struct Snapshot {
 }
 
 impl Snapshot {
-    fn take(field: &Field, lo: IVec3, hi: IVec3) -> Self {
+    fn take(field: &Field, level: usize, lo: IVec3, hi: IVec3) -> Self {
         let (lo, hi) = (lo - IVec3::ONE, hi + IVec3::ONE);
         let dims = hi - lo + IVec3::ONE;
-        let n = (dims.x * dims.y * dims.z) as usize;
-        let mut reader = FieldReader::new(field);
-        let (mut density, mut colour) = (Vec::with_capacity(n), Vec::with_capacity(n));
-        for z in lo.z..=hi.z {
-            for y in lo.y..=hi.y {
-                for x in lo.x..=hi.x {
-                    let p = IVec3::new(x, y, z);
-                    density.push(reader.density(p));
-                    colour.push(reader.colour(p));
-                }
-            }
-        }
+        let mut samples = Vec::new();
+        field.level_samples(level, lo, hi, &mut samples);
+        let (density, colour) = samples.into_iter().unzip();
         Self { lo, dims, density, colour }
     }
 
@@ -155,105 +159,130 @@ fn lerp_colour(c: &mut Colour, to: Colour, t: f32) {
 ///
 /// A uniformly scaled sphere adding or removing matter takes a sphere-only path that gives the
 /// same clay as [`super::stamp_sphere`] with fewer operations per sample.
+///
+/// The stamp edits the finest level, or with [`Tool::level_samples`] the level its size
+/// chooses ([`edit_level_for`]), band-limited on that
+/// level's lattice; finer detail under it rides along (see [`Field::edit_level`]). Actions
+/// that read the neighbours (smoothing, inflation) edit no coarser than the finest clay under
+/// the tool.
 pub fn apply_tool(field: &mut Field, tool: &Tool, pose: Pose, dt_s: f32) -> StampCounters {
     let frame = ToolFrame::new(pose, tool.scale);
+    let level = tool.level_samples.map_or(0, |n| edit_level_for(field, tool.size_m(), n));
     if let (ToolShape::Solid(Solid::Sphere { radius_m }), Action::Add | Action::Remove) =
         (&tool.shape, tool.action)
     {
         if tool.scale.x == tool.scale.y && tool.scale.y == tool.scale.z {
-            return sphere_fast_path(field, *radius_m * tool.scale.x, tool, pose);
+            return sphere_fast_path(field, level, *radius_m * tool.scale.x, tool, pose);
         }
     }
-    let fp = footprint(field, tool, &frame);
-    let mut counters = StampCounters::default();
+    let mut fp = footprint(field, level, tool, &frame);
+    // Smoothing and inflation move the surface by what its ramp looks like on the level they
+    // edit: they edit no coarser than the finest clay under them, whose ramp that level holds.
+    let finest =
+        if tool.action.reads_neighbours() { field.finest_level_under(level, fp.lo, fp.hi) } else { level };
+    let level = if finest < level {
+        fp = footprint(field, finest, tool, &frame);
+        finest
+    } else {
+        level
+    };
+    let mut counters = StampCounters { level: level as u32, ..Default::default() };
     if fp.lo.cmpgt(fp.hi).any() {
         return counters;
     }
-    let snapshot = tool.action.reads_neighbours().then(|| Snapshot::take(field, fp.lo, fp.hi));
+    let snapshot = tool.action.reads_neighbours().then(|| Snapshot::take(field, level, fp.lo, fp.hi));
     let dt_s = if dt_s.is_finite() { dt_s.max(0.0) } else { 0.0 };
-    let inv_h = 1.0 / field.transform().voxel_size_m;
+    let inv_h = 1.0 / field.level_transform(level).voxel_size_m;
     let colour = tool.colour;
     let action = tool.action;
     let shape = &tool.shape;
     let mut last_brick = None;
-    field.edit_box(fp.lo, fp.hi, action.may_create(), |p, d, c| {
-        counters.visited += 1;
-        let brick = p.div_euclid(IVec3::splat(BRICK_SIZE));
-        if last_brick != Some(brick) {
-            last_brick = Some(brick);
-            counters.bricks += 1;
-        }
-        let q = (p - fp.lo).as_vec3();
-        let local = fp.origin + fp.step[0] * q.x + fp.step[1] * q.y + fp.step[2] * q.z;
-        if local.abs().cmpgt(fp.local_half).any() {
-            return;
-        }
-        counters.computed += 1;
-        let t = shape.potential(local, fp.band_local);
-        if t <= 0.0 {
-            return;
-        }
-        let (old_d, old_c) = (*d, *c);
-        match action {
-            Action::Push | Action::Support => {}
-            Action::Add => {
-                let new = d.max(t);
-                mix_in(c, *d, new, colour);
-                *d = new;
+    field.edit_level(
+        level,
+        fp.lo,
+        fp.hi,
+        action.may_create(),
+        |_, _, _| true,
+        |p, d, c| {
+            counters.visited += 1;
+            let brick = p.div_euclid(IVec3::splat(BRICK_SIZE));
+            if last_brick != Some(brick) {
+                last_brick = Some(brick);
+                counters.bricks += 1;
             }
-            Action::Remove => *d = d.min(1.0 - t),
-            Action::SoftRemove { rate_per_s } => *d = (*d - rate_per_s * dt_s * t).clamp(0.0, 1.0),
-            Action::Build { rate_per_s } => {
-                let new = (*d + rate_per_s * dt_s * t).clamp(0.0, 1.0);
-                mix_in(c, *d, new, colour);
-                *d = new;
+            let q = (p - fp.lo).as_vec3();
+            let local = fp.origin + fp.step[0] * q.x + fp.step[1] * q.y + fp.step[2] * q.z;
+            if local.abs().cmpgt(fp.local_half).any() {
+                return;
             }
-            Action::Paint => lerp_colour(c, colour, t),
-            Action::SoftPaint { rate_per_s } => {
-                lerp_colour(c, colour, (rate_per_s * dt_s * t).clamp(0.0, 1.0))
+            counters.computed += 1;
+            let t = shape.potential(local, fp.band_local);
+            if t <= 0.0 {
+                return;
             }
-            Action::Smooth { centre_weight, rate_per_s } => {
-                let s = snapshot.as_ref().expect("smoothing takes a snapshot");
-                let (own, n) = s.neighbourhood(p);
-                let w = centre_weight.clamp(4.0, 24.0);
-                let avg = (w * own + n.iter().sum::<f32>()) / (w + 6.0);
-                let alpha = (rate_per_s * dt_s).clamp(0.0, 1.0) * t;
-                let new = (own + alpha * (avg - own)).clamp(0.0, 1.0);
-                if new > *d {
-                    mix_in(c, *d, new, s.neighbour_colour(p));
+            let (old_d, old_c) = (*d, *c);
+            match action {
+                Action::Push | Action::Support => {}
+                Action::Add => {
+                    let new = d.max(t);
+                    mix_in(c, *d, new, colour);
+                    *d = new;
                 }
-                *d = new;
-            }
-            Action::Stamp { deformation, .. } => {
-                let new = (*d + deformation.contribution(t)).clamp(0.0, 1.0);
-                mix_in(c, *d, new, colour);
-                *d = new;
-            }
-            Action::Inflate { speed_m_per_s } | Action::Deflate { speed_m_per_s } => {
-                let s = snapshot.as_ref().expect("inflation takes a snapshot");
-                let (own, n) = s.neighbourhood(p);
-                let outwards = matches!(action, Action::Inflate { .. });
-                let grad = upwind_gradient(own, n, outwards);
-                let step = speed_m_per_s.max(0.0) * inv_h * dt_s * t * grad;
-                let mut new = if outwards { own + step } else { own - step }.clamp(0.0, 1.0);
-                // The ramp's ends creep a voxel per tick at vanishing amounts; an empty sample
-                // stays empty, and a full one full, until the change is meaningful.
-                if (own == 0.0 && new < MIN_LEVEL_CHANGE) || (own == 1.0 && new > 1.0 - MIN_LEVEL_CHANGE) {
-                    new = own;
+                Action::Remove => *d = d.min(1.0 - t),
+                Action::SoftRemove { rate_per_s } => *d = (*d - rate_per_s * dt_s * t).clamp(0.0, 1.0),
+                Action::Build { rate_per_s } => {
+                    let new = (*d + rate_per_s * dt_s * t).clamp(0.0, 1.0);
+                    mix_in(c, *d, new, colour);
+                    *d = new;
                 }
-                if new > *d {
-                    mix_in(c, *d, new, s.neighbour_colour(p));
+                Action::Paint => lerp_colour(c, colour, t),
+                Action::SoftPaint { rate_per_s } => {
+                    lerp_colour(c, colour, (rate_per_s * dt_s * t).clamp(0.0, 1.0))
                 }
-                *d = new;
+                Action::Smooth { centre_weight, rate_per_s } => {
+                    let s = snapshot.as_ref().expect("smoothing takes a snapshot");
+                    let (own, n) = s.neighbourhood(p);
+                    let w = centre_weight.clamp(4.0, 24.0);
+                    let avg = (w * own + n.iter().sum::<f32>()) / (w + 6.0);
+                    let alpha = (rate_per_s * dt_s).clamp(0.0, 1.0) * t;
+                    let new = (own + alpha * (avg - own)).clamp(0.0, 1.0);
+                    if new > *d {
+                        mix_in(c, *d, new, s.neighbour_colour(p));
+                    }
+                    *d = new;
+                }
+                Action::Stamp { deformation, .. } => {
+                    let new = (*d + deformation.contribution(t)).clamp(0.0, 1.0);
+                    mix_in(c, *d, new, colour);
+                    *d = new;
+                }
+                Action::Inflate { speed_m_per_s } | Action::Deflate { speed_m_per_s } => {
+                    let s = snapshot.as_ref().expect("inflation takes a snapshot");
+                    let (own, n) = s.neighbourhood(p);
+                    let outwards = matches!(action, Action::Inflate { .. });
+                    let grad = upwind_gradient(own, n, outwards);
+                    let step = speed_m_per_s.max(0.0) * inv_h * dt_s * t * grad;
+                    let mut new = if outwards { own + step } else { own - step }.clamp(0.0, 1.0);
+                    // The ramp's ends creep a voxel per tick at vanishing amounts; an empty sample
+                    // stays empty, and a full one full, until the change is meaningful.
+                    if (own == 0.0 && new < MIN_LEVEL_CHANGE) || (own == 1.0 && new > 1.0 - MIN_LEVEL_CHANGE)
+                    {
+                        new = own;
+                    }
+                    if new > *d {
+                        mix_in(c, *d, new, s.neighbour_colour(p));
+                    }
+                    *d = new;
+                }
             }
-        }
-        if !d.is_finite() {
-            *d = old_d;
-        }
-        if *d != old_d || *c != old_c {
-            counters.dirtied += 1;
-        }
-    });
+            if !d.is_finite() {
+                *d = old_d;
+            }
+            if *d != old_d || *c != old_c {
+                counters.dirtied += 1;
+            }
+        },
+    );
     counters
 }
 
@@ -277,36 +306,49 @@ fn upwind_gradient(own: f32, n: [f32; 6], outwards: bool) -> f32 {
 /// The sphere's add/remove kernel: the arithmetic of [`stamp_sphere`] (distances in lattice
 /// units from the centre, no frame to map through), so both give bit-identical clay, plus the
 /// counters.
-fn sphere_fast_path(field: &mut Field, radius_m: f32, tool: &Tool, pose: Pose) -> StampCounters {
-    let transform = *field.transform();
+fn sphere_fast_path(
+    field: &mut Field,
+    level: usize,
+    radius_m: f32,
+    tool: &Tool,
+    pose: Pose,
+) -> StampCounters {
+    let transform = field.level_transform(level);
     let centre = transform.world_to_index(pose.position_m);
     let radius = transform.metres_to_voxels(radius_m);
     let reach = radius + 0.5 * SOLID_BAND_VOXELS;
     let lo = (centre - Vec3::splat(reach)).ceil().as_ivec3();
     let hi = (centre + Vec3::splat(reach)).floor().as_ivec3();
-    let mut counters = StampCounters::default();
+    let mut counters = StampCounters { level: level as u32, ..Default::default() };
     let mut last_brick = None;
     let (add, colour) = (tool.action == Action::Add, tool.colour);
-    field.edit_box(lo, hi, add, |p, d, c| {
-        counters.visited += 1;
-        counters.computed += 1;
-        let brick = p.div_euclid(IVec3::splat(BRICK_SIZE));
-        if last_brick != Some(brick) {
-            last_brick = Some(brick);
-            counters.bricks += 1;
-        }
-        let tool = solid_density(p.as_vec3().distance(centre) - radius);
-        let old = *d;
-        if add {
-            let new = d.max(tool);
-            mix_in(c, *d, new, colour);
-            *d = new;
-        } else {
-            *d = d.min(1.0 - tool);
-        }
-        if *d != old {
-            counters.dirtied += 1;
-        }
-    });
+    field.edit_level(
+        level,
+        lo,
+        hi,
+        add,
+        |_, _, _| true,
+        |p, d, c| {
+            counters.visited += 1;
+            counters.computed += 1;
+            let brick = p.div_euclid(IVec3::splat(BRICK_SIZE));
+            if last_brick != Some(brick) {
+                last_brick = Some(brick);
+                counters.bricks += 1;
+            }
+            let tool = solid_density(p.as_vec3().distance(centre) - radius);
+            let old = *d;
+            if add {
+                let new = d.max(tool);
+                mix_in(c, *d, new, colour);
+                *d = new;
+            } else {
+                *d = d.min(1.0 - tool);
+            }
+            if *d != old {
+                counters.dirtied += 1;
+            }
+        },
+    );
     counters
 }

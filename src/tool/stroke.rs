@@ -32,12 +32,16 @@ pub struct Tool {
     pub colour: Colour,
     /// Distance between stamps along a stroke, as a fraction of [`Tool::size_m`].
     pub spacing: f32,
+    /// The resolution level it edits: `None`, the finest; `Some(n)`, the finest level on which
+    /// its size spans at most `n` voxels (see [`super::edit_level_for`]), so that a large tool
+    /// costs about what a small one does.
+    pub level_samples: Option<f32>,
 }
 
 impl Tool {
     /// A tool of unit scale and the default spacing (a quarter of its size).
     pub fn new(shape: ToolShape, action: Action, colour: Colour) -> Self {
-        Self { shape, scale: Vec3::ONE, action, colour, spacing: 0.25 }
+        Self { shape, scale: Vec3::ONE, action, colour, spacing: 0.25, level_samples: None }
     }
 
     /// The tool's size for stamp spacing: its smallest half extent after scaling, metres (a

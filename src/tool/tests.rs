@@ -47,9 +47,9 @@ fn shapes(source: &Field) -> Vec<ToolShape> {
     ]
 }
 
-/// Every lattice point of every brick stored in either field.
+/// Every finest lattice point of every brick holding clay in either field, on any level.
 fn points(a: &Field, b: &Field) -> Vec<IVec3> {
-    let keys: HashSet<IVec3> = a.brick_keys().chain(b.brick_keys()).collect();
+    let keys: HashSet<IVec3> = a.covered_keys().into_iter().chain(b.covered_keys()).collect();
     let mut out = Vec::new();
     for key in keys {
         for z in 0..BRICK_SIZE {
@@ -94,10 +94,13 @@ proptest! {
         scale in (0.5f32..2.0, 0.5f32..2.0, 0.5f32..2.0),
         dt in prop_oneof![Just(0.0f32), 0.0f32..0.5, Just(f32::NAN), Just(1e6f32)],
         repeats in 1usize..4,
+        by_size in any::<bool>(),
     ) {
         let source = small_sphere_source();
         let tool = Tool {
             scale: Vec3::new(scale.0, scale.1, scale.2),
+            // Sizes of 2 to 16 voxels: by size, they edit levels 0 to 2 over the clay of level 0.
+            level_samples: by_size.then_some(3.0),
             ..Tool::new(shapes(&source)[shape].clone(), actions()[action], [0.9, 0.1, 0.1, 1.0])
         };
         let before = clay();
@@ -105,7 +108,8 @@ proptest! {
         for _ in 0..repeats {
             let c = apply_tool(&mut after, &tool, pose(p, r), dt);
             prop_assert!(c.visited >= c.computed && c.computed >= c.dirtied);
-            prop_assert_eq!(c.level, 0);
+            let sized = tool.level_samples.map_or(0, |n| edit_level_for(&after, tool.size_m(), n));
+            prop_assert!(c.level as usize == sized || (tool.action.reads_neighbours() && (c.level as usize) < sized));
         }
         for q in points(&before, &after) {
             let (d0, d1) = (before.density(q), after.density(q));
