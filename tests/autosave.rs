@@ -99,6 +99,39 @@ fn recovery_gives_the_last_stroke_across_checkpoints_and_undo() {
 }
 
 #[test]
+fn recovery_gives_back_every_resolution_level() {
+    use argile::math::Pose;
+    use argile::tool::{apply_tool, Tool, ToolShape, MAX_SIZE_SAMPLES};
+    let root = temp_dir("levels");
+    let mut field = Field::new(0.001, 0.5);
+    stamp_sphere(&mut field, Vec3::ZERO, 0.01, Action::Add, [0.6, 0.6, 0.6, 1.0]);
+    let mut autosave = Autosave::start(&root, &mut field, None, "test", fast(), Arc::new(LocalDisk)).unwrap();
+    let dir = autosave.dir().to_path_buf();
+    for i in 0..6 {
+        // Tools of 6 to 36 mm editing by their size: levels 0 to 3, over and beside the clay.
+        let radius_m = 0.006 * (i + 1) as f32;
+        let action = if i % 2 == 1 { Action::Remove } else { Action::Add };
+        let tool = Tool {
+            level_samples: Some(MAX_SIZE_SAMPLES),
+            ..Tool::new(ToolShape::sphere(radius_m), action, [0.1 * i as f32, 0.5, 0.3, 1.0])
+        };
+        field.begin_stroke();
+        let at = Vec3::new(0.01 * i as f32, 0.0, -0.01);
+        apply_tool(&mut field, &tool, Pose { position_m: at, ..Default::default() }, 0.0);
+        field.end_stroke();
+        autosave.record(&mut field);
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert!(field.level_brick_count(3) > 0, "the largest tool wrote level 3");
+    wait_for("every stroke on disk", || autosave.durable_strokes() == 6);
+    drop(autosave);
+    let recovered = recover(&dir).unwrap();
+    assert_eq!(recovered.strokes, 6);
+    assert!(recovered.sculpt.field.same_samples(&field), "bit for bit, every level");
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
+#[test]
 fn a_torn_journal_tail_is_discarded() {
     let root = temp_dir("torn");
     let mut field = Field::new(0.001, 0.5);

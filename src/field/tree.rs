@@ -70,6 +70,10 @@ pub struct Field {
     /// The shared constant tiles, by the bits of their density and colour.
     tiles: HashMap<TileValue, Arc<Brick>>,
     dirty: DirtySet,
+    /// Bricks of the coarser levels whose points changed since the dirty set was last read:
+    /// the finest bricks they reach are marked when it is read, so that a coarse stamp costs
+    /// one mark per coarse brick, not one per finest brick under it.
+    coarse_dirty: HashSet<LevelKey>,
     pub(super) history: History,
 }
 
@@ -82,6 +86,7 @@ impl Clone for Field {
             levels: self.levels.clone(),
             tiles: self.tiles.clone(),
             dirty: self.dirty.clone(),
+            coarse_dirty: self.coarse_dirty.clone(),
             history: History::new(self.history.config().clone()),
         }
     }
@@ -97,6 +102,7 @@ impl Field {
             levels: vec![Level::default(); LEVELS],
             tiles: HashMap::default(),
             dirty: DirtySet::default(),
+            coarse_dirty: HashSet::default(),
             history: History::new(HistoryConfig::default()),
         }
     }
@@ -570,8 +576,20 @@ impl Field {
     /// Marks dirty every finest-level brick whose mesh reads a point that level `level`'s
     /// points `lo ..= hi` reach (finest points strictly within one of its voxels).
     pub(super) fn mark_level_dirty(&mut self, level: usize, lo: IVec3, hi: IVec3) {
-        let scale = 1 << level;
-        self.mark_dirty((lo - IVec3::ONE) * scale + IVec3::ONE, (hi + IVec3::ONE) * scale - IVec3::ONE);
+        if level == 0 {
+            self.mark_dirty(lo, hi);
+        } else {
+            self.coarse_dirty.extend(keys_over(lo, hi).map(|k| LevelKey::new(level, k)));
+        }
+    }
+
+    /// Marks the finest bricks the coarse bricks changed since the last read reach.
+    fn settle_dirty(&mut self) {
+        for key in std::mem::take(&mut self.coarse_dirty) {
+            let scale = 1 << key.level;
+            let (lo, hi) = (key.key * BRICK_SIZE, key.key * BRICK_SIZE + IVec3::splat(BRICK_SIZE - 1));
+            self.mark_dirty((lo - IVec3::ONE) * scale + IVec3::ONE, (hi + IVec3::ONE) * scale - IVec3::ONE);
+        }
     }
 
     /// Marks dirty every brick whose mesh reads a lattice point of `lo ..= hi`.
@@ -588,17 +606,20 @@ impl Field {
 
     /// The bricks marked dirty since the last call, leaving the set empty.
     pub fn take_dirty(&mut self) -> DirtySet {
+        self.settle_dirty();
         std::mem::take(&mut self.dirty)
     }
 
     /// The bricks marked dirty since the last call, leaving the set empty but keeping its
     /// memory for the next marks.
     pub fn drain_dirty(&mut self) -> impl Iterator<Item = BrickKey> + '_ {
+        self.settle_dirty();
         self.dirty.drain()
     }
 
     /// The dirty set, without draining it.
-    pub fn dirty(&self) -> &DirtySet {
+    pub fn dirty(&mut self) -> &DirtySet {
+        self.settle_dirty();
         &self.dirty
     }
 }
