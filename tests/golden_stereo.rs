@@ -76,6 +76,16 @@ fn toothpaste_stroke_matches_golden() {
     golden_case("toothpaste", "scenes/tests/toothpaste.toml", None);
 }
 
+/// The same stroke with a tool editing the level its size chooses, on a lattice fine enough
+/// that it edits level 2: coarse clay meshed on the finest lattice, closed and in the same
+/// place as the fine stroke. Its highlights show the level's 2 mm cells as a faint grid: the
+/// finest lattice interpolates the coarse one trilinearly, so the normal turns at each coarse
+/// cell's faces (a smoother interpolation between levels would take that away).
+#[test]
+fn a_tool_editing_by_its_size_matches_golden() {
+    golden_case("tool-by-size", "scenes/tests/tool-by-size.toml", None);
+}
+
 #[test]
 fn tool_eraser_matches_golden() {
     golden_tool_case("tool-eraser");

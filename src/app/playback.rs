@@ -441,7 +441,7 @@ pub fn build_tool(t: &SceneTool, field: &Field) -> Tool {
         action: t.action,
         colour: t.colour,
         spacing: t.spacing,
-        level_samples: None,
+        level_samples: t.level_samples,
     }
 }
 

@@ -450,6 +450,7 @@ pub(super) struct ToolSpec {
     pub colour: SceneColour,
     #[serde(default = "default_spacing")]
     pub spacing: f32,
+    pub level_samples: Option<f32>,
     #[serde(default = "default_opacity")]
     pub glyph_opacity: f32,
 }

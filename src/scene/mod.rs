@@ -194,6 +194,9 @@ pub struct SceneTool {
     pub colour: Colour,
     /// Distance between stamps, as a fraction of the tool's smallest half extent.
     pub spacing: f32,
+    /// The level it edits: `None`, the finest; `Some(n)`, the finest on which its size spans at
+    /// most `n` voxels (see `tool::Tool::level_samples`).
+    pub level_samples: Option<f32>,
     /// Opacity of its glyph in renders.
     pub glyph_opacity: f32,
 }
@@ -603,6 +606,14 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
                 format!("spacing is a fraction of the tool's size between 0.05 and 4, not {}", t.spacing),
             ));
         }
+        if let Some(n) = t.level_samples {
+            if !(1.0..=64.0).contains(&n) {
+                return Err(at(
+                    Some(span),
+                    format!("level_samples is the most voxels across the tool's size, 1 to 64, not {n}"),
+                ));
+            }
+        }
         let size_m = (shape.half_extents_m() * scale).min_element();
         let action = tool::action_of(t, size_m, &span, at)?;
         tools.push(SceneTool {
@@ -612,6 +623,7 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
             action,
             colour: t.colour.with_alpha(1.0),
             spacing: t.spacing,
+            level_samples: t.level_samples,
             glyph_opacity: t.glyph_opacity.clamp(0.0, 1.0),
         });
     }

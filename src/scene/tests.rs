@@ -178,6 +178,18 @@ fn tool_errors_name_the_line_and_what_to_change() {
     let (line, _, message) = err(&format!("{TOOL}radius_m = 0.01\naction = \"polish\"\n"));
     assert_eq!(line, 4);
     assert!(message.contains("unknown variant `polish`"), "{message}");
+    let (_, _, message) = err(&format!("{TOOL}radius_m = 0.01\naction = \"add\"\nlevel_samples = 0.5\n"));
+    assert!(
+        message.contains("level_samples is the most voxels across the tool's size, 1 to 64"),
+        "{message}"
+    );
+    let scene = Scene::parse(
+        &format!("{TOOL}radius_m = 0.01\naction = \"add\"\nlevel_samples = 8\n"),
+        "t.toml",
+        None,
+    )
+    .unwrap();
+    assert_eq!(scene.tools[0].level_samples, Some(8.0));
 }
 
 #[test]
