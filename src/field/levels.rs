@@ -373,7 +373,50 @@ impl Field {
         hi: IVec3,
         create: bool,
         changes: impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool,
+        edit: impl FnMut(IVec3, &mut f32, &mut Colour),
+    ) {
+        self.edit_level_then(level, lo, hi, create, changes, edit, true);
+    }
+
+    /// [`Field::edit_level`] for edits that reach the finer bricks themselves: the level is
+    /// edited as there, and its change is not carried into the finer bricks under it; the
+    /// caller edits those at their own resolution with [`Field::edit_stored`] (a tool
+    /// evaluated on each finer lattice keeps its edge as sharp as that lattice holds it).
+    pub fn edit_level_alone(
+        &mut self,
+        level: usize,
+        lo: IVec3,
+        hi: IVec3,
+        create: bool,
+        changes: impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool,
+        edit: impl FnMut(IVec3, &mut f32, &mut Colour),
+    ) {
+        self.edit_level_then(level, lo, hi, create, changes, edit, false);
+    }
+
+    /// Edits the bricks `level` stores over its points `lo ..= hi`, creating and refining none
+    /// (see [`Field::edit_where`] for `edit`); for the finer bricks under an
+    /// [`Field::edit_level_alone`].
+    pub fn edit_stored(
+        &mut self,
+        level: usize,
+        lo: IVec3,
+        hi: IVec3,
+        edit: impl FnMut(IVec3, &mut f32, &mut Colour),
+    ) {
+        self.edit_existing(level, lo, hi, edit);
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn edit_level_then(
+        &mut self,
+        level: usize,
+        lo: IVec3,
+        hi: IVec3,
+        create: bool,
+        changes: impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool,
         mut edit: impl FnMut(IVec3, &mut f32, &mut Colour),
+        carry: bool,
     ) {
         assert!(level < LEVELS, "level {level} is beyond the field's {LEVELS}");
         if lo.cmpgt(hi).any() {
@@ -404,7 +447,7 @@ impl Field {
                 change[at(p, lo, dims)] = Some((*d - d0, dc, *d, *c));
             }
         });
-        if finer {
+        if finer && carry {
             self.carry_down(level, lo, hi, &change);
         }
     }

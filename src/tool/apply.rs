@@ -68,11 +68,23 @@ struct Footprint {
 }
 
 fn footprint(field: &Field, level: usize, tool: &Tool, frame: &ToolFrame) -> Footprint {
+    footprint_banded(field, level, level, tool, frame)
+}
+
+/// [`footprint`] on `level`'s lattice for the tool band-limited on `band_level`'s.
+fn footprint_banded(
+    field: &Field,
+    level: usize,
+    band_level: usize,
+    tool: &Tool,
+    frame: &ToolFrame,
+) -> Footprint {
     let t = field.level_transform(level);
     let h = t.voxel_size_m;
+    let band_h = field.level_transform(band_level).voxel_size_m;
     let band_m = match tool.action {
-        Action::Stamp { falloff_m, .. } => falloff_m.max(SOLID_BAND_VOXELS * h),
-        _ => SOLID_BAND_VOXELS * h,
+        Action::Stamp { falloff_m, .. } => falloff_m.max(SOLID_BAND_VOXELS * band_h),
+        _ => SOLID_BAND_VOXELS * band_h,
     };
     let band_local = band_m / frame.min_scale();
     let mut local_half = tool.shape.half_extents_m();
@@ -193,97 +205,147 @@ pub fn apply_tool(field: &mut Field, tool: &Tool, pose: Pose, dt_s: f32) -> Stam
     let snapshot = tool.action.reads_neighbours().then(|| Snapshot::take(field, level, fp.lo, fp.hi));
     let dt_s = if dt_s.is_finite() { dt_s.max(0.0) } else { 0.0 };
     let inv_h = 1.0 / field.level_transform(level).voxel_size_m;
-    let colour = tool.colour;
-    let action = tool.action;
-    let shape = &tool.shape;
-    let mut last_brick = None;
-    field.edit_level(
+    let kernel = Kernel {
+        action: tool.action,
+        shape: &tool.shape,
+        colour: tool.colour,
+        dt_s,
+        inv_h,
+        snapshot: snapshot.as_ref(),
+    };
+    let mut walk = Walked { counters: &mut counters, last_brick: None };
+    if level == 0 || tool.action.reads_neighbours() {
+        let create = tool.action.may_create();
+        field.edit_level(
+            level,
+            fp.lo,
+            fp.hi,
+            create,
+            |_, _, _| true,
+            |p, d, c| kernel.apply(&fp, p, d, c, &mut walk),
+        );
+        return counters;
+    }
+    // A coarse level, then the finer bricks under it, each on its own lattice: the tool keeps
+    // the coarse level's band (the same tool in metres everywhere), and the fine clay keeps
+    // its own edges where the tool does not reach.
+    field.edit_level_alone(
         level,
         fp.lo,
         fp.hi,
-        action.may_create(),
+        tool.action.may_create(),
         |_, _, _| true,
-        |p, d, c| {
-            counters.visited += 1;
-            let brick = p.div_euclid(IVec3::splat(BRICK_SIZE));
-            if last_brick != Some(brick) {
-                last_brick = Some(brick);
-                counters.bricks += 1;
-            }
-            let q = (p - fp.lo).as_vec3();
-            let local = fp.origin + fp.step[0] * q.x + fp.step[1] * q.y + fp.step[2] * q.z;
-            if local.abs().cmpgt(fp.local_half).any() {
-                return;
-            }
-            counters.computed += 1;
-            let t = shape.potential(local, fp.band_local);
-            if t <= 0.0 {
-                return;
-            }
-            let (old_d, old_c) = (*d, *c);
-            match action {
-                Action::Push | Action::Support => {}
-                Action::Add => {
-                    let new = d.max(t);
-                    mix_in(c, *d, new, colour);
-                    *d = new;
-                }
-                Action::Remove => *d = d.min(1.0 - t),
-                Action::SoftRemove { rate_per_s } => *d = (*d - rate_per_s * dt_s * t).clamp(0.0, 1.0),
-                Action::Build { rate_per_s } => {
-                    let new = (*d + rate_per_s * dt_s * t).clamp(0.0, 1.0);
-                    mix_in(c, *d, new, colour);
-                    *d = new;
-                }
-                Action::Paint => lerp_colour(c, colour, t),
-                Action::SoftPaint { rate_per_s } => {
-                    lerp_colour(c, colour, (rate_per_s * dt_s * t).clamp(0.0, 1.0))
-                }
-                Action::Smooth { centre_weight, rate_per_s } => {
-                    let s = snapshot.as_ref().expect("smoothing takes a snapshot");
-                    let (own, n) = s.neighbourhood(p);
-                    let w = centre_weight.clamp(4.0, 24.0);
-                    let avg = (w * own + n.iter().sum::<f32>()) / (w + 6.0);
-                    let alpha = (rate_per_s * dt_s).clamp(0.0, 1.0) * t;
-                    let new = (own + alpha * (avg - own)).clamp(0.0, 1.0);
-                    if new > *d {
-                        mix_in(c, *d, new, s.neighbour_colour(p));
-                    }
-                    *d = new;
-                }
-                Action::Stamp { deformation, .. } => {
-                    let new = (*d + deformation.contribution(t)).clamp(0.0, 1.0);
-                    mix_in(c, *d, new, colour);
-                    *d = new;
-                }
-                Action::Inflate { speed_m_per_s } | Action::Deflate { speed_m_per_s } => {
-                    let s = snapshot.as_ref().expect("inflation takes a snapshot");
-                    let (own, n) = s.neighbourhood(p);
-                    let outwards = matches!(action, Action::Inflate { .. });
-                    let grad = upwind_gradient(own, n, outwards);
-                    let step = speed_m_per_s.max(0.0) * inv_h * dt_s * t * grad;
-                    let mut new = if outwards { own + step } else { own - step }.clamp(0.0, 1.0);
-                    // The ramp's ends creep a voxel per tick at vanishing amounts; an empty sample
-                    // stays empty, and a full one full, until the change is meaningful.
-                    if (own == 0.0 && new < MIN_LEVEL_CHANGE) || (own == 1.0 && new > 1.0 - MIN_LEVEL_CHANGE)
-                    {
-                        new = own;
-                    }
-                    if new > *d {
-                        mix_in(c, *d, new, s.neighbour_colour(p));
-                    }
-                    *d = new;
-                }
-            }
-            if !d.is_finite() {
-                *d = old_d;
-            }
-            if *d != old_d || *c != old_c {
-                counters.dirtied += 1;
-            }
-        },
+        |p, d, c| kernel.apply(&fp, p, d, c, &mut walk),
     );
+    for finer in (0..level).rev() {
+        if field.level_brick_count(finer) == 0 {
+            continue;
+        }
+        let fine = footprint_banded(field, finer, level, tool, &frame);
+        walk.last_brick = None;
+        field.edit_stored(finer, fine.lo, fine.hi, |p, d, c| kernel.apply(&fine, p, d, c, &mut walk));
+    }
     counters
+}
+
+/// What one stamp does at a sample, on any level's lattice.
+struct Kernel<'a> {
+    action: Action,
+    shape: &'a ToolShape,
+    colour: Colour,
+    dt_s: f32,
+    /// Lattice units per metre of the level edited (for speeds).
+    inv_h: f32,
+    snapshot: Option<&'a Snapshot>,
+}
+
+/// The counters of a walk, and the brick it last counted.
+struct Walked<'a> {
+    counters: &'a mut StampCounters,
+    last_brick: Option<IVec3>,
+}
+
+impl Kernel<'_> {
+    /// Applies the stamp at lattice point `p` of the footprint's lattice.
+    #[inline]
+    fn apply(&self, fp: &Footprint, p: IVec3, d: &mut f32, c: &mut Colour, walk: &mut Walked<'_>) {
+        walk.counters.visited += 1;
+        let brick = p.div_euclid(IVec3::splat(BRICK_SIZE));
+        if walk.last_brick != Some(brick) {
+            walk.last_brick = Some(brick);
+            walk.counters.bricks += 1;
+        }
+        let q = (p - fp.lo).as_vec3();
+        let local = fp.origin + fp.step[0] * q.x + fp.step[1] * q.y + fp.step[2] * q.z;
+        if local.abs().cmpgt(fp.local_half).any() {
+            return;
+        }
+        walk.counters.computed += 1;
+        let t = self.shape.potential(local, fp.band_local);
+        if t <= 0.0 {
+            return;
+        }
+        let (old_d, old_c) = (*d, *c);
+        match self.action {
+            Action::Push | Action::Support => {}
+            Action::Add => {
+                let new = d.max(t);
+                mix_in(c, *d, new, self.colour);
+                *d = new;
+            }
+            Action::Remove => *d = d.min(1.0 - t),
+            Action::SoftRemove { rate_per_s } => *d = (*d - rate_per_s * self.dt_s * t).clamp(0.0, 1.0),
+            Action::Build { rate_per_s } => {
+                let new = (*d + rate_per_s * self.dt_s * t).clamp(0.0, 1.0);
+                mix_in(c, *d, new, self.colour);
+                *d = new;
+            }
+            Action::Paint => lerp_colour(c, self.colour, t),
+            Action::SoftPaint { rate_per_s } => {
+                lerp_colour(c, self.colour, (rate_per_s * self.dt_s * t).clamp(0.0, 1.0))
+            }
+            Action::Smooth { centre_weight, rate_per_s } => {
+                let s = self.snapshot.expect("smoothing takes a snapshot");
+                let (own, n) = s.neighbourhood(p);
+                let w = centre_weight.clamp(4.0, 24.0);
+                let avg = (w * own + n.iter().sum::<f32>()) / (w + 6.0);
+                let alpha = (rate_per_s * self.dt_s).clamp(0.0, 1.0) * t;
+                let new = (own + alpha * (avg - own)).clamp(0.0, 1.0);
+                if new > *d {
+                    mix_in(c, *d, new, s.neighbour_colour(p));
+                }
+                *d = new;
+            }
+            Action::Stamp { deformation, .. } => {
+                let new = (*d + deformation.contribution(t)).clamp(0.0, 1.0);
+                mix_in(c, *d, new, self.colour);
+                *d = new;
+            }
+            Action::Inflate { speed_m_per_s } | Action::Deflate { speed_m_per_s } => {
+                let s = self.snapshot.expect("inflation takes a snapshot");
+                let (own, n) = s.neighbourhood(p);
+                let outwards = matches!(self.action, Action::Inflate { .. });
+                let grad = upwind_gradient(own, n, outwards);
+                let step = speed_m_per_s.max(0.0) * self.inv_h * self.dt_s * t * grad;
+                let mut new = if outwards { own + step } else { own - step }.clamp(0.0, 1.0);
+                // The ramp's ends creep a voxel per tick at vanishing amounts; an empty sample
+                // stays empty, and a full one full, until the change is meaningful.
+                if (own == 0.0 && new < MIN_LEVEL_CHANGE) || (own == 1.0 && new > 1.0 - MIN_LEVEL_CHANGE) {
+                    new = own;
+                }
+                if new > *d {
+                    mix_in(c, *d, new, s.neighbour_colour(p));
+                }
+                *d = new;
+            }
+        }
+        if !d.is_finite() {
+            *d = old_d;
+        }
+        if *d != old_d || *c != old_c {
+            walk.counters.dirtied += 1;
+        }
+    }
 }
 
 /// The least change inflation or deflation makes to an empty or a full sample (1/1024).
@@ -313,22 +375,20 @@ fn sphere_fast_path(
     tool: &Tool,
     pose: Pose,
 ) -> StampCounters {
-    let transform = field.level_transform(level);
-    let centre = transform.world_to_index(pose.position_m);
-    let radius = transform.metres_to_voxels(radius_m);
-    let reach = radius + 0.5 * SOLID_BAND_VOXELS;
-    let lo = (centre - Vec3::splat(reach)).ceil().as_ivec3();
-    let hi = (centre + Vec3::splat(reach)).floor().as_ivec3();
     let mut counters = StampCounters { level: level as u32, ..Default::default() };
-    let mut last_brick = None;
     let (add, colour) = (tool.action == Action::Add, tool.colour);
-    field.edit_level(
-        level,
-        lo,
-        hi,
-        add,
-        |_, _, _| true,
-        |p, d, c| {
+    // The sphere in `level`'s voxels (its band's), applied on the lattice of level `on`, whose
+    // point p sits at p / scale of them.
+    let stamp = |field: &mut Field, on: usize, counters: &mut StampCounters| {
+        let transform = field.level_transform(level);
+        let centre = transform.world_to_index(pose.position_m);
+        let radius = transform.metres_to_voxels(radius_m);
+        let reach = radius + 0.5 * SOLID_BAND_VOXELS;
+        let scale = (1u32 << (level - on)) as f32;
+        let lo = ((centre - Vec3::splat(reach)) * scale).ceil().as_ivec3();
+        let hi = ((centre + Vec3::splat(reach)) * scale).floor().as_ivec3();
+        let mut last_brick = None;
+        let kernel = |p: IVec3, d: &mut f32, c: &mut Colour| {
             counters.visited += 1;
             counters.computed += 1;
             let brick = p.div_euclid(IVec3::splat(BRICK_SIZE));
@@ -336,7 +396,8 @@ fn sphere_fast_path(
                 last_brick = Some(brick);
                 counters.bricks += 1;
             }
-            let tool = solid_density(p.as_vec3().distance(centre) - radius);
+            let point = if on == level { p.as_vec3() } else { p.as_vec3() / scale };
+            let tool = solid_density(point.distance(centre) - radius);
             let old = *d;
             if add {
                 let new = d.max(tool);
@@ -348,7 +409,21 @@ fn sphere_fast_path(
             if *d != old {
                 counters.dirtied += 1;
             }
-        },
-    );
+        };
+        if level == 0 {
+            field.edit_level(level, lo, hi, add, |_, _, _| true, kernel);
+        } else if on == level {
+            field.edit_level_alone(level, lo, hi, add, |_, _, _| true, kernel);
+        } else {
+            field.edit_stored(on, lo, hi, kernel);
+        }
+    };
+    stamp(field, level, &mut counters);
+    // The finer bricks under a coarse stamp, each on its own lattice (see `apply_tool`).
+    for on in (0..level).rev() {
+        if field.level_brick_count(on) > 0 {
+            stamp(field, on, &mut counters);
+        }
+    }
     counters
 }
