@@ -22,6 +22,14 @@
 //!   level, and adds the change, interpolated, to every finer brick under it: the fine detail
 //!   rides along instead of being erased. Where a change saturates (clay filled to 1,
 //!   emptied to 0), the detail goes with it.
+//! - **Tools on a coarse level** (`tool::apply_tool` with `Tool::level_samples`) edit it with
+//!   [`Field::edit_level_alone`], then apply themselves again to the finer bricks under them,
+//!   each on its own lattice ([`Field::edit_stored`]): a tool's `max`, `min` or paint keeps the
+//!   fine clay's edges where it does not reach, and cuts its own edge as sharply as each
+//!   lattice holds it. Carrying the interpolated coarse change down instead (what
+//!   [`Field::edit_level`] does for any edit) left a carve over fine clay with a wavy edge: the
+//!   change followed the coarse samples of the fine clay's ramp, which the coarse level does
+//!   not resolve.
 //! - **Coarsening**: after an edit, a brick of a level under a coarser one that equals the
 //!   coarser levels' interpolation within [`DETAIL_TOLERANCE`] holds no detail and is dropped.
 //! - Colours follow densities: matter that was there keeps its colour plus the interpolated
