@@ -42,8 +42,9 @@ pub(super) struct Level {
 /// A sparse density + colour field on a regular lattice.
 ///
 /// Invariants: densities are in [0, 1] (1 is full clay; the surface is the iso-level, default
-/// 0.5); a lattice point with no brick has density 0 and [`DEFAULT_COLOUR`]; every edit marks
-/// the bricks whose mesh reads what it changed (see [`bricks_reading`]) in the dirty set.
+/// 0.5); a lattice point of a level without a brick reads the coarser levels, and one no level
+/// holds has density 0 and [`super::DEFAULT_COLOUR`]; every edit marks the bricks whose mesh
+/// reads what it changed (see [`bricks_reading`]) in the dirty set.
 ///
 /// Edits made between [`Field::begin_stroke`] and [`Field::end_stroke`] form one undo step
 /// (see the `history` module).
