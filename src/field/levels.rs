@@ -177,6 +177,12 @@ impl Field {
     /// (see [`Field::edit_level`]): at each point, the finest level present there. x fastest.
     pub fn level_samples(&self, level: usize, lo: IVec3, hi: IVec3, out: &mut Vec<(f32, Colour)>) {
         self.level_block(level, lo, hi, true, out);
+        self.overlay_finer(level, lo, hi, out);
+    }
+
+    /// Replaces each of `out`'s values of level `level`'s points `lo ..= hi` with the sample
+    /// of the finest level finer than `level` holding the point, where one does.
+    fn overlay_finer(&self, level: usize, lo: IVec3, hi: IVec3, out: &mut [Sample]) {
         if (0..level).all(|l| self.levels[l].bricks.is_empty()) {
             return;
         }
@@ -438,8 +444,11 @@ impl Field {
         // The finest value present at each point, read before the walk writes.
         let mut truth = Vec::new();
         if finer {
-            self.level_samples(level, lo, hi, &mut truth);
-            self.hold_finest_around(level, lo, hi, &truth);
+            let mut shown = Vec::new();
+            self.level_block(level, lo, hi, true, &mut shown);
+            truth.clone_from(&shown);
+            self.overlay_finer(level, lo, hi, &mut truth);
+            self.hold_finest_around(level, lo, hi, &shown, &truth);
         }
         // Where finer clay lies under the level, the level takes its values (they may change
         // nothing: bricks that hold no detail are dropped again).
@@ -461,13 +470,11 @@ impl Field {
     }
 
     /// Before an edit of level `level` over `lo ..= hi` writes `truth` (the finest values
-    /// present) into that level: where a point's value changes by it, the finest points that
-    /// read the point through the levels (no finest brick holds them) would change too; the
-    /// finest bricks around such points are stored as they read now, so that only the edit's
-    /// change reaches them.
-    fn hold_finest_around(&mut self, level: usize, lo: IVec3, hi: IVec3, truth: &[Sample]) {
-        let mut shown = Vec::new();
-        self.level_block(level, lo, hi, true, &mut shown);
+    /// present) into that level, which showed `shown`: where a point's value changes, the
+    /// finest points that read it through the levels (no finest brick holds them) would change
+    /// too; the finest bricks around such points are stored as they read now, so that only the
+    /// edit's change reaches them.
+    fn hold_finest_around(&mut self, level: usize, lo: IVec3, hi: IVec3, shown: &[Sample], truth: &[Sample]) {
         let scale = 1 << level;
         let mut keys = Vec::new();
         let mut i = 0;
