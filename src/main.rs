@@ -157,8 +157,12 @@ enum Command {
         force: bool,
     },
     /// Lists the Vulkan devices, the OpenXR state, the input devices Argile sees, what each
-    /// drives and where its calibration comes from.
+    /// drives and where its calibration comes from; with a sculpt file, describes it instead
+    /// from its index, without reading its clay.
     Info {
+        /// A sculpt file (`.argile`) to describe: version, size, settings, each level's bricks
+        /// and where they lie, history and scene.
+        sculpt: Option<PathBuf>,
         /// Desk input settings (see calibration/input.toml); else ~/.config/argile/input.toml
         /// if there is one.
         #[arg(long)]
@@ -331,7 +335,8 @@ fn main() -> ExitCode {
             }
             Ok(())
         }
-        Some(Command::Info { input }) => info(input.as_deref()),
+        Some(Command::Info { sculpt: Some(path), .. }) => app::describe_sculpt(&path).map(|d| print!("{d}")),
+        Some(Command::Info { input, sculpt: None }) => info(input.as_deref()),
         Some(Command::Bench { json, quick, workloads }) => run_bench(json, quick, &workloads),
         Some(Command::Calibrate { calibration, out, width }) => {
             let options =

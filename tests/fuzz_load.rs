@@ -17,6 +17,9 @@
 
 #[path = "../fuzz/fuzz_targets/load_body.rs"]
 mod load_body;
+mod sculpt_bytes;
+
+use sculpt_bytes::{join, split, Chunks};
 
 use std::time::{Duration, Instant};
 
@@ -59,48 +62,51 @@ fn seeds() -> Vec<Vec<u8>> {
     for (toml, history) in [(scene, true), (None, false)] {
         out.push(encode_with(&field, toml, EncodeOptions { version: 2, history }, &mut |_| {}));
     }
+    // Version 4 (indexed), with a coarse level over several blocks and a fine stroke.
+    field.begin_stroke();
+    field.edit_level(
+        2,
+        IVec3::new(-20, -4, -4),
+        IVec3::new(20, 4, 4),
+        true,
+        |_, _, _| true,
+        |q, d, c| {
+            *d = (0.5 + 0.2 * (q.y as f32)).clamp(0.0, 1.0);
+            *c = [0.3, 0.3, 0.8, 1.0];
+        },
+    );
+    field.end_stroke();
+    out.push(encode_with(&field, scene, EncodeOptions::default(), &mut |_| {}));
     out
 }
 
-/// A sculpt file as its header and its chunks (tag, decompressed bytes).
-type Chunks = ([u8; 12], Vec<([u8; 4], Vec<u8>)>);
-
-fn u32_at(b: &[u8], at: usize) -> usize {
-    u32::from_le_bytes(b[at..at + 4].try_into().unwrap()) as usize
-}
-
-/// Splits a valid sculpt file (see the layout in `src/io/mod.rs`) into its chunks.
-fn split(file: &[u8]) -> Chunks {
-    let header: [u8; 12] = file[..12].try_into().unwrap();
-    let mut chunks = Vec::new();
-    let mut at = 12;
-    for _ in 0..u32_at(file, 8) {
-        let tag: [u8; 4] = file[at..at + 4].try_into().unwrap();
-        let (raw_len, stored_len) = (u32_at(file, at + 4), u32_at(file, at + 8));
-        let stored = &file[at + 16..at + 16 + stored_len];
-        chunks.push((tag, lz4_flex::block::decompress(stored, raw_len).unwrap()));
-        at += 16 + stored_len;
+/// Points an index (INDX) at where its file's brick chunks and history now lie, so that
+/// changes to the chunks reach the checks behind the index's.
+fn reindex(chunks: &mut [([u8; 4], Vec<u8>)]) {
+    let Some(at) = chunks.iter().position(|(tag, raw)| tag == b"INDX" && raw.len() >= 12) else { return };
+    let mut offset = 0u64;
+    let (mut entry, mut history) = (0, None);
+    let sizes: Vec<([u8; 4], u64)> = chunks[at + 1..]
+        .iter()
+        .map(|(tag, raw)| (*tag, 16 + lz4_flex::block::compress(raw).len() as u64))
+        .collect();
+    let index = &mut chunks[at].1;
+    for (tag, size) in sizes {
+        match &tag {
+            b"BRKS" | b"BRKL" if 12 + 25 * (entry + 1) <= index.len() => {
+                index[12 + 25 * entry + 17..12 + 25 * (entry + 1)].copy_from_slice(&offset.to_le_bytes());
+                entry += 1;
+            }
+            b"HIST" if history.is_none() => history = Some(offset),
+            _ => {}
+        }
+        offset += size;
     }
-    (header, chunks)
-}
-
-/// Writes chunks back as a file whose lengths, compression and checksums are all valid.
-fn join(header: [u8; 12], chunks: &[([u8; 4], Vec<u8>)]) -> Vec<u8> {
-    let mut out = header.to_vec();
-    out[8..12].copy_from_slice(&(chunks.len() as u32).to_le_bytes());
-    for (tag, raw) in chunks {
-        let stored = lz4_flex::block::compress(raw);
-        out.extend_from_slice(tag);
-        out.extend_from_slice(&(raw.len() as u32).to_le_bytes());
-        out.extend_from_slice(&(stored.len() as u32).to_le_bytes());
-        out.extend_from_slice(&crc32fast::hash(&stored).to_le_bytes());
-        out.extend_from_slice(&stored);
-    }
-    out
+    index[4..12].copy_from_slice(&history.unwrap_or(offset).to_le_bytes());
 }
 
 /// A structure-aware mutation: a seed's chunks changed inside, or dropped, repeated or
-/// reordered, written back with valid checksums.
+/// reordered, written back with valid checksums (and, half the time, a valid index).
 fn mutate_chunks(rng: &mut Rng, seeds: &[Chunks]) -> Vec<u8> {
     let (header, mut chunks) = seeds[rng.below(seeds.len())].clone();
     for _ in 0..1 + rng.below(3) {
@@ -120,6 +126,9 @@ fn mutate_chunks(rng: &mut Rng, seeds: &[Chunks]) -> Vec<u8> {
             }
             _ => {}
         }
+    }
+    if rng.below(2) == 0 {
+        reindex(&mut chunks);
     }
     join(header, &chunks)
 }

@@ -6,10 +6,14 @@ use std::process::Command;
 
 use argile::app::load_sculpt;
 use argile::field::Field;
-use argile::io::{decode, encode};
-use argile::math::Vec3;
+use argile::io::{decode, encode, encode_with, EncodeOptions, LazySculpt};
+use argile::math::{IVec3, Vec3};
 use argile::tool::{stamp_sphere, Action};
 use proptest::prelude::*;
+
+mod sculpt_bytes;
+
+use sculpt_bytes::{join, split};
 
 const SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/tests/toothpaste.toml");
 
@@ -160,12 +164,20 @@ fn a_version_2_file_still_loads() {
 #[test]
 fn convert_moves_sculpts_between_versions() {
     let dir = temp_dir("convert");
-    let (v3, v2, v1) = (dir.join("v3.argile"), dir.join("v2.argile"), dir.join("back-to-v1.argile"));
-    let out = argile(&["convert", FIXTURE_V1, v3.to_str().unwrap()]);
+    let (v4, v3) = (dir.join("v4.argile"), dir.join("v3.argile"));
+    let (v2, v1) = (dir.join("v2.argile"), dir.join("back-to-v1.argile"));
+    let out = argile(&["convert", FIXTURE_V1, v4.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(String::from_utf8_lossy(&out.stdout).contains("format version 3"));
-    assert_eq!(&std::fs::read(&v3).unwrap()[4..8], &3u32.to_le_bytes());
-    assert!(same_matter(&load_sculpt(&v3).unwrap().field, &fixture_field()));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("format version 4"));
+    assert_eq!(&std::fs::read(&v4).unwrap()[4..8], &4u32.to_le_bytes());
+    assert!(same_matter(&load_sculpt(&v4).unwrap().field, &fixture_field()));
+    let out = argile(&["convert", v4.to_str().unwrap(), v3.to_str().unwrap(), "--format-version", "3"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        std::fs::read(&v3).unwrap(),
+        std::fs::read(FIXTURE_V3).unwrap(),
+        "the same bytes as version 3 wrote"
+    );
     let out = argile(&["convert", v3.to_str().unwrap(), v2.to_str().unwrap(), "--format-version", "2"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert_eq!(
@@ -185,7 +197,7 @@ fn convert_moves_sculpts_between_versions() {
         argile(&["convert", FIXTURE_V1, dir.join("v9.argile").to_str().unwrap(), "--format-version", "9"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("format version 9 cannot be written"));
-    let out = argile(&["convert", FIXTURE_V1, v3.to_str().unwrap()]);
+    let out = argile(&["convert", FIXTURE_V1, v4.to_str().unwrap()]);
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("pass --force"));
 
     // A scene converts to its clay at the end of its timeline, as `argile save` stores it.
@@ -357,4 +369,265 @@ fn random_byte_flips_are_refused_with_the_message_for_the_part_hit() {
         };
         assert!(expected.iter().any(|m| e.contains(m)), "{part} flipped at byte {at}: {e}");
     }
+}
+
+// ---- Reading lazily (format version 4) ----
+
+/// A sculpt spread over many blocks: stamps along a bar 0.3 m long at 1 mm voxels, a coarse
+/// build on level 2 around its middle, and the undo step of a last stroke.
+fn spread_field() -> Field {
+    let mut f = Field::new(0.001, 0.5);
+    for i in 0..15 {
+        let centre = Vec3::new(-0.15 + 0.02 * i as f32, 0.004 * (i % 3) as f32, 0.0);
+        stamp_sphere(&mut f, centre, 0.006, Action::Add, [0.05 * i as f32, 0.4, 0.6, 1.0]);
+    }
+    coarse_ball(&mut f, 2, IVec3::new(0, 40, 0), 30.0);
+    f.begin_stroke();
+    stamp_sphere(&mut f, Vec3::new(0.05, 0.0, 0.0), 0.005, Action::Remove, [0.0; 4]);
+    f.end_stroke();
+    f
+}
+
+/// A ball of `radius` finest voxels about `centre` (finest lattice), built on `level`.
+fn coarse_ball(f: &mut Field, level: usize, centre: IVec3, radius: f32) {
+    let step = 1 << level;
+    let (c, r) = (centre / step, (radius / step as f32).ceil() as i32 + 2);
+    f.edit_level(
+        level,
+        c - IVec3::splat(r),
+        c + IVec3::splat(r),
+        true,
+        |_, _, _| true,
+        |q, d, col| {
+            let dist = (q * step - centre).as_vec3().length();
+            *d = d.max(((radius - dist) / step as f32 * 0.5 + 0.5).clamp(0.0, 1.0));
+            *col = [0.7, 0.3, 0.2, 1.0];
+        },
+    );
+}
+
+/// Every point of `lo..=hi` reads the same in both fields, bit for bit: its density, and its
+/// colour where it holds matter (an empty point's colour means nothing: there, the default
+/// colour comes through an interpolation of the empty coarse levels when the field has any,
+/// to within a rounding).
+fn reads_the_same(part: &Field, whole: &Field, lo: IVec3, hi: IVec3) -> Result<(), TestCaseError> {
+    for z in lo.z..=hi.z {
+        for y in lo.y..=hi.y {
+            for x in lo.x..=hi.x {
+                let p = IVec3::new(x, y, z);
+                let (a, b) = (part.sample(p), whole.sample(p));
+                prop_assert_eq!(a.0.to_bits(), b.0.to_bits(), "density at {}", p);
+                if a.0 > 0.0 {
+                    prop_assert_eq!(a.1.map(f32::to_bits), b.1.map(f32::to_bits), "colour at {}", p);
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Loads `lo..=hi` lazily from `bytes` and checks it: the chunks read are those reaching into
+/// the box, the box reads as in the whole sculpt read at once (bit for bit), and finishing gives the whole sculpt, history and all.
+fn check_box(bytes: &[u8], lo: IVec3, hi: IVec3) -> Result<usize, TestCaseError> {
+    let mut lazy = LazySculpt::from_bytes(bytes.to_vec(), "lazy.argile").unwrap();
+    prop_assert_eq!(lazy.field().level_brick_count(0), 0, "opening reads no brick");
+    let read = lazy.load_box(lo, hi).unwrap();
+    for (i, c) in lazy.chunks().iter().enumerate() {
+        let (a, b) = c.reach();
+        let reaches = a.cmple(hi).all() && b.cmpge(lo).all();
+        prop_assert_eq!(lazy.is_loaded(i), reaches, "chunk {} ({:?})", i, c);
+    }
+    let mut whole = decode(bytes, "whole.argile", &mut |_| {}).unwrap().field;
+    reads_the_same(lazy.field(), &whole, lo, hi)?;
+    let mut back = lazy.finish(&mut |_| {}).unwrap().field;
+    assert_same_history(&mut back, &mut whole)?;
+    Ok(read)
+}
+
+#[test]
+fn opening_a_sculpt_reads_its_index_and_a_box_reads_the_chunks_reaching_into_it() {
+    let whole = spread_field();
+    let bytes = encode(&whole, Some("# a scene\n"), &mut |_| {});
+    assert_eq!(&bytes[4..8], &4u32.to_le_bytes());
+    let lazy = LazySculpt::from_bytes(bytes.clone(), "lazy.argile").unwrap();
+    assert_eq!(lazy.scene_toml(), Some("# a scene\n"));
+    assert_eq!(lazy.brick_count() as usize, whole.brick_count() + whole.level_brick_count(2));
+    let levels: Vec<usize> = lazy.chunks().iter().map(|c| c.level).collect();
+    assert!(levels.contains(&0) && levels.contains(&2), "{levels:?}");
+    assert!(
+        lazy.bytes_read() * 20 < lazy.file_len(),
+        "opening read {} of {} bytes",
+        lazy.bytes_read(),
+        lazy.file_len()
+    );
+    // One stamp's box, at the bar's left end, and a box across the coarse build and the bar.
+    let left = IVec3::new(-150, 0, 0);
+    let read = check_box(&bytes, left - IVec3::splat(8), left + IVec3::splat(8)).unwrap();
+    assert!(read >= 1 && read < lazy.chunks().len() / 2, "{read} of {} chunks", lazy.chunks().len());
+    check_box(&bytes, IVec3::new(-20, -10, -6), IVec3::new(20, 70, 6)).unwrap();
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 12,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(11),
+        ..ProptestConfig::default()
+    })]
+
+    /// Random strokes on the finest level and coarse builds on levels 1 to 3, some undone: any
+    /// box loaded lazily reads as in the whole sculpt, and finishing gives the whole sculpt.
+    #[test]
+    fn any_box_read_lazily_reads_as_the_whole_sculpt(
+        stamps in proptest::collection::vec(
+            (-0.1f32..0.1, -0.05f32..0.05, -0.05f32..0.05, 0.002f32..0.01, any::<bool>()),
+            1..8,
+        ),
+        builds in proptest::collection::vec((1usize..4, -100i32..100, -60i32..60, 10.0f32..40.0), 0..3),
+        undone in 0usize..3,
+        lo in (-120i32..120, -70i32..70, -70i32..70),
+        size in (0i32..40, 0i32..40, 0i32..40),
+    ) {
+        let mut f = Field::new(0.001, 0.5);
+        for &(level, x, y, r) in &builds {
+            f.begin_stroke();
+            coarse_ball(&mut f, level, IVec3::new(x, y, 0), r);
+            f.end_stroke();
+        }
+        for &(x, y, z, r, remove) in &stamps {
+            f.begin_stroke();
+            let action = if remove { Action::Remove } else { Action::Add };
+            stamp_sphere(&mut f, Vec3::new(x, y, z), r, action, [x.abs() * 5.0, 0.5, 0.5, 1.0]);
+            f.end_stroke();
+        }
+        for _ in 0..undone {
+            f.undo().unwrap();
+        }
+        let bytes = encode(&f, None, &mut |_| {});
+        let lo = IVec3::new(lo.0, lo.1, lo.2);
+        check_box(&bytes, lo, lo + IVec3::new(size.0, size.1, size.2))?;
+    }
+}
+
+/// Both readers refuse `bytes`, naming the file, with a reason containing `why`.
+fn both_refuse(bytes: &[u8], why: &str) {
+    let e = decode(bytes, "lie.argile", &mut |_| {}).unwrap_err().to_string();
+    assert!(e.starts_with("sculpt file lie.argile: ") && e.contains(why), "whole: {e}");
+    let lazy = LazySculpt::from_bytes(bytes.to_vec(), "lie.argile").and_then(|mut l| {
+        for i in 0..l.chunks().len() {
+            l.load_chunk(i)?;
+        }
+        l.finish(&mut |_| {})
+    });
+    let e = lazy.unwrap_err().to_string();
+    assert!(e.starts_with("sculpt file lie.argile: ") && e.contains(why), "lazy: {e}");
+}
+
+#[test]
+fn an_index_that_lies_is_refused_by_both_readers() {
+    let bytes = encode(&spread_field(), None, &mut |_| {});
+    let (header, chunks) = split(&bytes);
+    assert_eq!(&chunks[1].0, b"INDX");
+    let entry = |i: usize| 12 + 25 * i;
+    let patched = |at: usize, value: &[u8]| {
+        let mut c = chunks.clone();
+        c[1].1[at..at + value.len()].copy_from_slice(value);
+        join(header, &c)
+    };
+    // Entry 0's block moved to where no brick of it lies.
+    both_refuse(&patched(entry(0) + 1, &77i32.to_le_bytes()), "outside its block");
+    // Entry 1 claims a brick more, and the header's count with it: the chunk holds fewer.
+    let mut c = chunks.clone();
+    let bricks = u32::from_le_bytes(c[1].1[entry(1) + 13..entry(1) + 17].try_into().unwrap());
+    c[1].1[entry(1) + 13..entry(1) + 17].copy_from_slice(&(bricks + 1).to_le_bytes());
+    let meta = String::from_utf8(c[0].1.clone()).unwrap();
+    let total: u64 = meta.split("\"bricks\":").nth(1).unwrap().trim_end_matches('}').parse().unwrap();
+    c[0].1 = meta.replace(&format!("\"bricks\":{total}"), &format!("\"bricks\":{}", total + 1)).into_bytes();
+    both_refuse(&join(header, &c), "its index entry says");
+    // Entry 2 starts 16 bytes late: inside another chunk.
+    let offset = u64::from_le_bytes(c[1].1[entry(2) + 17..entry(2) + 25].try_into().unwrap());
+    both_refuse(&patched(entry(2) + 17, &(offset + 16).to_le_bytes()), "chunk 4");
+    // Absurd values: an offset at the end of the 64-bit range, a block beyond the field, more
+    // entries than the chunk holds.
+    both_refuse(&patched(entry(2) + 17, &u64::MAX.to_le_bytes()), "where none can start");
+    both_refuse(&patched(entry(0) + 5, &i32::MIN.to_le_bytes()), "beyond the field");
+    both_refuse(&patched(0, &u32::MAX.to_le_bytes()), "not a whole index");
+    // The history put a byte early.
+    let history = u64::from_le_bytes(chunks[1].1[4..12].try_into().unwrap());
+    both_refuse(&patched(4, &(history - 1).to_le_bytes()), "history");
+    // A brick chunk before the index; the index left out.
+    let mut c = chunks.clone();
+    c.swap(1, 2);
+    both_refuse(&join(header, &c), "before the index");
+    let mut c = chunks.clone();
+    c.remove(1);
+    both_refuse(&join(header, &c), "before the index");
+}
+
+#[test]
+fn every_truncation_of_an_indexed_sculpt_is_refused_by_both_readers() {
+    let mut f = spread_field();
+    f.undo().unwrap();
+    let bytes = encode(&f, None, &mut |_| {});
+    for n in (0..bytes.len()).step_by(97).chain([bytes.len() - 1]) {
+        both_refuse(&bytes[..n], "");
+    }
+}
+
+/// The same sculpt as the version-1 fixture, written by format version 3.
+const FIXTURE_V3: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/sculpt-v3.argile");
+
+#[test]
+fn a_version_3_file_still_loads_whole_or_lazily() {
+    let bytes = std::fs::read(FIXTURE_V3).unwrap();
+    assert_eq!(&bytes[4..8], &3u32.to_le_bytes(), "the fixture is format version 3");
+    let sculpt = load_sculpt(std::path::Path::new(FIXTURE_V3)).unwrap();
+    assert!(same_matter(&sculpt.field, &fixture_field()));
+    let lazy = LazySculpt::open(std::path::Path::new(FIXTURE_V3)).unwrap();
+    assert!(lazy.chunks().is_empty() && lazy.bytes_read() == bytes.len() as u64, "no index: read whole");
+    assert!(lazy.finish(&mut |_| {}).unwrap().field.same_samples(&sculpt.field));
+    let v3 = encode_with(
+        &sculpt.field,
+        sculpt.scene_toml.as_deref(),
+        EncodeOptions { version: 3, history: true },
+        &mut |_| {},
+    );
+    assert_eq!(v3, bytes, "the same bytes as version 3 wrote");
+}
+
+#[test]
+fn info_describes_a_sculpt_from_its_index() {
+    let dir = temp_dir("info");
+    let path = dir.join("spread.argile");
+    let bytes = encode(&spread_field(), Some("# a scene\n"), &mut |_| {});
+    std::fs::write(&path, &bytes).unwrap();
+    let out = argile(&["info", path.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let lazy = LazySculpt::from_bytes(bytes.clone(), "spread.argile").unwrap();
+    for line in [
+        format!("format version 4, {} bytes", bytes.len()),
+        "voxels 1 mm, iso-level 0.5".to_owned(),
+        "level 0 (1 mm voxels): ".to_owned(),
+        "level 2 (4 mm voxels): ".to_owned(),
+        "undo history: 1 chunks".to_owned(),
+        "stored (10 bytes of TOML)".to_owned(),
+        format!("read {} of {} bytes: its header, settings, scene and index", lazy.bytes_read(), bytes.len()),
+    ] {
+        assert!(text.contains(&line), "`{line}` in:\n{text}");
+    }
+    // A damaged index is refused by name, as every reader refuses it.
+    let mut bad = bytes;
+    let tags: Vec<usize> = layout(&bad).into_iter().filter(|p| p.2 == "tag").map(|p| p.0).collect();
+    let indx = tags.into_iter().find(|&at| &bad[at..at + 4] == b"INDX").unwrap();
+    bad[indx + 16 + 2] ^= 0x10;
+    std::fs::write(&path, &bad).unwrap();
+    let out = argile(&["info", path.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(&format!("sculpt file {}", path.display()))
+            && err.contains("chunk 2 (INDX) fails its checksum"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
 }

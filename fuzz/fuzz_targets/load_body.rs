@@ -1,11 +1,35 @@
 //! The body of the `load` fuzz target, shared with its stable-toolchain run
 //! (`tests/fuzz_load.rs`): the sculpt loader on arbitrary bytes must refuse or load, never
 //! panic, hang or allocate what the bytes claim; what it loads must store and load again
-//! unchanged.
+//! unchanged; and the lazy reader (`LazySculpt`) must take and refuse the same files as the
+//! whole-file reader, and give the same sculpt.
 
-/// Runs the loader on `data`; panics (a finding) when the round trip of a loaded sculpt fails.
+/// Runs the loaders on `data`; panics (a finding) when they disagree or when the round trip
+/// of a loaded sculpt fails.
 pub fn check(data: &[u8]) {
-    let Ok(sculpt) = argile::io::decode(data, "fuzz.argile", &mut |_| {}) else { return };
+    let whole = argile::io::decode(data, "fuzz.argile", &mut |_| {});
+    let lazy = argile::io::LazySculpt::from_bytes(data.to_vec(), "fuzz.argile").and_then(|mut l| {
+        // A box first, as a viewer would, then the rest.
+        if let Some(c) = l.chunks().last().copied() {
+            let (lo, _) = c.reach();
+            l.load_box(lo, lo + argile::math::IVec3::splat(8))?;
+        }
+        l.finish(&mut |_| {})
+    });
+    let sculpt = match (whole, lazy) {
+        (Ok(whole), Ok(lazy)) => {
+            assert!(lazy.field.same_samples(&whole.field), "the lazy reader gives the same clay");
+            assert_eq!(lazy.scene_toml, whole.scene_toml);
+            assert_eq!(lazy.field.history_stats(), whole.field.history_stats());
+            whole
+        }
+        (Err(_), Err(_)) => return,
+        (whole, lazy) => panic!(
+            "the readers disagree: whole {:?}, lazy {:?}",
+            whole.err().map(|e| e.reason),
+            lazy.err().map(|e| e.reason)
+        ),
+    };
     let again = argile::io::encode(&sculpt.field, sculpt.scene_toml.as_deref(), &mut |_| {});
     let back = argile::io::decode(&again, "again.argile", &mut |_| {})
         .expect("a loaded sculpt stores and loads again");

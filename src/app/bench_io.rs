@@ -187,12 +187,46 @@ pub(super) fn load_large(size: BenchSize, emit: &mut impl FnMut(Value)) -> Resul
         times.push(begin.elapsed().as_secs_f64());
         anyhow::ensure!(loaded.field.same_samples(&field), "the loaded sculpt differs from the saved one");
     }
+    // Lazily: the index alone; then a box of 32 voxels a side on the sphere's surface, as a
+    // viewer or a tool would want first; then the rest, which checks the whole file.
+    let r = size.large_sphere_radius_voxels as i32;
+    let (box_lo, box_hi) =
+        (crate::math::IVec3::new(r - 16, -16, -16), crate::math::IVec3::new(r + 15, 15, 15));
+    let (mut open_s, mut box_s, mut finish_s) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut open_bytes, mut box_bytes, mut box_chunks, mut chunks) = (0, 0, 0, 0);
+    for _ in 0..size.repetitions {
+        let begin = Instant::now();
+        let mut lazy = crate::io::LazySculpt::open(&path)?;
+        open_s.push(begin.elapsed().as_secs_f64());
+        open_bytes = lazy.bytes_read();
+        let begin = Instant::now();
+        box_chunks = lazy.load_box(box_lo, box_hi)?;
+        box_s.push(begin.elapsed().as_secs_f64());
+        box_bytes = lazy.bytes_read() - open_bytes;
+        chunks = lazy.chunks().len();
+        let begin = Instant::now();
+        let loaded = lazy.finish(&mut |_| {})?;
+        finish_s.push(begin.elapsed().as_secs_f64());
+        anyhow::ensure!(
+            loaded.field.same_samples(&field),
+            "the lazily loaded sculpt differs from the saved one"
+        );
+    }
     let sample_bytes = field.brick_count() * crate::field::BRICK_BYTES;
     let t = median(times);
+    let (open_s, box_s, finish_s) = (median(open_s), median(box_s), median(finish_s));
     emit(json!({
         "workload": "load-large",
         "samples": field.brick_count() * crate::field::BRICK_VOLUME,
         "file_bytes": bytes.len(),
+        "chunks": chunks,
+        "lazy_open_ms_median": open_s * 1e3,
+        "lazy_open_bytes": open_bytes,
+        "lazy_box_ms_median": box_s * 1e3,
+        "lazy_box_chunks": box_chunks,
+        "lazy_box_bytes": box_bytes,
+        "lazy_rest_ms_median": finish_s * 1e3,
+        "load_to_lazy_open": t / open_s.max(1e-9),
         "load_ms_median": t * 1e3,
         "load_mb_per_s_of_samples": megabytes_per_s(sample_bytes, t),
         "load_mb_per_s_of_file": megabytes_per_s(bytes.len(), t),

@@ -32,8 +32,8 @@ pub use export::{export, final_field, final_mesh, welded_surface, ExportSummary}
 pub use frame::{build_frame, world_lights};
 pub use playback::Playback;
 pub use sculpt::{
-    convert_sculpt, is_sculpt, load_sculpt, load_sculpt_with_progress, open_sculpt, save_scene_sculpt,
-    SavedSculpt, SCULPT_EXTENSION,
+    convert_sculpt, describe_sculpt, is_sculpt, load_sculpt, load_sculpt_with_progress, open_sculpt,
+    save_scene_sculpt, SavedSculpt, SCULPT_EXTENSION,
 };
 pub use station::{
     no_display_reason, run_station, InputScript, ScriptEvent, Station, StationOptions, StationReport,

@@ -8,9 +8,11 @@ use anyhow::{bail, Context, Result};
 use super::autosave::start_autosave;
 use super::export::end_s;
 use super::playback::Playback;
+use crate::field::{BRICK_SIZE, LEVELS};
 use crate::io::autosave::AutosaveConfig;
 use crate::io::write_atomically;
-use crate::io::{encode, encode_with, read_file, EncodeOptions, Sculpt, VERSION};
+use crate::io::{encode, encode_with, read_file, EncodeOptions, LazySculpt, Sculpt, VERSION};
+use crate::math::{IVec3, Vec3};
 use crate::scene::Scene;
 
 /// The extension of sculpt files.
@@ -26,7 +28,7 @@ pub fn is_sculpt(path: &Path) -> bool {
 pub struct SavedSculpt {
     /// The file.
     pub path: PathBuf,
-    /// Bricks stored.
+    /// Bricks stored, on every level.
     pub bricks: usize,
     /// Bytes written.
     pub bytes: usize,
@@ -64,7 +66,12 @@ pub fn save_scene_sculpt(
     if let Some(session) = session {
         session.close()?;
     }
-    Ok(SavedSculpt { path: out.to_path_buf(), bricks: field.brick_count(), bytes: bytes.len() })
+    Ok(SavedSculpt { path: out.to_path_buf(), bricks: all_bricks(&field), bytes: bytes.len() })
+}
+
+/// The bricks `field` stores, on every level.
+fn all_bricks(field: &crate::field::Field) -> usize {
+    (0..LEVELS).map(|l| field.level_brick_count(l)).sum()
 }
 
 /// Loads a sculpt file, refusing damaged, truncated, future-version or hostile files with a
@@ -139,7 +146,7 @@ pub fn convert_sculpt(
     write_atomically(out, overwrite, |w| {
         w.write_all(&bytes).with_context(|| format!("cannot write {}", out.display()))
     })?;
-    Ok(SavedSculpt { path: out.to_path_buf(), bricks: sculpt.field.brick_count(), bytes: bytes.len() })
+    Ok(SavedSculpt { path: out.to_path_buf(), bricks: all_bricks(&sculpt.field), bytes: bytes.len() })
 }
 
 /// Writes `field` (with its undo history) to `path` as a sculpt, atomically.
@@ -148,4 +155,87 @@ pub(crate) fn save_field(field: &crate::field::Field, path: &Path) -> Result<()>
     write_atomically(path, true, |w| {
         w.write_all(&bytes).with_context(|| format!("cannot write {}", path.display()))
     })
+}
+
+/// Describes the sculpt file at `path` from its index, without reading its clay (a file of
+/// version 1 to 3 has no index: it is read whole): its version and size, settings, each
+/// level's bricks and where they lie, its history and scene, and how much of it was read.
+pub fn describe_sculpt(path: &Path) -> Result<String> {
+    use std::fmt::Write;
+    let lazy = LazySculpt::open(path)?;
+    let field = lazy.field();
+    let voxel_mm = field.transform().voxel_size_m * 1000.0;
+    let mut out =
+        format!("{}: format version {}, {} bytes\n", path.display(), lazy.version(), lazy.file_len());
+    let _ = writeln!(out, "  voxels {voxel_mm} mm, iso-level {}", field.iso());
+    // Per level: bricks, chunks, and the box of the finest lattice that holds them.
+    let mut levels = [(0u64, 0usize, IVec3::MAX, IVec3::MIN); LEVELS];
+    if lazy.chunks().is_empty() {
+        for (level, stats) in levels.iter_mut().enumerate() {
+            for key in field.level_keys(level) {
+                let lo = key * BRICK_SIZE * (1 << level);
+                let hi = lo + IVec3::splat((BRICK_SIZE - 1) << level);
+                *stats = (stats.0 + 1, 0, stats.2.min(lo), stats.3.max(hi));
+            }
+        }
+    } else {
+        for c in lazy.chunks() {
+            let step = 1 << c.level;
+            let (lo, hi) = c.reach();
+            let (lo, hi) = (lo + IVec3::splat(step - 1), hi - IVec3::splat(step - 1));
+            let stats = &mut levels[c.level];
+            *stats = (stats.0 + u64::from(c.bricks), stats.1 + 1, stats.2.min(lo), stats.3.max(hi));
+        }
+    }
+    let metres = |p: IVec3| field.transform().index_to_world(p.as_vec3());
+    for (level, &(bricks, chunks, lo, hi)) in levels.iter().enumerate().filter(|(_, l)| l.0 > 0) {
+        let (a, b): (Vec3, Vec3) = (metres(lo), metres(hi));
+        let _ =
+            write!(out, "  level {level} ({} mm voxels): {bricks} bricks", voxel_mm * (1 << level) as f32);
+        if chunks > 0 {
+            let _ = write!(out, " in {chunks} chunks");
+        }
+        let _ = writeln!(
+            out,
+            ", in {} spanning x {:.3}..{:.3} m, y {:.3}..{:.3} m, z {:.3}..{:.3} m",
+            if chunks > 0 { "blocks of 64 samples a side" } else { "bricks" },
+            a.x,
+            b.x,
+            a.y,
+            b.y,
+            a.z,
+            b.z
+        );
+    }
+    if lazy.brick_count() == 0 {
+        let _ = writeln!(out, "  no clay");
+    }
+    match lazy.history_size() {
+        Some((0, _)) => {
+            let _ = writeln!(out, "  no undo history");
+        }
+        Some((chunks, bytes)) => {
+            let _ = writeln!(out, "  undo history: {chunks} chunks, {bytes} bytes");
+        }
+        None => {
+            let stats = field.history_stats();
+            let _ =
+                writeln!(out, "  undo history: {} undo and {} redo steps", stats.undo_in_memory, stats.redo);
+        }
+    }
+    match lazy.scene_toml() {
+        Some(text) => {
+            let _ = writeln!(out, "  the scene it was made in: stored ({} bytes of TOML)", text.len());
+        }
+        None => {
+            let _ = writeln!(out, "  no scene stored");
+        }
+    }
+    let what = if lazy.chunks().is_empty() && lazy.brick_count() > 0 {
+        "the whole file (no index before version 4)"
+    } else {
+        "its header, settings, scene and index"
+    };
+    let _ = writeln!(out, "  read {} of {} bytes: {what}", lazy.bytes_read(), lazy.file_len());
+    Ok(out)
 }

@@ -2,7 +2,7 @@
 //!
 //! Knows the field (it stores bricks) and nothing of Vulkan or devices.
 //!
-//! ## Layout, version 3
+//! ## Layout, version 4
 //!
 //! ```text
 //!  header  "ARGL" · version u32 · chunk count u32                      (little-endian)
@@ -11,25 +11,41 @@
 //!
 //!  chunks  META  (first, once)  JSON: format, voxel size, iso-level, brick size, brick count
 //!          SCNE  (at most once) the scene file's TOML text the sculpt was made in
-//!          BRKS  (any number)   up to 512 bricks of the finest level: per brick its key
-//!                               (3 × i32), then 512 densities (f32) and 512 linear RGBA
+//!          INDX  (once, before any brick) the directory of the brick chunks that follow it:
+//!                               chunk count u32 · history offset u64 · per brick chunk, in
+//!                               file order: level u8 · block (3 × i32) · brick count u32 ·
+//!                               offset u64. Offsets count from the first byte after INDX.
+//!          BRKS  (any number)   the bricks of one block of the finest level: per brick its
+//!                               key (3 × i32), then 512 densities (f32) and 512 linear RGBA
 //!                               colours (4 × f32)
-//!          BRKL  (any number)   up to 512 bricks of a coarser level: the level u8 (1 to 4),
-//!                               then the bricks as in BRKS, keyed on that level's lattice
-//!          HIST  (any number)   the undo history held in memory (optional): kind u8 (0 undo,
-//!                               1 redo) · step index u32 · entry count u32 (≤ 512) · entries:
-//!                               per brick, flags u8 (bit 0: present; bits 1–3: the level,
-//!                               0 the finest) · key (3 × i32) · if present its densities and
-//!                               colours as in BRKS. Undo steps oldest first,
-//!                               then redo steps (the next redo last), each index from 0; a step
-//!                               of more than 512 bricks continues in chunks of the same index.
+//!          BRKL  (any number)   the bricks of one block of a coarser level: the level u8
+//!                               (1 to 4), then the bricks as in BRKS, keyed on that level's
+//!                               lattice
+//!          HIST  (any number, from the history offset on) the undo history held in memory
+//!                               (optional): kind u8 (0 undo, 1 redo) · step index u32 · entry
+//!                               count u32 (≤ 512) · entries: per brick, flags u8 (bit 0:
+//!                               present; bits 1–3: the level, 0 the finest) · key (3 × i32) ·
+//!                               if present its densities and colours as in BRKS. Undo steps
+//!                               oldest first, then redo steps (the next redo last), each index
+//!                               from 0; a step of more than 512 bricks continues in chunks of
+//!                               the same index.
+//!
+//!  block   the bricks of a level whose keys shifted right by 3 agree: a cube of 8 × 8 × 8
+//!          bricks, 64 samples of its level a side (64 finest voxels on level 0, 1024 on
+//!          level 4); it holds at most 512 bricks, so it fits one chunk
 //! ```
 //!
-//! Version 2 is version 3 without BRKL chunks and with the finest level alone in entries;
-//! version 1 is version 2 without HIST chunks. This build reads all three and writes any
-//! (`argile convert`): a sculpt with coarse levels written as version 1 or 2 stores the
-//! finest lattice as its readers see it (the coarse clay refined into finest bricks, the same
-//! field to the eye and to the mesher), without its undo history.
+//! The index lets a sculpt be read lazily ([`LazySculpt`]): opening one reads the header,
+//! META, SCNE and INDX, and any brick chunk can then be read on its own, by where its block
+//! lies (loading a box reads the chunks whose samples reach into it, and nothing else).
+//!
+//! Version 3 is version 4 without INDX, its brick chunks holding up to 512 bricks of one level
+//! in key order (not by block). Version 2 is version 3 without BRKL chunks and with the finest
+//! level alone in entries; version 1 is version 2 without HIST chunks. This build reads all
+//! four and writes any (`argile convert`): a sculpt with coarse levels written as version 1
+//! or 2 stores the finest lattice as its readers see it (the coarse clay refined into finest
+//! bricks, the same field to the eye and to the mesher), without its undo history. Versions 1
+//! to 3 have no index: [`LazySculpt`] reads them whole when it opens them.
 //!
 //! - Every chunk's bytes are LZ4-compressed (`lz4_flex` block format) and carry the CRC-32 of
 //!   the stored bytes; a reader checks the CRC before decompressing and the decompressed
@@ -38,13 +54,14 @@
 //!   most [`MAX_CHUNK_BYTES`] raw, so a large sculpt loads chunk by chunk, with progress.
 //! - A reader refuses, with a sentence naming the file and the problem: a truncated file, a
 //!   bad checksum, a future version, an unknown or repeated chunk, sizes or counts past the
-//!   limits, a brick key twice or beyond ±2²⁴ bricks, densities outside [0, 1] or non-finite samples, history steps
-//!   out of order. It never allocates what a header claims before checking the claim against
-//!   the file's size.
+//!   limits, a brick key twice or beyond ±2²⁴ bricks, densities outside [0, 1] or non-finite
+//!   samples, history steps out of order, an index that does not say where the chunks are and
+//!   what they hold. It never allocates what a header claims before checking the claim
+//!   against the file's size.
 //! - Files are written atomically ([`write_atomically`]).
 //!
-//! Later versions (resolution levels, freeform tools) add chunk tags; a reader keeps reading
-//! every version it has shipped (`tests/fixtures/sculpt-v1.argile` and `sculpt-v2.argile` are checked).
+//! Later versions add chunk tags; a reader keeps reading every version it has shipped
+//! (`tests/fixtures/sculpt-v1.argile`, `sculpt-v2.argile` and `sculpt-v3.argile` are checked).
 //!
 //! ## Fuzzing the loader
 //!
@@ -106,11 +123,13 @@ use crate::math::IVec3;
 mod atomic;
 pub mod autosave;
 mod journal;
+mod lazy;
 
 pub use atomic::write_atomically;
+pub use lazy::{ChunkInfo, LazySculpt};
 
 /// The format version this build writes.
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 /// The largest raw chunk a reader accepts.
 pub const MAX_CHUNK_BYTES: usize = 64 << 20;
 /// The most chunks a file may declare.
@@ -157,8 +176,8 @@ struct Meta {
 /// What [`encode_with`] writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct EncodeOptions {
-    /// The format version to write (1 to 3; version 1 holds no history, versions 1 and 2 no
-    /// coarse levels).
+    /// The format version to write (1 to 4; version 1 holds no history, versions 1 and 2 no
+    /// coarse levels, versions 1 to 3 no index).
     pub version: u32,
     /// Whether to store the undo history held in memory.
     pub history: bool,
@@ -231,7 +250,6 @@ fn encode_parts(
     history: Option<&History>,
     progress: &mut dyn FnMut(f32),
 ) -> Vec<u8> {
-    bricks.sort_unstable_by_key(|(k, _)| k.sort_key());
     let meta = Meta {
         format: "argile sculpt".into(),
         voxel_size_m,
@@ -239,25 +257,26 @@ fn encode_parts(
         brick_size: BRICK_SIZE,
         bricks: bricks.len() as u64,
     };
-    // Chunks of up to 512 bricks of one level.
-    let groups: Vec<&[(LevelKey, &Brick)]> =
-        bricks.chunk_by(|a, b| a.0.level == b.0.level).flat_map(|l| l.chunks(BRICKS_PER_CHUNK)).collect();
+    // Chunks of the bricks of one block (version 4), or of up to 512 bricks of one level.
+    let indexed = version >= 4;
+    let groups: Vec<&[(LevelKey, &Brick)]> = if indexed {
+        bricks.sort_unstable_by_key(|(k, _)| (k.level, block_of(k.key).to_array(), k.key.to_array()));
+        bricks.chunk_by(|a, b| (a.0.level, block_of(a.0.key)) == (b.0.level, block_of(b.0.key))).collect()
+    } else {
+        bricks.sort_unstable_by_key(|(k, _)| k.sort_key());
+        bricks.chunk_by(|a, b| a.0.level == b.0.level).flat_map(|l| l.chunks(BRICKS_PER_CHUNK)).collect()
+    };
     let steps: Vec<(u8, u32, &HistoryStep)> = history.map_or_else(Vec::new, |(undo, redo)| {
         let undo = undo.iter().enumerate().map(|(i, s)| (0, i as u32, s));
         undo.chain(redo.iter().enumerate().map(|(i, s)| (1, i as u32, s))).collect()
     });
     let step_chunks: usize = steps.iter().map(|(_, _, s)| s.len().div_ceil(BRICKS_PER_CHUNK).max(1)).sum();
-    let chunk_count = 1 + u32::from(scene_toml.is_some()) + groups.len() as u32 + step_chunks as u32;
-    let mut out = Vec::new();
-    out.extend_from_slice(MAGIC);
-    out.extend_from_slice(&version.to_le_bytes());
-    out.extend_from_slice(&chunk_count.to_le_bytes());
-    put_chunk(&mut out, *b"META", &serde_json::to_vec(&meta).expect("plain values serialise"));
-    if let Some(text) = scene_toml {
-        put_chunk(&mut out, *b"SCNE", text.as_bytes());
-    }
+    // The brick chunks, compressed first: the index gives where each one lies.
     let group_count = groups.len().max(1);
     let mut raw = Vec::new();
+    let mut stored = Vec::with_capacity(groups.len());
+    let mut entries = Vec::with_capacity(groups.len());
+    let mut offset = 0u64;
     for (i, group) in groups.into_iter().enumerate() {
         raw.clear();
         raw.reserve(1 + group.len() * BRICK_RECORD);
@@ -268,8 +287,33 @@ fn encode_parts(
         for (key, brick) in group {
             put_brick(&mut raw, key.key, brick);
         }
-        put_chunk(&mut out, if level > 0 { *b"BRKL" } else { *b"BRKS" }, &raw);
+        let mut chunk = Vec::new();
+        put_chunk(&mut chunk, if level > 0 { *b"BRKL" } else { *b"BRKS" }, &raw);
+        entries.push(IndexEntry {
+            level,
+            block: block_of(group[0].0.key),
+            bricks: group.len() as u32,
+            offset,
+        });
+        offset += chunk.len() as u64;
+        stored.push(chunk);
         progress((i + 1) as f32 / group_count as f32);
+    }
+    let chunk_count =
+        1 + u32::from(scene_toml.is_some()) + u32::from(indexed) + stored.len() as u32 + step_chunks as u32;
+    let mut out = Vec::with_capacity(offset as usize + 1024);
+    out.extend_from_slice(MAGIC);
+    out.extend_from_slice(&version.to_le_bytes());
+    out.extend_from_slice(&chunk_count.to_le_bytes());
+    put_chunk(&mut out, *b"META", &serde_json::to_vec(&meta).expect("plain values serialise"));
+    if let Some(text) = scene_toml {
+        put_chunk(&mut out, *b"SCNE", text.as_bytes());
+    }
+    if indexed {
+        put_chunk(&mut out, *b"INDX", &put_index(&entries, offset));
+    }
+    for chunk in stored {
+        out.extend_from_slice(&chunk);
     }
     for (kind, index, step) in steps {
         for part in step.chunks(BRICKS_PER_CHUNK).chain(step.is_empty().then_some(&[][..])) {
@@ -282,6 +326,108 @@ fn encode_parts(
         }
     }
     out
+}
+
+/// The block (see the module docs) holding brick `key` of its level.
+fn block_of(key: BrickKey) -> IVec3 {
+    key >> BLOCK_SHIFT
+}
+
+/// Bricks of a block a side, as a shift of brick keys.
+const BLOCK_SHIFT: i32 = 3;
+/// Bytes of one index entry: level, block, brick count, offset.
+const INDEX_ENTRY: usize = 1 + 12 + 4 + 8;
+
+/// One brick chunk as the index tells of it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct IndexEntry {
+    pub(crate) level: u8,
+    pub(crate) block: IVec3,
+    pub(crate) bricks: u32,
+    /// From the first byte after the index chunk.
+    pub(crate) offset: u64,
+}
+
+/// The index chunk's bytes: the entries and where the history starts (both from the first
+/// byte after the index chunk).
+fn put_index(entries: &[IndexEntry], history_offset: u64) -> Vec<u8> {
+    let mut raw = Vec::with_capacity(12 + entries.len() * INDEX_ENTRY);
+    raw.extend_from_slice(&(entries.len() as u32).to_le_bytes());
+    raw.extend_from_slice(&history_offset.to_le_bytes());
+    for e in entries {
+        raw.push(e.level);
+        for c in e.block.to_array() {
+            raw.extend_from_slice(&c.to_le_bytes());
+        }
+        raw.extend_from_slice(&e.bricks.to_le_bytes());
+        raw.extend_from_slice(&e.offset.to_le_bytes());
+    }
+    raw
+}
+
+/// Reads an index chunk's bytes, refusing entries that are not in file order, repeat a block,
+/// name a level or block beyond the field, claim more bricks than a block holds or than the
+/// file's META says, or lie past `room` bytes (what follows the index in the file).
+fn read_index(raw: &[u8], bricks: u64, room: u64) -> Result<(Vec<IndexEntry>, u64), String> {
+    if raw.len() < 12
+        || (raw.len() - 12) % INDEX_ENTRY != 0
+        || u32_at(raw, 0) as usize != (raw.len() - 12) / INDEX_ENTRY
+    {
+        return Err("its INDX chunk is not a whole index".into());
+    }
+    let u64_at = |at: usize| u64::from_le_bytes(raw[at..at + 8].try_into().expect("8 bytes"));
+    let history = u64_at(4);
+    if history > room {
+        return Err(format!(
+            "its index puts the history at byte {history} after it, past the file's end (truncated)"
+        ));
+    }
+    let mut entries = Vec::with_capacity((raw.len() - 12) / INDEX_ENTRY);
+    let mut blocks = HashSet::new();
+    let (mut next, mut total) = (0u64, 0u64);
+    let limit = MAX_BRICK_COORD >> BLOCK_SHIFT;
+    for e in raw[12..].chunks_exact(INDEX_ENTRY) {
+        let block = IVec3::new(u32_at(e, 1) as i32, u32_at(e, 5) as i32, u32_at(e, 9) as i32);
+        let entry = IndexEntry {
+            level: e[0],
+            block,
+            bricks: u32_at(e, 13),
+            offset: u64::from_le_bytes(e[17..25].try_into().expect("8 bytes")),
+        };
+        let i = entries.len();
+        if usize::from(entry.level) >= LEVELS
+            || block.to_array().iter().any(|c| !(-limit..=limit).contains(c))
+        {
+            return Err(format!(
+                "its index entry {i} names block {block} of level {}, beyond the field",
+                entry.level
+            ));
+        }
+        if !(1..=BRICKS_PER_CHUNK as u32).contains(&entry.bricks) {
+            return Err(format!("its index entry {i} claims {} bricks in one block", entry.bricks));
+        }
+        // The first chunk starts right after the index; each takes at least its header and a
+        // byte; all of them lie before the history.
+        if (i == 0 && entry.offset != 0)
+            || entry.offset < next
+            || entry.offset.saturating_add(CHUNK_HEADER as u64) > history
+        {
+            return Err(format!(
+                "its index entry {i} puts a chunk at byte {} after the index, where none can start",
+                entry.offset
+            ));
+        }
+        if !blocks.insert((entry.level, block)) {
+            return Err(format!("its index names block {block} of level {} twice", entry.level));
+        }
+        next = entry.offset + CHUNK_HEADER as u64 + 1;
+        total += u64::from(entry.bricks);
+        entries.push(entry);
+    }
+    if total != bricks {
+        return Err(format!("its index counts {total} bricks, its META chunk says {bricks}"));
+    }
+    Ok((entries, history))
 }
 
 /// Appends brick entries: per brick, flags u8 (bit 0: present; bits 1–3: the level) · key
@@ -417,7 +563,7 @@ pub(crate) struct Chunk {
 
 /// Where a reader takes a sculpt's bytes from: memory, or a file read chunk by chunk, so that
 /// a large sculpt is never in memory twice.
-trait Source {
+trait Source: Send {
     /// Bytes in all.
     fn len(&self) -> u64;
     /// Bytes taken so far.
@@ -425,16 +571,18 @@ trait Source {
     /// The next `n` bytes (the caller checked that they exist), read into `buf` where they must
     /// be copied.
     fn take<'a>(&'a mut self, n: usize, buf: &'a mut Vec<u8>) -> Result<&'a [u8], String>;
+    /// Goes to byte `to` (at most [`Source::len`]).
+    fn seek(&mut self, to: u64) -> Result<(), String>;
 }
 
-struct Slice<'b> {
-    bytes: &'b [u8],
+struct Slice<B> {
+    bytes: B,
     at: usize,
 }
 
-impl Source for Slice<'_> {
+impl<B: AsRef<[u8]> + Send> Source for Slice<B> {
     fn len(&self) -> u64 {
-        self.bytes.len() as u64
+        self.bytes.as_ref().len() as u64
     }
 
     fn position(&self) -> u64 {
@@ -442,9 +590,14 @@ impl Source for Slice<'_> {
     }
 
     fn take<'a>(&'a mut self, n: usize, _: &'a mut Vec<u8>) -> Result<&'a [u8], String> {
-        let taken = &self.bytes[self.at..self.at + n];
+        let taken = &self.bytes.as_ref()[self.at..self.at + n];
         self.at += n;
         Ok(taken)
+    }
+
+    fn seek(&mut self, to: u64) -> Result<(), String> {
+        self.at = to as usize;
+        Ok(())
     }
 }
 
@@ -452,6 +605,16 @@ struct FileSource {
     reader: std::io::BufReader<std::fs::File>,
     len: u64,
     at: u64,
+}
+
+impl FileSource {
+    /// The file at `path`, read through a buffer of `buffer` bytes (0: each read goes to the
+    /// file, for reading a few chunks here and there).
+    fn open(path: &std::path::Path, buffer: usize) -> Result<Self, String> {
+        let file = std::fs::File::open(path).map_err(|e| format!("cannot open it: {e}"))?;
+        let len = file.metadata().map_err(|e| format!("cannot read it: {e}"))?.len();
+        Ok(Self { reader: std::io::BufReader::with_capacity(buffer, file), len, at: 0 })
+    }
 }
 
 impl Source for FileSource {
@@ -469,6 +632,13 @@ impl Source for FileSource {
         std::io::Read::read_exact(&mut self.reader, buf).map_err(|e| format!("cannot read it: {e}"))?;
         self.at += n as u64;
         Ok(buf)
+    }
+
+    fn seek(&mut self, to: u64) -> Result<(), String> {
+        use std::io::Seek;
+        self.reader.seek(std::io::SeekFrom::Start(to)).map_err(|e| format!("cannot read it: {e}"))?;
+        self.at = to;
+        Ok(())
     }
 }
 
@@ -535,18 +705,16 @@ pub fn decode(bytes: &[u8], file: &str, progress: &mut dyn FnMut(f32)) -> Result
 /// sculpt), as [`decode`] checks it; `progress` gets the fraction of the file read.
 pub fn read_file(path: &std::path::Path, progress: &mut dyn FnMut(f32)) -> Result<Sculpt, SculptError> {
     let fail = |reason: String| SculptError { file: path.display().to_string(), reason };
-    let file = std::fs::File::open(path).map_err(|e| fail(format!("cannot open it: {e}")))?;
-    let len = file.metadata().map_err(|e| fail(format!("cannot read it: {e}")))?.len();
-    let mut source = FileSource { reader: std::io::BufReader::with_capacity(1 << 20, file), len, at: 0 };
+    let mut source = FileSource::open(path, 1 << 20).map_err(fail)?;
     decode_from(&mut source, progress).map_err(fail)
 }
 
-fn decode_from(source: &mut dyn Source, progress: &mut dyn FnMut(f32)) -> Result<Sculpt, String> {
-    let mut buf = Vec::new();
+/// Reads and checks the 12-byte header: the version and the chunk count.
+fn read_header(source: &mut dyn Source, buf: &mut Vec<u8>) -> Result<(u32, u32), String> {
     if source.len() < 12 {
         return Err("it is not an Argile sculpt (no ARGL header)".into());
     }
-    let header: [u8; 12] = source.take(12, &mut buf)?.try_into().expect("12 bytes");
+    let header: [u8; 12] = source.take(12, buf)?.try_into().expect("12 bytes");
     if &header[..4] != MAGIC {
         return Err("it is not an Argile sculpt (no ARGL header)".into());
     }
@@ -565,108 +733,243 @@ fn decode_from(source: &mut dyn Source, progress: &mut dyn FnMut(f32)) -> Result
             source.len()
         ));
     }
-    let mut meta: Option<Meta> = None;
-    let mut field: Option<Field> = None;
-    let mut scene_toml = None;
-    let mut keys: HashSet<LevelKey> = HashSet::new();
-    let mut raw = Vec::new();
-    let (mut undo, mut redo): (Vec<HistoryStep>, Vec<HistoryStep>) = (Vec::new(), Vec::new());
-    // The (kind, index) of the step the last HIST chunk added to, and its keys.
-    let mut step_at: Option<(u8, u32)> = None;
-    let mut step_keys = HashSet::new();
-    for index in 0..chunk_count {
-        let Chunk { tag, name } = read_chunk_from(source, index, &mut raw, &mut buf)?;
-        match (&tag, &meta) {
-            (b"META", None) if index == 0 => {
-                let m: Meta =
-                    serde_json::from_slice(&raw).map_err(|e| format!("its META chunk is not valid: {e}"))?;
-                if m.format != "argile sculpt" || m.brick_size != BRICK_SIZE {
-                    return Err(format!(
-                        "its META chunk describes `{}` with bricks of {}",
-                        m.format, m.brick_size
-                    ));
-                }
-                if !(m.voxel_size_m.is_finite() && m.voxel_size_m > 0.0 && m.voxel_size_m < 1.0) {
-                    return Err(format!("its voxel size {} m is not a usable size", m.voxel_size_m));
-                }
-                if !(m.iso > 0.0 && m.iso < 1.0) {
-                    return Err(format!("its iso-level {} is outside (0, 1)", m.iso));
-                }
-                field = Some(Field::new(m.voxel_size_m, m.iso));
-                meta = Some(m);
-            }
-            (b"META", _) => return Err(format!("chunk {index} is a second or late META chunk")),
-            (_, None) => return Err("its first chunk is not META".into()),
-            (b"SCNE", Some(_)) if scene_toml.is_none() => {
+    Ok((version, chunk_count))
+}
+
+/// Reads the META chunk's bytes into an empty field of its settings.
+fn read_meta(raw: &[u8]) -> Result<(Meta, Field), String> {
+    let m: Meta = serde_json::from_slice(raw).map_err(|e| format!("its META chunk is not valid: {e}"))?;
+    if m.format != "argile sculpt" || m.brick_size != BRICK_SIZE {
+        return Err(format!("its META chunk describes `{}` with bricks of {}", m.format, m.brick_size));
+    }
+    if !(m.voxel_size_m.is_finite() && m.voxel_size_m > 0.0 && m.voxel_size_m < 1.0) {
+        return Err(format!("its voxel size {} m is not a usable size", m.voxel_size_m));
+    }
+    if !(m.iso > 0.0 && m.iso < 1.0) {
+        return Err(format!("its iso-level {} is outside (0, 1)", m.iso));
+    }
+    let field = Field::new(m.voxel_size_m, m.iso);
+    Ok((m, field))
+}
+
+/// Reads the bricks of a BRKS or BRKL chunk (chunk number `index`) into `field`, refusing a
+/// brick `keys` already holds; with `block`, refusing a chunk that is not the bricks of that
+/// block (level, block, count) as its index entry says. Returns the bricks read.
+fn read_brick_chunk(
+    tag: &[u8; 4],
+    raw: &[u8],
+    index: u32,
+    block: Option<&IndexEntry>,
+    keys: &mut HashSet<LevelKey>,
+    field: &mut Field,
+) -> Result<usize, String> {
+    let (level, records) = if tag == b"BRKS" {
+        (0, raw)
+    } else {
+        let level = raw.first().map_or(0, |&l| usize::from(l));
+        if !(1..LEVELS).contains(&level) {
+            return Err(format!("chunk {index} (BRKL) is of level {level}, not one of 1 to {}", LEVELS - 1));
+        }
+        (level, &raw[1..])
+    };
+    let name = String::from_utf8_lossy(tag);
+    if records.len() % BRICK_RECORD != 0 {
+        return Err(format!("chunk {index} ({name}) holds a partial brick"));
+    }
+    let count = records.len() / BRICK_RECORD;
+    if let Some(e) = block {
+        if usize::from(e.level) != level || e.bricks as usize != count {
+            return Err(format!(
+                "chunk {index} ({name}) holds {count} bricks of level {level}; its index entry says {} of level {}",
+                e.bricks, e.level
+            ));
+        }
+    }
+    for record in records.chunks_exact(BRICK_RECORD) {
+        let (key, brick) = read_brick(record)?;
+        if let Some(e) = block.filter(|e| block_of(key) != e.block) {
+            return Err(format!("chunk {index} ({name}) holds brick {key}, outside its block {}", e.block));
+        }
+        let key = LevelKey::new(level, key);
+        if !keys.insert(key) {
+            return Err(format!("brick {key} is stored twice"));
+        }
+        field.insert_brick(key, brick);
+    }
+    Ok(count)
+}
+
+/// The undo history as HIST chunks give it, step by step.
+#[derive(Default)]
+struct HistoryReader {
+    undo: Vec<HistoryStep>,
+    redo: Vec<HistoryStep>,
+    /// The (kind, index) of the step the last HIST chunk added to, and its keys.
+    step_at: Option<(u8, u32)>,
+    step_keys: HashSet<LevelKey>,
+}
+
+impl HistoryReader {
+    /// Whether no HIST chunk was read yet.
+    fn is_empty(&self) -> bool {
+        self.step_at.is_none()
+    }
+
+    /// Adds HIST chunk number `index`.
+    fn read(&mut self, raw: &[u8], index: u32) -> Result<(), String> {
+        if raw.len() < 9 {
+            return Err(format!("chunk {index} (HIST) is too short"));
+        }
+        let (kind, step) = (raw[0], u32_at(raw, 1));
+        let follows = match self.step_at {
+            _ if kind > 1 => false,
+            None => step == 0,
+            Some((k, s)) if k == kind => step == s || step == s + 1,
+            Some((k, _)) => k < kind && step == 0,
+        };
+        if !follows {
+            return Err(format!("chunk {index} (HIST) is history step {kind}/{step}, out of order"));
+        }
+        let stack = if kind == 0 { &mut self.undo } else { &mut self.redo };
+        if self.step_at != Some((kind, step)) {
+            stack.push(Vec::new());
+            self.step_keys.clear();
+        }
+        self.step_at = Some((kind, step));
+        let mut at = 9;
+        let entries = read_entries(raw, &mut at, u32_at(raw, 5) as usize, &mut self.step_keys)
+            .map_err(|e| format!("chunk {index} (HIST): {e}"))?;
+        if at != raw.len() {
+            return Err(format!("chunk {index} (HIST) has {} bytes after its last brick", raw.len() - at));
+        }
+        let step = stack.last_mut().expect("pushed above");
+        step.extend(entries.into_iter().map(|(k, b)| (k, b.map(Arc::new))));
+        Ok(())
+    }
+}
+
+/// What the chunks before the bricks say: the settings, the scene, and (version 4) the index.
+struct Head {
+    version: u32,
+    chunk_count: u32,
+    meta: Meta,
+    field: Field,
+    scene_toml: Option<String>,
+    /// Version 4: the brick chunks, and where the history starts, both from `base`.
+    index: Option<(Vec<IndexEntry>, u64)>,
+    /// The first byte after the index (version 4), else after META and SCNE.
+    base: u64,
+    /// Chunks read.
+    chunks_read: u32,
+}
+
+/// Reads the header, META, SCNE (if any) and, from version 4, INDX. Before version 4 it stops
+/// after META or SCNE; the chunk it peeked at that is neither is left in `pending`.
+fn read_head(
+    source: &mut dyn Source,
+    raw: &mut Vec<u8>,
+    buf: &mut Vec<u8>,
+    pending: &mut Option<Chunk>,
+) -> Result<Head, String> {
+    let (version, chunk_count) = read_header(source, buf)?;
+    if chunk_count == 0 {
+        return Err("it holds no META chunk".into());
+    }
+    let Chunk { tag, .. } = read_chunk_from(source, 0, raw, buf)?;
+    if &tag != b"META" {
+        return Err("its first chunk is not META".into());
+    }
+    let (meta, field) = read_meta(raw)?;
+    let mut head = Head {
+        version,
+        chunk_count,
+        meta,
+        field,
+        scene_toml: None,
+        index: None,
+        base: source.position(),
+        chunks_read: 1,
+    };
+    while head.chunks_read < chunk_count {
+        let index = head.chunks_read;
+        let chunk = read_chunk_from(source, index, raw, buf)?;
+        head.chunks_read += 1;
+        match &chunk.tag {
+            b"SCNE" if head.scene_toml.is_none() && index == 1 => {
                 let text =
                     String::from_utf8(raw.clone()).map_err(|_| "its scene text is not UTF-8".to_owned())?;
-                scene_toml = Some(text);
+                head.scene_toml = Some(text);
+                head.base = source.position();
             }
-            (b"BRKS", Some(_)) => {
-                if raw.len() % BRICK_RECORD != 0 {
-                    return Err(format!("chunk {index} (BRKS) holds a partial brick"));
-                }
-                let field = field.as_mut().expect("META came first");
-                for record in raw.chunks_exact(BRICK_RECORD) {
-                    let (key, brick) = read_brick(record)?;
-                    if !keys.insert(key.into()) {
-                        return Err(format!("brick {key} is stored twice"));
-                    }
-                    field.insert_brick(key, brick);
-                }
-            }
-            (b"BRKL", Some(_)) if version >= 3 => {
-                let level = raw.first().map_or(0, |&l| usize::from(l));
-                if !(1..LEVELS).contains(&level) {
+            b"INDX" if version >= 4 => {
+                let room = source.len() - source.position();
+                let (entries, history_at) = read_index(raw, head.meta.bricks, room)?;
+                if entries.len() as u64 > u64::from(chunk_count - head.chunks_read) {
                     return Err(format!(
-                        "chunk {index} (BRKL) is of level {level}, not one of 1 to {}",
-                        LEVELS - 1
+                        "its index names {} brick chunks; its header counts {} chunks after the index",
+                        entries.len(),
+                        chunk_count - head.chunks_read
                     ));
                 }
-                if (raw.len() - 1) % BRICK_RECORD != 0 {
-                    return Err(format!("chunk {index} (BRKL) holds a partial brick"));
-                }
-                let field = field.as_mut().expect("META came first");
-                for record in raw[1..].chunks_exact(BRICK_RECORD) {
-                    let (key, brick) = read_brick(record)?;
-                    let key = LevelKey::new(level, key);
-                    if !keys.insert(key) {
-                        return Err(format!("brick {key} is stored twice"));
-                    }
-                    field.insert_brick(key, brick);
-                }
+                head.index = Some((entries, history_at));
+                head.base = source.position();
+                return Ok(head);
             }
-            (b"HIST", Some(_)) if version >= 2 => {
-                if raw.len() < 9 {
-                    return Err(format!("chunk {index} (HIST) is too short"));
-                }
-                let (kind, step) = (raw[0], u32_at(&raw, 1));
-                let follows = match step_at {
-                    _ if kind > 1 => false,
-                    None => step == 0,
-                    Some((k, s)) if k == kind => step == s || step == s + 1,
-                    Some((k, _)) => k < kind && step == 0,
+            _ if version >= 4 => {
+                return Err(format!("chunk {index} ({}) comes before the index (INDX)", chunk.name));
+            }
+            _ => {
+                *pending = Some(chunk);
+                return Ok(head);
+            }
+        }
+    }
+    if version >= 4 {
+        return Err("it holds no index (INDX chunk)".into());
+    }
+    Ok(head)
+}
+
+fn decode_from(source: &mut dyn Source, progress: &mut dyn FnMut(f32)) -> Result<Sculpt, String> {
+    let (mut buf, mut raw) = (Vec::new(), Vec::new());
+    let mut pending = None;
+    let Head { version, chunk_count, meta, mut field, scene_toml, index: directory, base, chunks_read } =
+        read_head(source, &mut raw, &mut buf, &mut pending)?;
+    let mut keys: HashSet<LevelKey> = HashSet::new();
+    let mut history = HistoryReader::default();
+    // Version 4: the index entry the next brick chunk must match.
+    let mut next_entry = 0;
+    let first = chunks_read - u32::from(pending.is_some());
+    for index in first..chunk_count {
+        let at = source.position() - base;
+        let Chunk { tag, name } = match pending.take() {
+            Some(chunk) => chunk,
+            None => read_chunk_from(source, index, &mut raw, &mut buf)?,
+        };
+        match &tag {
+            b"BRKS" | b"BRKL" if version >= 3 || &tag == b"BRKS" => {
+                let entry = match &directory {
+                    Some((entries, _)) => {
+                        let e = entries.get(next_entry).filter(|e| e.offset == at);
+                        let e =
+                            e.ok_or_else(|| format!("chunk {index} ({name}) is not where the index says"))?;
+                        next_entry += 1;
+                        Some(*e)
+                    }
+                    None => None,
                 };
-                if !follows {
-                    return Err(format!("chunk {index} (HIST) is history step {kind}/{step}, out of order"));
+                if !history.is_empty() {
+                    return Err(format!("chunk {index} ({name}) follows the history"));
                 }
-                let stack = if kind == 0 { &mut undo } else { &mut redo };
-                if step_at != Some((kind, step)) {
-                    stack.push(Vec::new());
-                    step_keys.clear();
+                read_brick_chunk(&tag, &raw, index, entry.as_ref(), &mut keys, &mut field)?;
+            }
+            b"HIST" if version >= 2 => {
+                if let Some((entries, history_at)) = &directory {
+                    if history.is_empty() && (next_entry != entries.len() || at != *history_at) {
+                        return Err(format!("chunk {index} (HIST) is not where the index puts the history"));
+                    }
                 }
-                step_at = Some((kind, step));
-                let mut at = 9;
-                let entries = read_entries(&raw, &mut at, u32_at(&raw, 5) as usize, &mut step_keys)
-                    .map_err(|e| format!("chunk {index} (HIST): {e}"))?;
-                if at != raw.len() {
-                    return Err(format!(
-                        "chunk {index} (HIST) has {} bytes after its last brick",
-                        raw.len() - at
-                    ));
-                }
-                let step = stack.last_mut().expect("pushed above");
-                step.extend(entries.into_iter().map(|(k, b)| (k, b.map(Arc::new))));
+                history.read(&raw, index)?;
             }
             _ => return Err(format!("chunk {index} has an unknown or repeated tag `{name}`")),
         }
@@ -675,14 +978,19 @@ fn decode_from(source: &mut dyn Source, progress: &mut dyn FnMut(f32)) -> Result
     if source.position() != source.len() {
         return Err(format!("{} bytes follow its last chunk", source.len() - source.position()));
     }
-    let (Some(meta), Some(mut field)) = (meta, field) else {
-        return Err("it holds no META chunk".into());
-    };
+    if let Some((entries, history_at)) = &directory {
+        if next_entry != entries.len() {
+            return Err(format!("its index names {} brick chunks; it holds {next_entry}", entries.len()));
+        }
+        if history.is_empty() && source.len() - base != *history_at {
+            return Err("its index puts the history where the file does not end".into());
+        }
+    }
     if keys.len() as u64 != meta.bricks {
         return Err(format!("it holds {} bricks, its META chunk says {}", keys.len(), meta.bricks));
     }
     field.take_dirty();
-    field.set_history(undo, redo);
+    field.set_history(history.undo, history.redo);
     Ok(Sculpt { field, scene_toml })
 }
 
@@ -718,7 +1026,8 @@ mod tests {
             let mut brick = Brick::default();
             brick.density[0] = 1.0;
             f.insert_brick(IVec3::new(1, 0, 0), brick.clone());
-            let mut bytes = encode(&f, None, &mut |_| {});
+            // Version 3 (no index): the key's range is checked before its block is.
+            let mut bytes = encode_with(&f, None, EncodeOptions { version: 3, history: false }, &mut |_| {});
             // Rewrite the stored key's y through the chunk layer: decompress, patch, recompress.
             let (meta_len, at) = (u32_at(&bytes, 20) as usize, 12);
             let brks = at + 16 + meta_len;
@@ -876,7 +1185,7 @@ mod tests {
         f.begin_stroke();
         f.edit_box(IVec3::ZERO, IVec3::splat(3), true, |_, d, _| *d = 1.0);
         f.end_stroke();
-        let mut bytes = encode(&f, None, &mut |_| {});
+        let mut bytes = encode_with(&f, None, EncodeOptions { version: 2, history: true }, &mut |_| {});
         bytes[4..8].copy_from_slice(&1u32.to_le_bytes());
         let e = decode(&bytes, "v1.argile", &mut |_| {}).unwrap_err().to_string();
         assert!(e.contains("unknown or repeated tag `HIST`"), "{e}");
