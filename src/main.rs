@@ -399,7 +399,9 @@ fn station(scene_path: Option<PathBuf>, xr: Option<bool>, options: app::StationO
         };
         // The headset sculpts an opened file's clay; it is saved to the file it came from
         // unless --save-to says otherwise.
-        let opened = sculpt.take().map(|s| s.field);
+        // A copy (bricks are shared, not copied): without a headset, the desktop station
+        // below opens the same sculpt.
+        let opened = sculpt.clone();
         let xr_options = app::XrRunOptions {
             save_to: xr_options.save_to.or_else(|| opened.is_some().then(|| scene_path.clone()).flatten()),
             ..xr_options

@@ -309,3 +309,26 @@ fn render_and_save_take_a_sculpt_file_where_they_take_a_scene() {
     assert!(!out.status.success() && err.contains("missing.argile"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn without_a_headset_run_xr_goes_on_with_the_sculpt_it_was_given() {
+    let dir = temp_dir("xr-fallback");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/tests/toothpaste.toml");
+    let sculpt = dir.join("paste.argile");
+    assert!(argile().args(["save", scene, "--out"]).arg(&sculpt).output().unwrap().status.success());
+    let reference = argile().arg("render").arg(&sculpt).arg("--out").arg(dir.join("ref")).output().unwrap();
+    assert!(reference.status.success(), "{}", String::from_utf8_lossy(&reference.stderr));
+    // No runtime: the desktop station takes over, here headless, on the same sculpt.
+    let out = headless_in(&dir)
+        .env("XR_RUNTIME_JSON", dir.join("no-runtime.json"))
+        .args(["run", "--xr"])
+        .arg(&sculpt)
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{said}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(said.contains("No headset session") && said.contains("headless"), "{said}");
+    let png = |d: &str| std::fs::read(dir.join(d).join("toothpaste-left.png")).unwrap();
+    assert!(png("argile-out") == png("ref"), "the sculpt's clay, not the empty scene: {said}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

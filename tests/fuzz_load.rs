@@ -62,7 +62,8 @@ fn seeds() -> Vec<Vec<u8>> {
     for (toml, history) in [(scene, true), (None, false)] {
         out.push(encode_with(&field, toml, EncodeOptions { version: 2, history }, &mut |_| {}));
     }
-    // Version 4 (indexed), with a coarse level over several blocks and a fine stroke.
+    // Version 4 (indexed), with a coarse level over several blocks, a fine stroke and a
+    // freeform tool.
     field.begin_stroke();
     field.edit_level(
         2,
@@ -76,7 +77,8 @@ fn seeds() -> Vec<Vec<u8>> {
         },
     );
     field.end_stroke();
-    out.push(encode_with(&field, scene, EncodeOptions::default(), &mut |_| {}));
+    let tool = argile::io::StoredTool { index: 0, dims: [3, 2, 2], spacing_m: 0.002, samples: vec![0.5; 12] };
+    out.push(argile::io::encode_sculpt(&field, scene, &[tool], EncodeOptions::default(), &mut |_| {}));
     out
 }
 

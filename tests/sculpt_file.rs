@@ -631,3 +631,66 @@ fn info_describes_a_sculpt_from_its_index() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+const FREEFORM_SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/tests/tool-freeform.toml");
+
+/// The densities of the scene's first tool, a freeform one.
+fn freeform_samples(playback: &argile::app::Playback<'_>) -> Vec<f32> {
+    match &playback.tools()[0].shape {
+        argile::tool::ToolShape::Freeform(f) => f.samples().to_vec(),
+        other => panic!("the first tool is freeform, not {other:?}"),
+    }
+}
+
+#[test]
+fn a_sculpt_keeps_its_scenes_freeform_tools_as_they_were_made() {
+    let dir = temp_dir("tools");
+    let (path, carved) = (dir.join("copy.argile"), dir.join("carved.argile"));
+    let out = argile(&["save", FREEFORM_SCENE, "--out", path.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(FREEFORM_SCENE).unwrap();
+    let scene = argile::scene::Scene::parse(&text, FREEFORM_SCENE, None).unwrap();
+    let made = freeform_samples(&argile::app::Playback::new(&scene));
+    assert!(made.iter().any(|&d| d > 0.5), "the copy holds the torus");
+
+    let mut sculpt = load_sculpt(&path).unwrap();
+    assert_eq!(sculpt.tools.len(), 1);
+    assert_eq!((sculpt.tools[0].index, &sculpt.tools[0].samples), (0, &made));
+    // The clay the tool was copied from carved away: the file still holds the tool.
+    let t = *sculpt.field.transform();
+    let (lo, hi) =
+        (t.world_to_index(Vec3::new(-0.12, -0.02, -0.04)), t.world_to_index(Vec3::new(-0.04, 0.02, 0.04)));
+    sculpt.field.edit_box(lo.floor().as_ivec3(), hi.ceil().as_ivec3(), false, |_, d, _| *d = 0.0);
+    let bytes = argile::io::encode_sculpt(
+        &sculpt.field,
+        sculpt.scene_toml.as_deref(),
+        &sculpt.tools,
+        EncodeOptions::default(),
+        &mut |_| {},
+    );
+    std::fs::write(&carved, &bytes).unwrap();
+    let (scene, opened) = argile::app::open_sculpt(&carved).unwrap();
+    let mut playback = argile::app::Playback::on_field(&scene, opened.field, |_| None);
+    assert!(freeform_samples(&playback).iter().all(|&d| d == 0.0), "copied again, the tool would be empty");
+    assert_eq!(playback.restore_tools(&opened.tools), 1);
+    assert_eq!(freeform_samples(&playback), made, "the tool as it was made");
+
+    // Versions before 4 hold no tools; a damaged tool chunk is refused by name.
+    let v3 = encode_with(&sculpt.field, None, EncodeOptions { version: 3, history: true }, &mut |_| {});
+    assert!(decode(&v3, "v3.argile", &mut |_| {}).unwrap().tools.is_empty());
+    let (header, chunks) = split(&bytes);
+    let at = chunks.iter().position(|c| &c.0 == b"TOOL").unwrap();
+    for (offset, value, why) in [
+        (4, 1000u32.to_le_bytes(), "samples in"),
+        (16, f32::NAN.to_le_bytes(), "not a usable spacing"),
+        (20, 1.5f32.to_le_bytes(), "outside [0, 1]"),
+    ] {
+        let mut c = chunks.clone();
+        c[at].1[offset..offset + 4].copy_from_slice(&value);
+        both_refuse(&join(header, &c), why);
+    }
+    let mut c = chunks.clone();
+    c.insert(at, c[at].clone());
+    both_refuse(&join(header, &c), "a second copy of tool 0");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

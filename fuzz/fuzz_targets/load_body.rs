@@ -20,6 +20,7 @@ pub fn check(data: &[u8]) {
         (Ok(whole), Ok(lazy)) => {
             assert!(lazy.field.same_samples(&whole.field), "the lazy reader gives the same clay");
             assert_eq!(lazy.scene_toml, whole.scene_toml);
+            assert_eq!(lazy.tools, whole.tools);
             assert_eq!(lazy.field.history_stats(), whole.field.history_stats());
             whole
         }
@@ -30,9 +31,12 @@ pub fn check(data: &[u8]) {
             lazy.err().map(|e| e.reason)
         ),
     };
-    let again = argile::io::encode(&sculpt.field, sculpt.scene_toml.as_deref(), &mut |_| {});
+    let options = argile::io::EncodeOptions::default();
+    let scene = sculpt.scene_toml.as_deref();
+    let again = argile::io::encode_sculpt(&sculpt.field, scene, &sculpt.tools, options, &mut |_| {});
     let back = argile::io::decode(&again, "again.argile", &mut |_| {})
         .expect("a loaded sculpt stores and loads again");
     assert!(back.field.same_samples(&sculpt.field));
     assert_eq!(back.scene_toml, sculpt.scene_toml);
+    assert_eq!(back.tools, sculpt.tools);
 }

@@ -3,13 +3,14 @@
 
 use crate::field::Field;
 use crate::io::autosave::Autosave;
+use crate::io::StoredTool;
 use crate::math::Pose;
 use std::sync::Arc;
 
 use crate::clay::{window_around, Clay, ClayParams, ClayTool};
 use crate::math::{Aabb, Vec3};
 use crate::scene::{Hand, HandState, Key, Scene, SceneTool, SceneToolShape};
-use crate::tool::{rasterize_solid, Action, Freeform, Stroke, Tool, ToolFrame};
+use crate::tool::{rasterize_solid, Action, Freeform, Stroke, Tool, ToolFrame, ToolShape};
 
 /// Lattice points of room the virtual clay's window keeps around the tools' paths and the
 /// clay they touch.
@@ -57,6 +58,41 @@ impl<'s> Playback<'s> {
     /// The scene at time 0: its initial clay, rasterised into a new field.
     pub fn new(scene: &'s Scene) -> Self {
         Self::new_autosaved(scene, |_| None)
+    }
+
+    /// The scene's freeform tools as a sculpt stores them (each with its index in the scene).
+    pub fn stored_tools(&self) -> Vec<StoredTool> {
+        let freeform = self.tools.iter().enumerate().filter_map(|(i, t)| match &t.shape {
+            ToolShape::Freeform(f) => Some((i, f)),
+            _ => None,
+        });
+        freeform
+            .map(|(i, f)| StoredTool {
+                index: i as u32,
+                dims: f.dims().to_array(),
+                spacing_m: f.spacing_m(),
+                samples: f.samples().to_vec(),
+            })
+            .collect()
+    }
+
+    /// Puts the freeform tools a sculpt stored (see [`Playback::stored_tools`]) in place of the
+    /// scene's copies of its clay; one whose index is not a freeform tool of the scene is left
+    /// out. Returns how many it put.
+    pub fn restore_tools(&mut self, stored: &[StoredTool]) -> usize {
+        let mut put = 0;
+        for s in stored {
+            let Some(tool) = self.tools.get_mut(s.index as usize) else { continue };
+            if !matches!(tool.shape, ToolShape::Freeform(_)) {
+                continue;
+            }
+            let dims = crate::math::UVec3::from_array(s.dims);
+            if let Some(f) = Freeform::from_samples(s.samples.clone(), dims, s.spacing_m) {
+                tool.shape = ToolShape::Freeform(Arc::new(f));
+                put += 1;
+            }
+        }
+        put
     }
 
     /// The scene at time 0, with autosave started by `start` on the initial clay, before the

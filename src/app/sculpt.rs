@@ -11,7 +11,7 @@ use super::playback::Playback;
 use crate::field::{BRICK_SIZE, LEVELS};
 use crate::io::autosave::AutosaveConfig;
 use crate::io::write_atomically;
-use crate::io::{encode, encode_with, read_file, EncodeOptions, LazySculpt, Sculpt, VERSION};
+use crate::io::{encode_sculpt, read_file, EncodeOptions, LazySculpt, Sculpt, VERSION};
 use crate::math::{IVec3, Vec3};
 use crate::scene::Scene;
 
@@ -58,8 +58,9 @@ pub fn save_scene_sculpt(
     });
     playback.advance_to(end_s(&scene), |_| {});
     let session = playback.finish_autosave();
+    let tools = playback.stored_tools();
     let field = playback.into_field();
-    let bytes = encode(&field, Some(&text), &mut |_| {});
+    let bytes = encode_sculpt(&field, Some(&text), &tools, EncodeOptions::default(), &mut |_| {});
     write_atomically(out, overwrite, |w| {
         w.write_all(&bytes).with_context(|| format!("cannot write {}", out.display()))
     })?;
@@ -140,18 +141,22 @@ pub fn convert_sculpt(
         let scene = Scene::parse(&text, &input.display().to_string(), input.parent())?;
         let mut playback = Playback::new(&scene);
         playback.advance_to(end_s(&scene), |_| {});
-        Sculpt { field: playback.into_field(), scene_toml: Some(text) }
+        let tools = playback.stored_tools();
+        Sculpt { field: playback.into_field(), scene_toml: Some(text), tools }
     };
-    let bytes = encode_with(&sculpt.field, sculpt.scene_toml.as_deref(), options, &mut |_| {});
+    let scene_toml = sculpt.scene_toml.as_deref();
+    let bytes = encode_sculpt(&sculpt.field, scene_toml, &sculpt.tools, options, &mut |_| {});
     write_atomically(out, overwrite, |w| {
         w.write_all(&bytes).with_context(|| format!("cannot write {}", out.display()))
     })?;
     Ok(SavedSculpt { path: out.to_path_buf(), bricks: all_bricks(&sculpt.field), bytes: bytes.len() })
 }
 
-/// Writes `field` (with its undo history) to `path` as a sculpt, atomically.
-pub(crate) fn save_field(field: &crate::field::Field, path: &Path) -> Result<()> {
-    let bytes = encode(field, None, &mut |_| {});
+/// Writes the clay of `playback` (with its undo history), the scene text it plays and the
+/// scene's freeform tools to `path` as a sculpt, atomically.
+pub(crate) fn save_playback(playback: &Playback<'_>, scene_toml: Option<&str>, path: &Path) -> Result<()> {
+    let tools = playback.stored_tools();
+    let bytes = encode_sculpt(playback.field(), scene_toml, &tools, EncodeOptions::default(), &mut |_| {});
     write_atomically(path, true, |w| {
         w.write_all(&bytes).with_context(|| format!("cannot write {}", path.display()))
     })

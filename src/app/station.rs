@@ -468,6 +468,8 @@ pub struct Station<'s> {
     confirm_open: Option<PathBuf>,
     /// How autosave starts again on an opened sculpt, with the scene text its snapshots carry.
     autosave_restart: Option<(AutosaveConfig, Option<String>)>,
+    /// The text of the scene the station plays, stored in the sculpts it saves.
+    scene_toml: Option<String>,
     quit: bool,
     frame_ms: f32,
     times: StepTimes,
@@ -554,6 +556,7 @@ impl<'s> Station<'s> {
             opened: None,
             confirm_open: None,
             autosave_restart: None,
+            scene_toml: None,
             quit: false,
             frame_ms: 0.0,
             times: StepTimes::default(),
@@ -989,10 +992,17 @@ impl<'s> Station<'s> {
     /// Writes the sculpt to the save path, atomically.
     pub fn save(&mut self) -> Result<PathBuf> {
         let path = self.save_to.clone();
-        super::sculpt::save_field(self.playback.field(), &path)?;
+        super::sculpt::save_playback(&self.playback, self.scene_toml.as_deref(), &path)?;
         self.saved = Some(path.clone());
         self.unsaved_strokes = 0;
         Ok(path)
+    }
+
+    /// The text of the scene the station plays (a scene file's, or the one a sculpt file
+    /// stores): saving stores it with the clay, and a sculpt opened later that was made in it
+    /// brings back its freeform tools.
+    pub fn set_scene_toml(&mut self, text: Option<String>) {
+        self.scene_toml = text;
     }
 
     /// The open key looks for sculpts in `dir`.
@@ -1007,12 +1017,14 @@ impl<'s> Station<'s> {
     }
 
     /// Opens the sculpt file at `path`: its clay replaces the station's (the scene's tools,
-    /// lights and view stay), a stroke in progress ends, and saving writes back to it. The
+    /// lights and view stay; when the file was made in the station's scene, its freeform
+    /// tools are the ones it stores), a stroke in progress ends, and saving writes back to it. The
     /// autosave session of the clay it replaces is closed, or left for recovery at the next
     /// start when it holds unsaved strokes. A file that cannot be read changes nothing and the
     /// error names it.
     pub fn open(&mut self, path: &Path) -> Result<()> {
         let sculpt = crate::io::read_file(path, &mut |_| {})?;
+        let same_scene = sculpt.scene_toml.is_some() && sculpt.scene_toml == self.scene_toml;
         self.stroke = None;
         let restart = self.autosave_restart.clone();
         let source = path.display().to_string();
@@ -1028,6 +1040,14 @@ impl<'s> Station<'s> {
                 }
             }
             // Else dropped unclosed: the next start recovers its strokes.
+        }
+        if same_scene && self.playback.restore_tools(&sculpt.tools) > 0 {
+            let stored = self.playback.tools().get(self.tool_index).map(|t| t.shape.clone());
+            if let Some(shape @ ToolShape::Freeform(_)) = stored {
+                if matches!(self.desk_tool.shape, ToolShape::Freeform(_)) {
+                    self.desk_tool.shape = shape;
+                }
+            }
         }
         self.save_to = path.to_owned();
         self.opened = Some(path.to_owned());
@@ -1287,6 +1307,7 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
             if let Some(config) = &options.autosave {
                 station.set_autosave_restart(config.clone(), options.scene_toml.clone());
             }
+            station.set_scene_toml(options.scene_toml.clone());
             if let Some(dir) = &options.open_dir {
                 station.set_open_dir(dir.clone());
             }
@@ -2076,6 +2097,43 @@ mod tests {
         }
         assert!((station.desk.poses.get(Target::Tool).position_m - at).length() > 0.005);
         assert!(station.stroke.is_none());
+    }
+
+    #[test]
+    fn saving_stores_the_scene_and_its_freeform_tools_and_opening_in_that_scene_brings_them_back() {
+        let dir = std::env::temp_dir().join(format!("argile-station-tools-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let text = concat!(
+            "[[clay]]\nshape = \"sphere\"\nradius_m = 0.02\n",
+            "[[tool]]\nname = \"copy\"\nshape = \"freeform\"\n",
+            "region_min_m = [-0.03, -0.03, -0.03]\nregion_max_m = [0.03, 0.0, 0.03]\naction = \"add\"\n",
+        );
+        let scene = Scene::parse(text, "copy", None).unwrap();
+        let path = dir.join("copy.argile");
+        let mut maker = Station::new(&scene, KeyBindings::shipped(), (64, 64), path.clone());
+        maker.set_scene_toml(Some(text.to_owned()));
+        let made = maker.desk_tool.shape.clone();
+        assert!(matches!(&made, ToolShape::Freeform(f) if f.mass() > 0.0));
+        maker.save().unwrap();
+        let saved = crate::io::read_file(&path, &mut |_| {}).unwrap();
+        assert_eq!(saved.scene_toml.as_deref(), Some(text), "the scene is stored");
+        assert_eq!(saved.tools.len(), 1);
+
+        // The scene as `open_sculpt` shows a sculpt: without its initial clay, so its freeform
+        // tool, copied from no clay, is empty until the sculpt brings back the one it stores.
+        let mut bare = scene.clone();
+        bare.clay.clear();
+        for (scene_text, restored) in [(Some(text), true), (Some("# another scene\n"), false), (None, false)]
+        {
+            let mut station = Station::new(&bare, KeyBindings::shipped(), (64, 64), dir.join("x.argile"));
+            station.set_scene_toml(scene_text.map(str::to_owned));
+            assert!(matches!(&station.desk_tool.shape, ToolShape::Freeform(f) if f.mass() == 0.0));
+            station.open(&path).unwrap();
+            let tools_made = station.playback.tools()[0].shape == made && station.desk_tool.shape == made;
+            assert_eq!(tools_made, restored, "in {scene_text:?}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -28,6 +28,7 @@ use super::playback::Playback;
 use super::station::{action_cycle, shape_cycle, shape_name};
 use crate::field::{Field, FieldReader};
 use crate::io::autosave::AutosaveConfig;
+use crate::io::Sculpt;
 use crate::math::{Pose, Vec3};
 use crate::mesh::{MeshDiff, Mesher};
 use crate::render::{Frame, ToolGlyph};
@@ -120,6 +121,8 @@ pub struct XrSculptor<'s> {
     time_s: f32,
     save_to: PathBuf,
     saved: Option<PathBuf>,
+    /// The text of the scene, stored in the sculpts it saves.
+    scene_toml: Option<String>,
     /// Time spent in the last step: tools and simulation, meshing (ms).
     times: (f64, f64),
     /// Messages for the user.
@@ -154,10 +157,16 @@ impl<'s> XrSculptor<'s> {
             time_s: 0.0,
             save_to,
             saved: None,
+            scene_toml: None,
             times: (0.0, 0.0),
             messages: Vec::new(),
             mesher: Mesher::default(),
         }
+    }
+
+    /// The text of the scene, stored with the clay when saving.
+    pub fn set_scene_toml(&mut self, text: Option<String>) {
+        self.scene_toml = text;
     }
 
     /// The clay.
@@ -182,7 +191,7 @@ impl<'s> XrSculptor<'s> {
             self.playback.journal();
         }
         let path = self.save_to.clone();
-        super::sculpt::save_field(self.playback.field(), &path)?;
+        super::sculpt::save_playback(&self.playback, self.scene_toml.as_deref(), &path)?;
         self.saved = Some(path.clone());
         Ok(path)
     }
@@ -415,7 +424,7 @@ pub fn contact_density(field: &crate::field::Field, pose: Pose, half_m: Vec3) ->
 /// caller then falls back to the desktop stereo modes.
 pub fn run_xr(
     scene: &Scene,
-    opened: Option<Field>,
+    opened: Option<Sculpt>,
     scene_name: &str,
     options: &XrRunOptions,
 ) -> Result<XrReport> {
@@ -430,10 +439,15 @@ pub fn run_xr(
         })
     };
     let playback = match opened {
-        Some(field) => Playback::on_field(scene, field, start),
+        Some(sculpt) => {
+            let mut playback = Playback::on_field(scene, sculpt.field, start);
+            playback.restore_tools(&sculpt.tools);
+            playback
+        }
         None => Playback::new_autosaved(scene, start),
     };
     let mut sculptor = XrSculptor::new(scene, playback, save_to, options.left_handed);
+    sculptor.set_scene_toml(options.scene_toml.clone());
     let mut report = XrReport {
         runtime: station.runtime().to_owned(),
         frames: 0,

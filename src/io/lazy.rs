@@ -13,7 +13,7 @@ use std::collections::HashSet;
 
 use super::{
     decode_from, read_brick_chunk, read_chunk_from, read_head, Chunk, FileSource, Head, HistoryReader,
-    IndexEntry, Sculpt, SculptError, Slice, Source, BLOCK_SHIFT,
+    IndexEntry, Sculpt, SculptError, Slice, Source, StoredTool, BLOCK_SHIFT,
 };
 use crate::field::{Field, BRICK_SIZE};
 use crate::math::IVec3;
@@ -55,6 +55,7 @@ pub struct LazySculpt {
     bricks: u64,
     field: Field,
     scene_toml: Option<String>,
+    tools: Vec<StoredTool>,
     entries: Vec<IndexEntry>,
     chunks: Vec<ChunkInfo>,
     /// Per chunk, its bytes in the file once it has been read.
@@ -105,7 +106,7 @@ impl LazySculpt {
         let fail = |reason: String| SculptError { file: file.clone(), reason };
         let (mut raw, mut buf) = (Vec::new(), Vec::new());
         let head = read_head(&mut *source, &mut raw, &mut buf, &mut None).map_err(fail)?;
-        let Head { version, chunk_count, meta, field, scene_toml, index, base, chunks_read } = head;
+        let Head { version, chunk_count, meta, field, scene_toml, tools, index, base, chunks_read } = head;
         let mut sculpt = Self {
             file: file.clone(),
             source,
@@ -114,6 +115,7 @@ impl LazySculpt {
             bricks: meta.bricks,
             field,
             scene_toml,
+            tools,
             entries: Vec::new(),
             chunks: Vec::new(),
             read: Vec::new(),
@@ -139,6 +141,7 @@ impl LazySculpt {
                 let whole = decode_from(&mut *sculpt.source, &mut |_| {}).map_err(fail)?;
                 sculpt.bytes_read = sculpt.source.len();
                 sculpt.field = whole.field;
+                sculpt.tools = whole.tools;
                 sculpt.whole = true;
             }
         }
@@ -168,6 +171,11 @@ impl LazySculpt {
     /// The scene file's text, if the sculpt was made from one.
     pub fn scene_toml(&self) -> Option<&str> {
         self.scene_toml.as_deref()
+    }
+
+    /// The scene's freeform tools as the file stores them.
+    pub fn tools(&self) -> &[StoredTool] {
+        &self.tools
     }
 
     /// The clay loaded so far, with the sculpt's settings (its points beyond the loaded chunks
@@ -271,7 +279,7 @@ impl LazySculpt {
     pub fn finish(mut self, progress: &mut dyn FnMut(f32)) -> Result<Sculpt, SculptError> {
         if self.whole {
             progress(1.0);
-            return Ok(Sculpt { field: self.field, scene_toml: self.scene_toml });
+            return Ok(Sculpt { field: self.field, scene_toml: self.scene_toml, tools: self.tools });
         }
         let total = self.chunks.len().max(1) as f32;
         for i in 0..self.chunks.len() {
@@ -311,6 +319,6 @@ impl LazySculpt {
         let mut field = self.field;
         field.take_dirty();
         field.set_history(history.undo, history.redo);
-        Ok(Sculpt { field, scene_toml: self.scene_toml })
+        Ok(Sculpt { field, scene_toml: self.scene_toml, tools: self.tools })
     }
 }

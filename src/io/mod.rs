@@ -1,4 +1,5 @@
-//! The native sculpt format (`.argile`): the clay, and the scene it was made in.
+//! The native sculpt format (`.argile`): the clay, the scene it was made in and that scene's
+//! freeform tools.
 //!
 //! Knows the field (it stores bricks) and nothing of Vulkan or devices.
 //!
@@ -11,6 +12,10 @@
 //!
 //!  chunks  META  (first, once)  JSON: format, voxel size, iso-level, brick size, brick count
 //!          SCNE  (at most once) the scene file's TOML text the sculpt was made in
+//!          TOOL  (any number, before INDX) a freeform tool of that scene as it was saved (a
+//!                               copy of clay the scene's clay no longer holds): the scene
+//!                               tool's index u32 · sample counts (3 × u32) · spacing f32
+//!                               (metres) · densities (f32, x fastest, then y, then z)
 //!          INDX  (once, before any brick) the directory of the brick chunks that follow it:
 //!                               chunk count u32 · history offset u64 · per brick chunk, in
 //!                               file order: level u8 · block (3 × i32) · brick count u32 ·
@@ -39,13 +44,14 @@
 //! META, SCNE and INDX, and any brick chunk can then be read on its own, by where its block
 //! lies (loading a box reads the chunks whose samples reach into it, and nothing else).
 //!
-//! Version 3 is version 4 without INDX, its brick chunks holding up to 512 bricks of one level
+//! Version 3 is version 4 without INDX and TOOL, its brick chunks holding up to 512 bricks of one level
 //! in key order (not by block). Version 2 is version 3 without BRKL chunks and with the finest
 //! level alone in entries; version 1 is version 2 without HIST chunks. This build reads all
 //! four and writes any (`argile convert`): a sculpt with coarse levels written as version 1
 //! or 2 stores the finest lattice as its readers see it (the coarse clay refined into finest
 //! bricks, the same field to the eye and to the mesher), without its undo history. Versions 1
-//! to 3 have no index: [`LazySculpt`] reads them whole when it opens them.
+//! to 3 have no index: [`LazySculpt`] reads them whole when it opens them. They hold no
+//! freeform tools either: a scene's freeform tool is copied again from the clay.
 //!
 //! - Every chunk's bytes are LZ4-compressed (`lz4_flex` block format) and carry the CRC-32 of
 //!   the stored bytes; a reader checks the CRC before decompressing and the decompressed
@@ -144,13 +150,75 @@ const CHUNK_HEADER: usize = 16;
 /// The fewest bytes an entry (see [`put_entries`]) takes: an absent brick.
 const MIN_ENTRY: usize = 13;
 
-/// A sculpt as stored: the clay and the scene text it was made in.
-#[derive(Debug)]
+/// A sculpt as stored: the clay, the scene text it was made in and that scene's freeform
+/// tools.
+#[derive(Clone, Debug)]
 pub struct Sculpt {
     /// The clay.
     pub field: Field,
     /// The scene file's text, if the sculpt was made from one.
     pub scene_toml: Option<String>,
+    /// The scene's freeform tools as they were saved.
+    pub tools: Vec<StoredTool>,
+}
+
+/// A freeform tool as a sculpt stores it: a box of densities copied from clay (see
+/// `tool::Freeform`), and which of the scene's tools it is.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StoredTool {
+    /// The tool's index in the scene's `[[tool]]` list.
+    pub index: u32,
+    /// Samples along x, y and z (each at least 1).
+    pub dims: [u32; 3],
+    /// Distance between samples, metres.
+    pub spacing_m: f32,
+    /// Densities in [0, 1], x fastest, then y, then z.
+    pub samples: Vec<f32>,
+}
+
+impl StoredTool {
+    fn put(&self) -> Vec<u8> {
+        let mut raw = Vec::with_capacity(20 + 4 * self.samples.len());
+        for v in [self.index, self.dims[0], self.dims[1], self.dims[2]] {
+            raw.extend_from_slice(&v.to_le_bytes());
+        }
+        raw.extend_from_slice(&self.spacing_m.to_le_bytes());
+        for d in &self.samples {
+            raw.extend_from_slice(&d.to_le_bytes());
+        }
+        raw
+    }
+
+    /// Reads a TOOL chunk's bytes, refusing sizes that do not match the bytes, a spacing that
+    /// is not a usable size and densities outside [0, 1].
+    fn read(raw: &[u8], chunk: u32) -> Result<Self, String> {
+        if raw.len() < 20 {
+            return Err(format!("chunk {chunk} (TOOL) is too short"));
+        }
+        let dims = [u32_at(raw, 4), u32_at(raw, 8), u32_at(raw, 12)];
+        let count = dims.iter().try_fold(1u64, |n, &d| n.checked_mul(u64::from(d)));
+        if dims.contains(&0) || raw.len() % 4 != 0 || count != Some(((raw.len() - 20) / 4) as u64) {
+            return Err(format!(
+                "chunk {chunk} (TOOL) claims {} × {} × {} samples in {} bytes",
+                dims[0],
+                dims[1],
+                dims[2],
+                raw.len()
+            ));
+        }
+        let f = |at: usize| f32::from_le_bytes(raw[at..at + 4].try_into().expect("4 bytes"));
+        let spacing_m = f(16);
+        if !(spacing_m.is_finite() && spacing_m > 0.0 && spacing_m < 1.0) {
+            return Err(format!(
+                "chunk {chunk} (TOOL) has samples {spacing_m} m apart, not a usable spacing"
+            ));
+        }
+        let samples: Vec<f32> = (20..raw.len()).step_by(4).map(f).collect();
+        if let Some(d) = samples.iter().find(|d| !(0.0..=1.0).contains(*d)) {
+            return Err(format!("chunk {chunk} (TOOL) holds density {d}, outside [0, 1]"));
+        }
+        Ok(Self { index: u32_at(raw, 0), dims, spacing_m, samples })
+    }
 }
 
 /// Why a sculpt file cannot be read.
@@ -204,6 +272,18 @@ pub fn encode_with(
     options: EncodeOptions,
     progress: &mut dyn FnMut(f32),
 ) -> Vec<u8> {
+    encode_sculpt(field, scene_toml, &[], options, progress)
+}
+
+/// Encodes a sculpt with its scene's freeform tools as `options` say (versions before 4 leave
+/// the tools out).
+pub fn encode_sculpt(
+    field: &Field,
+    scene_toml: Option<&str>,
+    tools: &[StoredTool],
+    options: EncodeOptions,
+    progress: &mut dyn FnMut(f32),
+) -> Vec<u8> {
     assert!((1..=VERSION).contains(&options.version), "format version {} is not written", options.version);
     let levels = options.version >= 3 || !field.has_levels_above(0);
     let mut refined = Vec::new();
@@ -226,7 +306,8 @@ pub fn encode_with(
     // the finest, they would undo into holes.
     let history = (options.history && options.version >= 2 && levels).then(|| field.history_in_memory());
     let settings = (field.transform().voxel_size_m, field.iso());
-    encode_parts(options.version, settings, bricks, scene_toml, history.as_ref(), progress)
+    let tools = if options.version >= 4 { tools } else { &[] };
+    encode_parts(options.version, settings, bricks, (scene_toml, tools), history.as_ref(), progress)
 }
 
 /// Encodes a sculpt given as its settings and bricks (in any order), without history.
@@ -237,7 +318,7 @@ pub(crate) fn encode_bricks(
     scene_toml: Option<&str>,
     progress: &mut dyn FnMut(f32),
 ) -> Vec<u8> {
-    encode_parts(VERSION, (voxel_size_m, iso), bricks, scene_toml, None, progress)
+    encode_parts(VERSION, (voxel_size_m, iso), bricks, (scene_toml, &[]), None, progress)
 }
 
 type History = (Vec<HistoryStep>, Vec<HistoryStep>);
@@ -246,7 +327,7 @@ fn encode_parts(
     version: u32,
     (voxel_size_m, iso): (f32, f32),
     mut bricks: Vec<(LevelKey, &Brick)>,
-    scene_toml: Option<&str>,
+    (scene_toml, tools): (Option<&str>, &[StoredTool]),
     history: Option<&History>,
     progress: &mut dyn FnMut(f32),
 ) -> Vec<u8> {
@@ -299,8 +380,12 @@ fn encode_parts(
         stored.push(chunk);
         progress((i + 1) as f32 / group_count as f32);
     }
-    let chunk_count =
-        1 + u32::from(scene_toml.is_some()) + u32::from(indexed) + stored.len() as u32 + step_chunks as u32;
+    let chunk_count = 1
+        + u32::from(scene_toml.is_some())
+        + tools.len() as u32
+        + u32::from(indexed)
+        + stored.len() as u32
+        + step_chunks as u32;
     let mut out = Vec::with_capacity(offset as usize + 1024);
     out.extend_from_slice(MAGIC);
     out.extend_from_slice(&version.to_le_bytes());
@@ -308,6 +393,9 @@ fn encode_parts(
     put_chunk(&mut out, *b"META", &serde_json::to_vec(&meta).expect("plain values serialise"));
     if let Some(text) = scene_toml {
         put_chunk(&mut out, *b"SCNE", text.as_bytes());
+    }
+    for tool in tools {
+        put_chunk(&mut out, *b"TOOL", &tool.put());
     }
     if indexed {
         put_chunk(&mut out, *b"INDX", &put_index(&entries, offset));
@@ -855,6 +943,7 @@ struct Head {
     meta: Meta,
     field: Field,
     scene_toml: Option<String>,
+    tools: Vec<StoredTool>,
     /// Version 4: the brick chunks, and where the history starts, both from `base`.
     index: Option<(Vec<IndexEntry>, u64)>,
     /// The first byte after the index (version 4), else after META and SCNE.
@@ -886,6 +975,7 @@ fn read_head(
         meta,
         field,
         scene_toml: None,
+        tools: Vec::new(),
         index: None,
         base: source.position(),
         chunks_read: 1,
@@ -900,6 +990,13 @@ fn read_head(
                     String::from_utf8(raw.clone()).map_err(|_| "its scene text is not UTF-8".to_owned())?;
                 head.scene_toml = Some(text);
                 head.base = source.position();
+            }
+            b"TOOL" if version >= 4 => {
+                let tool = StoredTool::read(raw, index)?;
+                if head.tools.iter().any(|t| t.index == tool.index) {
+                    return Err(format!("chunk {index} (TOOL) is a second copy of tool {}", tool.index));
+                }
+                head.tools.push(tool);
             }
             b"INDX" if version >= 4 => {
                 let room = source.len() - source.position();
@@ -933,8 +1030,17 @@ fn read_head(
 fn decode_from(source: &mut dyn Source, progress: &mut dyn FnMut(f32)) -> Result<Sculpt, String> {
     let (mut buf, mut raw) = (Vec::new(), Vec::new());
     let mut pending = None;
-    let Head { version, chunk_count, meta, mut field, scene_toml, index: directory, base, chunks_read } =
-        read_head(source, &mut raw, &mut buf, &mut pending)?;
+    let Head {
+        version,
+        chunk_count,
+        meta,
+        mut field,
+        scene_toml,
+        tools,
+        index: directory,
+        base,
+        chunks_read,
+    } = read_head(source, &mut raw, &mut buf, &mut pending)?;
     let mut keys: HashSet<LevelKey> = HashSet::new();
     let mut history = HistoryReader::default();
     // Version 4: the index entry the next brick chunk must match.
@@ -991,7 +1097,7 @@ fn decode_from(source: &mut dyn Source, progress: &mut dyn FnMut(f32)) -> Result
     }
     field.take_dirty();
     field.set_history(history.undo, history.redo);
-    Ok(Sculpt { field, scene_toml })
+    Ok(Sculpt { field, scene_toml, tools })
 }
 
 #[cfg(test)]

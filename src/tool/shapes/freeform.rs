@@ -45,6 +45,27 @@ impl Freeform {
         Self::from_field(field, lo, hi)
     }
 
+    /// A copy made before (see [`Freeform::samples`]): `samples` holds `dims.x · dims.y ·
+    /// dims.z` densities in [0, 1], x fastest, `spacing_m` apart; `None` when they do not.
+    pub fn from_samples(samples: Vec<f32>, dims: UVec3, spacing_m: f32) -> Option<Self> {
+        let fits = dims.cmpge(UVec3::ONE).all()
+            && samples.len() as u64 == u64::from(dims.x) * u64::from(dims.y) * u64::from(dims.z)
+            && spacing_m.is_finite()
+            && spacing_m > 0.0
+            && samples.iter().all(|d| (0.0..=1.0).contains(d));
+        fits.then_some(Self { samples, dims, spacing_m })
+    }
+
+    /// The copied densities, x fastest, then y, then z.
+    pub fn samples(&self) -> &[f32] {
+        &self.samples
+    }
+
+    /// Distance between the copied samples, metres.
+    pub fn spacing_m(&self) -> f32 {
+        self.spacing_m
+    }
+
     /// Half the size of the copied box, metres.
     pub fn half_extents_m(&self) -> Vec3 {
         (self.dims.as_vec3() - Vec3::ONE) * self.spacing_m * 0.5
