@@ -453,3 +453,29 @@ fn a_session_whose_state_folder_cannot_be_written_warns_by_path_and_still_saves(
     assert!(argile::app::load_sculpt(&out).is_ok(), "the sculpt is saved where asked");
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+#[test]
+fn a_recovered_sculpt_keeps_the_scenes_freeform_tools() {
+    let root = temp_dir("tools");
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/tests/tool-freeform.toml");
+    let text = std::fs::read_to_string(path).unwrap();
+    let scene = argile::scene::Scene::parse(&text, path, None).unwrap();
+    let mut playback = argile::app::Playback::new_autosaved(&scene, |field, tools| {
+        let disk = Arc::new(LocalDisk);
+        Some(Autosave::start_with_tools(&root, field, (Some(&text), tools), "test", fast(), disk).unwrap())
+    });
+    let dir = playback.autosave().unwrap().dir().to_path_buf();
+    playback.advance_to(10.0, |_| {});
+    let strokes = playback.autosave().unwrap().strokes();
+    assert!(strokes > 0, "the scene's stamps are strokes");
+    wait_for("every stroke on disk", || playback.autosave().unwrap().durable_strokes() == strokes);
+    wait_for("a snapshot", || !files(&dir, "snapshot-").is_empty());
+    let tools = playback.stored_tools();
+    assert_eq!(tools.len(), 1);
+    // Dropped without closing, as a crash would leave it.
+    let field = playback.into_field();
+    let recovered = recover(&dir).unwrap();
+    assert!(recovered.sculpt.field.same_samples(&field));
+    assert!(recovered.sculpt.tools == tools, "the tool as the scene copied it from its first clay");
+    std::fs::remove_dir_all(&root).unwrap();
+}

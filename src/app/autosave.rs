@@ -10,7 +10,7 @@ use anyhow::{Context, Result};
 use super::state_dir;
 use crate::field::Field;
 use crate::io::autosave::{recover, remove_session, unclosed_sessions, Autosave, AutosaveConfig, LocalDisk};
-use crate::io::{encode, write_atomically};
+use crate::io::{encode_sculpt, write_atomically, EncodeOptions, StoredTool};
 
 /// The folder autosave sessions live in: `autosave/` in the state folder.
 pub fn autosave_root() -> Option<PathBuf> {
@@ -26,7 +26,7 @@ pub fn recovered_dir() -> Option<PathBuf> {
 /// warns with the reason (naming the folder) and returns `None`: the sculpt stays in memory.
 pub fn start_autosave(
     field: &mut Field,
-    scene_toml: Option<&str>,
+    (scene_toml, tools): (Option<&str>, &[StoredTool]),
     source: &str,
     config: AutosaveConfig,
 ) -> Option<Autosave> {
@@ -34,7 +34,7 @@ pub fn start_autosave(
         tracing::warn!("autosave is off: this system names no state folder (set XDG_STATE_HOME)");
         return None;
     };
-    match Autosave::start(&root, field, scene_toml, source, config, Arc::new(LocalDisk)) {
+    match Autosave::start_with_tools(&root, field, (scene_toml, tools), source, config, Arc::new(LocalDisk)) {
         Ok(a) => {
             tracing::debug!("autosave: session folder {}", a.dir().display());
             Some(a)
@@ -84,7 +84,15 @@ pub fn recover_sessions() -> Vec<Result<RecoveredSculpt>> {
                 .with_context(|| format!("cannot create the folder {}", out_dir.display()))?;
             let name = session.dir.file_name().and_then(|n| n.to_str()).unwrap_or("session");
             let path = out_dir.join(format!("sculpt-{name}.argile"));
-            let bytes = encode(&recovered.sculpt.field, recovered.sculpt.scene_toml.as_deref(), &mut |_| {});
+            let sculpt = &recovered.sculpt;
+            let options = EncodeOptions::default();
+            let bytes = encode_sculpt(
+                &sculpt.field,
+                sculpt.scene_toml.as_deref(),
+                &sculpt.tools,
+                options,
+                &mut |_| {},
+            );
             write_atomically(&path, true, |w| {
                 w.write_all(&bytes).with_context(|| format!("cannot write {}", path.display()))
             })?;

@@ -125,11 +125,11 @@ fn render_over(
     }
     let mut renderer = renderer_for(&scene, None, options.validation, None)?;
     tracing::info!("rendering {} on {}", scene.source, renderer.device_name());
-    let start = |field: &mut Field| {
-        autosave.and_then(|config| start_autosave(field, scene_toml, &scene.source, config))
+    let start = |field: &mut Field, tools: &[crate::io::StoredTool]| {
+        autosave.and_then(|config| start_autosave(field, (scene_toml, tools), &scene.source, config))
     };
     let mut playback = match field {
-        Some(field) => Playback::on_field(&scene, field, start),
+        Some(field) => Playback::on_field(&scene, field, &[], start),
         None => Playback::new_autosaved(&scene, start),
     };
     let initial = mesh_all(playback.field());

@@ -57,64 +57,48 @@ fn slot(hand: Hand) -> usize {
 impl<'s> Playback<'s> {
     /// The scene at time 0: its initial clay, rasterised into a new field.
     pub fn new(scene: &'s Scene) -> Self {
-        Self::new_autosaved(scene, |_| None)
+        Self::new_autosaved(scene, |_, _| None)
     }
 
     /// The scene's freeform tools as a sculpt stores them (each with its index in the scene).
     pub fn stored_tools(&self) -> Vec<StoredTool> {
-        let freeform = self.tools.iter().enumerate().filter_map(|(i, t)| match &t.shape {
-            ToolShape::Freeform(f) => Some((i, f)),
-            _ => None,
-        });
-        freeform
-            .map(|(i, f)| StoredTool {
-                index: i as u32,
-                dims: f.dims().to_array(),
-                spacing_m: f.spacing_m(),
-                samples: f.samples().to_vec(),
-            })
-            .collect()
+        stored_tools(&self.tools)
     }
 
     /// Puts the freeform tools a sculpt stored (see [`Playback::stored_tools`]) in place of the
     /// scene's copies of its clay; one whose index is not a freeform tool of the scene is left
-    /// out. Returns how many it put.
+    /// out. Returns how many it put. An autosave session started before keeps the tools it was
+    /// started with: open a sculpt with [`Playback::on_field`] or [`Playback::replace_field`].
     pub fn restore_tools(&mut self, stored: &[StoredTool]) -> usize {
-        let mut put = 0;
-        for s in stored {
-            let Some(tool) = self.tools.get_mut(s.index as usize) else { continue };
-            if !matches!(tool.shape, ToolShape::Freeform(_)) {
-                continue;
-            }
-            let dims = crate::math::UVec3::from_array(s.dims);
-            if let Some(f) = Freeform::from_samples(s.samples.clone(), dims, s.spacing_m) {
-                tool.shape = ToolShape::Freeform(Arc::new(f));
-                put += 1;
-            }
-        }
-        put
+        restore_tools(&mut self.tools, stored)
     }
 
     /// The scene at time 0, with autosave started by `start` on the initial clay, before the
     /// first stroke; every stroke that ends is then journaled.
-    pub fn new_autosaved(scene: &'s Scene, start: impl FnOnce(&mut Field) -> Option<Autosave>) -> Self {
+    pub fn new_autosaved(
+        scene: &'s Scene,
+        start: impl FnOnce(&mut Field, &[StoredTool]) -> Option<Autosave>,
+    ) -> Self {
         let mut field = Field::new(scene.voxel_size_m, scene.iso);
         field.set_history_config(super::history_config());
         for primitive in &scene.clay {
             rasterize_solid(&mut field, &primitive.solid, primitive.op, primitive.colour);
         }
-        Self::on_field(scene, field, start)
+        Self::on_field(scene, field, &[], start)
     }
 
     /// The scene at time 0 over `field` (a sculpt opened from a file) instead of its initial
-    /// clay, with autosave started by `start` on it.
+    /// clay, with the freeform tools the sculpt stored (see [`Playback::restore_tools`]) and
+    /// autosave started by `start` on it (given the scene's freeform tools, for its snapshots).
     pub fn on_field(
         scene: &'s Scene,
         mut field: Field,
-        start: impl FnOnce(&mut Field) -> Option<Autosave>,
+        stored: &[StoredTool],
+        start: impl FnOnce(&mut Field, &[StoredTool]) -> Option<Autosave>,
     ) -> Self {
-        let tools = scene.tools.iter().map(|t| build_tool(t, &field)).collect();
-        let autosave = start(&mut field);
+        let mut tools: Vec<Tool> = scene.tools.iter().map(|t| build_tool(t, &field)).collect();
+        restore_tools(&mut tools, stored);
+        let autosave = start(&mut field, &stored_tools(&tools));
         let mut playback = Self {
             scene,
             field,
@@ -138,7 +122,7 @@ impl<'s> Playback<'s> {
     pub fn replace_field(
         &mut self,
         mut field: Field,
-        start: impl FnOnce(&mut Field) -> Option<Autosave>,
+        start: impl FnOnce(&mut Field, &[StoredTool]) -> Option<Autosave>,
     ) -> Option<Autosave> {
         use crate::field::BRICK_SIZE;
         self.strokes = [None, None];
@@ -151,7 +135,7 @@ impl<'s> Playback<'s> {
         }
         self.field = field;
         let old = self.autosave.take();
-        self.autosave = start(&mut self.field);
+        self.autosave = start(&mut self.field, &stored_tools(&self.tools));
         old
     }
 
@@ -461,6 +445,40 @@ impl<'s> Playback<'s> {
         });
         Some((state.tool, put.unwrap_or(state.pose)))
     }
+}
+
+/// The freeform tools among `tools`, as a sculpt stores them (each with its index).
+fn stored_tools(tools: &[Tool]) -> Vec<StoredTool> {
+    let freeform = tools.iter().enumerate().filter_map(|(i, t)| match &t.shape {
+        ToolShape::Freeform(f) => Some((i, f)),
+        _ => None,
+    });
+    freeform
+        .map(|(i, f)| StoredTool {
+            index: i as u32,
+            dims: f.dims().to_array(),
+            spacing_m: f.spacing_m(),
+            samples: f.samples().to_vec(),
+        })
+        .collect()
+}
+
+/// Puts `stored` freeform tools in place of those of `tools` at their indices (a stored tool
+/// whose index is not a freeform tool is left out); returns how many it put.
+fn restore_tools(tools: &mut [Tool], stored: &[StoredTool]) -> usize {
+    let mut put = 0;
+    for s in stored {
+        let Some(tool) = tools.get_mut(s.index as usize) else { continue };
+        if !matches!(tool.shape, ToolShape::Freeform(_)) {
+            continue;
+        }
+        let dims = crate::math::UVec3::from_array(s.dims);
+        if let Some(f) = Freeform::from_samples(s.samples.clone(), dims, s.spacing_m) {
+            tool.shape = ToolShape::Freeform(Arc::new(f));
+            put += 1;
+        }
+    }
+    put
 }
 
 /// The tool a scene describes; a freeform one copies the clay in its region of `field`.

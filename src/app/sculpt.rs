@@ -53,8 +53,8 @@ pub fn save_scene_sculpt(
         .with_context(|| format!("cannot read scene file {}", scene_path.display()))?;
     let scene = Scene::parse(&text, &scene_path.display().to_string(), scene_path.parent())?;
     let source = scene_path.display().to_string();
-    let mut playback = Playback::new_autosaved(&scene, |field| {
-        autosave.and_then(|config| start_autosave(field, Some(&text), &source, config))
+    let mut playback = Playback::new_autosaved(&scene, |field, tools| {
+        autosave.and_then(|config| start_autosave(field, (Some(&text), tools), &source, config))
     });
     playback.advance_to(end_s(&scene), |_| {});
     let session = playback.finish_autosave();

@@ -482,17 +482,17 @@ pub struct Station<'s> {
 impl<'s> Station<'s> {
     /// The station on `scene` at time 0, for a window of `window_px`.
     pub fn new(scene: &'s Scene, bindings: KeyBindings, window_px: (u32, u32), save_to: PathBuf) -> Self {
-        Self::new_autosaved(scene, bindings, window_px, save_to, |_| None)
+        Self::new_autosaved(scene, bindings, window_px, save_to, |_, _| None)
     }
 
     /// As [`Station::new`], journaling every finished stroke with the autosave session `start`
-    /// opens on the initial clay.
+    /// opens on the initial clay (given the scene's freeform tools).
     pub fn new_autosaved(
         scene: &'s Scene,
         bindings: KeyBindings,
         window_px: (u32, u32),
         save_to: PathBuf,
-        start: impl FnOnce(&mut crate::field::Field) -> Option<Autosave>,
+        start: impl FnOnce(&mut crate::field::Field, &[crate::io::StoredTool]) -> Option<Autosave>,
     ) -> Self {
         let playback = Playback::new_autosaved(scene, start);
         let rig = scene.rig;
@@ -1026,11 +1026,20 @@ impl<'s> Station<'s> {
         let sculpt = crate::io::read_file(path, &mut |_| {})?;
         let same_scene = sculpt.scene_toml.is_some() && sculpt.scene_toml == self.scene_toml;
         self.stroke = None;
+        // The tools first: the autosave session started on the new clay stores them.
+        if same_scene && self.playback.restore_tools(&sculpt.tools) > 0 {
+            let stored = self.playback.tools().get(self.tool_index).map(|t| t.shape.clone());
+            if let Some(shape @ ToolShape::Freeform(_)) = stored {
+                if matches!(self.desk_tool.shape, ToolShape::Freeform(_)) {
+                    self.desk_tool.shape = shape;
+                }
+            }
+        }
         let restart = self.autosave_restart.clone();
         let source = path.display().to_string();
-        let old = self.playback.replace_field(sculpt.field, |field| {
+        let old = self.playback.replace_field(sculpt.field, |field, tools| {
             restart.and_then(|(config, toml)| {
-                super::autosave::start_autosave(field, toml.as_deref(), &source, config)
+                super::autosave::start_autosave(field, (toml.as_deref(), tools), &source, config)
             })
         });
         if let Some(session) = old {
@@ -1040,14 +1049,6 @@ impl<'s> Station<'s> {
                 }
             }
             // Else dropped unclosed: the next start recovers its strokes.
-        }
-        if same_scene && self.playback.restore_tools(&sculpt.tools) > 0 {
-            let stored = self.playback.tools().get(self.tool_index).map(|t| t.shape.clone());
-            if let Some(shape @ ToolShape::Freeform(_)) = stored {
-                if matches!(self.desk_tool.shape, ToolShape::Freeform(_)) {
-                    self.desk_tool.shape = shape;
-                }
-            }
         }
         self.save_to = path.to_owned();
         self.opened = Some(path.to_owned());
@@ -1292,9 +1293,9 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
     let window_px = options.window_px.unwrap_or((scene.output.width_px, scene.output.height_px));
     let save_to = options.save_to.clone().unwrap_or_else(|| PathBuf::from(format!("{scene_name}.argile")));
     let source = scene.source.clone();
-    let start = |field: &mut crate::field::Field| {
+    let start = |field: &mut crate::field::Field, tools: &[crate::io::StoredTool]| {
         options.autosave.clone().and_then(|config| {
-            super::autosave::start_autosave(field, options.scene_toml.as_deref(), &source, config)
+            super::autosave::start_autosave(field, (options.scene_toml.as_deref(), tools), &source, config)
         })
     };
     let mut app = WindowApp {

@@ -433,17 +433,13 @@ pub fn run_xr(
     let validation = station.renderer().validation_log();
     let save_to = options.save_to.clone().unwrap_or_else(|| PathBuf::from(format!("{scene_name}.argile")));
     let source = scene.source.clone();
-    let start = |field: &mut Field| {
+    let start = |field: &mut Field, tools: &[crate::io::StoredTool]| {
         options.autosave.clone().and_then(|config| {
-            super::autosave::start_autosave(field, options.scene_toml.as_deref(), &source, config)
+            super::autosave::start_autosave(field, (options.scene_toml.as_deref(), tools), &source, config)
         })
     };
     let playback = match opened {
-        Some(sculpt) => {
-            let mut playback = Playback::on_field(scene, sculpt.field, start);
-            playback.restore_tools(&sculpt.tools);
-            playback
-        }
+        Some(sculpt) => Playback::on_field(scene, sculpt.field, &sculpt.tools, start),
         None => Playback::new_autosaved(scene, start),
     };
     let mut sculptor = XrSculptor::new(scene, playback, save_to, options.left_handed);

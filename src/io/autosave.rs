@@ -35,7 +35,7 @@ use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 
 use super::journal::{self, Reader};
-use super::{decode, encode_bricks, write_atomically, Sculpt};
+use super::{decode, encode_bricks, write_atomically, Sculpt, StoredTool};
 use crate::field::{Brick, Field, LevelKey};
 
 /// When autosave syncs and checkpoints.
@@ -254,6 +254,19 @@ impl Autosave {
         config: AutosaveConfig,
         disk: Arc<dyn Disk>,
     ) -> Result<Self, AutosaveError> {
+        Self::start_with_tools(root, field, (scene_toml, &[]), source, config, disk)
+    }
+
+    /// [`Autosave::start`] for a scene with freeform tools (`scene`: its text and its tools as
+    /// they were copied), which the snapshots store, so that a recovered sculpt keeps them.
+    pub fn start_with_tools(
+        root: &Path,
+        field: &mut Field,
+        (scene_toml, tools): (Option<&str>, &[StoredTool]),
+        source: &str,
+        config: AutosaveConfig,
+        disk: Arc<dyn Disk>,
+    ) -> Result<Self, AutosaveError> {
         debug_assert!(!field.in_stroke(), "autosave starts between strokes");
         let info = SessionInfo::of_this_process(source);
         let nanos = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.subsec_nanos());
@@ -275,6 +288,7 @@ impl Autosave {
             voxel_size_m: field.transform().voxel_size_m,
             iso: field.iso(),
             scene_toml: scene_toml.map(Arc::from),
+            tools: Arc::from(tools),
             journal: None,
             journals: Vec::new(),
             snapshots: Vec::new(),
@@ -374,6 +388,7 @@ struct Writer {
     voxel_size_m: f32,
     iso: f32,
     scene_toml: Option<Arc<str>>,
+    tools: Arc<[StoredTool]>,
     journal: Option<Journal>,
     /// Journal files on disk (base, path), oldest first; the last one is `journal`'s.
     journals: Vec<(u64, PathBuf)>,
@@ -549,11 +564,12 @@ impl Writer {
             bricks: self.mirror.iter().map(|(k, b)| (*k, Arc::clone(b))).collect(),
         };
         let (dir, disk, tx) = (self.dir.clone(), Arc::clone(&self.disk), self.tx.clone());
-        let (voxel, iso, scene) = (self.voxel_size_m, self.iso, self.scene_toml.clone());
+        let (voxel, iso, scene, tools) =
+            (self.voxel_size_m, self.iso, self.scene_toml.clone(), Arc::clone(&self.tools));
         let n = job.stroke;
         let spawned = std::thread::Builder::new().name("autosave-checkpoint".into()).spawn(move || {
             let bricks = job.bricks.iter().map(|(k, b)| (*k, &**b)).collect();
-            let bytes = encode_bricks(voxel, iso, bricks, scene.as_deref(), &mut |_| {});
+            let bytes = encode_bricks(voxel, iso, bricks, (scene.as_deref(), &tools), &mut |_| {});
             let result =
                 disk.write_whole(&snapshot_path(&dir, job.stroke), &bytes).map_err(|e| format!("{e:#}"));
             let _ = tx.send(Msg::Checkpointed(job.stroke, result));

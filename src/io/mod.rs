@@ -310,15 +310,16 @@ pub fn encode_sculpt(
     encode_parts(options.version, settings, bricks, (scene_toml, tools), history.as_ref(), progress)
 }
 
-/// Encodes a sculpt given as its settings and bricks (in any order), without history.
+/// Encodes a sculpt given as its settings, bricks (in any order), scene text and freeform
+/// tools, without history.
 pub(crate) fn encode_bricks(
     voxel_size_m: f32,
     iso: f32,
     bricks: Vec<(LevelKey, &Brick)>,
-    scene_toml: Option<&str>,
+    scene: (Option<&str>, &[StoredTool]),
     progress: &mut dyn FnMut(f32),
 ) -> Vec<u8> {
-    encode_parts(VERSION, (voxel_size_m, iso), bricks, (scene_toml, &[]), None, progress)
+    encode_parts(VERSION, (voxel_size_m, iso), bricks, scene, None, progress)
 }
 
 type History = (Vec<HistoryStep>, Vec<HistoryStep>);
