@@ -62,8 +62,8 @@ fn seeds() -> Vec<Vec<u8>> {
     for (toml, history) in [(scene, true), (None, false)] {
         out.push(encode_with(&field, toml, EncodeOptions { version: 2, history }, &mut |_| {}));
     }
-    // Version 4 (indexed), with a coarse level over several blocks, a fine stroke and a
-    // freeform tool.
+    // Version 4 (indexed), with a coarse level over several blocks, a fine stroke, a freeform
+    // tool and a view.
     field.begin_stroke();
     field.edit_level(
         2,
@@ -78,7 +78,19 @@ fn seeds() -> Vec<Vec<u8>> {
     );
     field.end_stroke();
     let tool = argile::io::StoredTool { index: 0, dims: [3, 2, 2], spacing_m: 0.002, samples: vec![0.5; 12] };
-    out.push(argile::io::encode_sculpt(&field, scene, &[tool], EncodeOptions::default(), &mut |_| {}));
+    let view = argile::io::StoredView {
+        turn: [0.0, 0.0, 0.0, 1.0],
+        distance_m: 0.3,
+        scene_position_m: [0.0; 3],
+        scene_rotation: [0.0, 0.0, 0.0, 1.0],
+        convergence_factor: 1.0,
+        interaxial_m: 0.065,
+        lights_follow_viewer: false,
+        auto_convergence: true,
+        display_mode: "anaglyph".into(),
+    };
+    let parts = argile::io::SceneParts { toml: scene, tools: &[tool], view: Some(&view) };
+    out.push(argile::io::encode_sculpt(&field, parts, EncodeOptions::default(), &mut |_| {}));
     out
 }
 

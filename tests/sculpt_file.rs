@@ -661,13 +661,8 @@ fn a_sculpt_keeps_its_scenes_freeform_tools_as_they_were_made() {
     let (lo, hi) =
         (t.world_to_index(Vec3::new(-0.12, -0.02, -0.04)), t.world_to_index(Vec3::new(-0.04, 0.02, 0.04)));
     sculpt.field.edit_box(lo.floor().as_ivec3(), hi.ceil().as_ivec3(), false, |_, d, _| *d = 0.0);
-    let bytes = argile::io::encode_sculpt(
-        &sculpt.field,
-        sculpt.scene_toml.as_deref(),
-        &sculpt.tools,
-        EncodeOptions::default(),
-        &mut |_| {},
-    );
+    let bytes =
+        argile::io::encode_sculpt(&sculpt.field, sculpt.scene_parts(), EncodeOptions::default(), &mut |_| {});
     std::fs::write(&carved, &bytes).unwrap();
     let (scene, opened) = argile::app::open_sculpt(&carved).unwrap();
     let copied = argile::app::Playback::on_field(&scene, opened.field.clone(), &[], |_, _| None);
@@ -693,4 +688,47 @@ fn a_sculpt_keeps_its_scenes_freeform_tools_as_they_were_made() {
     c.insert(at, c[at].clone());
     both_refuse(&join(header, &c), "a second copy of tool 0");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_sculpt_keeps_the_view_it_was_saved_in_and_refuses_a_view_no_station_has() {
+    let view = argile::io::StoredView {
+        turn: argile::math::Quat::from_rotation_y(0.5).to_array(),
+        distance_m: 0.4,
+        scene_position_m: [0.01, 0.0, -0.02],
+        scene_rotation: argile::math::Quat::from_rotation_x(0.1).to_array(),
+        convergence_factor: 0.9,
+        interaxial_m: 0.05,
+        lights_follow_viewer: true,
+        auto_convergence: false,
+        display_mode: "side-by-side".into(),
+    };
+    let field = spread_field();
+    let parts = argile::io::SceneParts { toml: Some("# a scene\n"), tools: &[], view: Some(&view) };
+    let bytes = argile::io::encode_sculpt(&field, parts, EncodeOptions::default(), &mut |_| {});
+    let back = decode(&bytes, "view.argile", &mut |_| {}).unwrap();
+    assert_eq!(back.view.as_ref(), Some(&view));
+    let lazy = LazySculpt::from_bytes(bytes.clone(), "view.argile").unwrap().finish(&mut |_| {}).unwrap();
+    assert_eq!(lazy.view.as_ref(), Some(&view));
+    let v3 =
+        argile::io::encode_sculpt(&field, parts, EncodeOptions { version: 3, history: true }, &mut |_| {});
+    assert!(decode(&v3, "v3.argile", &mut |_| {}).unwrap().view.is_none(), "version 3 holds no view");
+
+    let (header, chunks) = split(&bytes);
+    let at = chunks.iter().position(|c| &c.0 == b"VIEW").unwrap();
+    let json = String::from_utf8(chunks[at].1.clone()).unwrap();
+    for (from, to, why) in [
+        ("\"distance_m\":0.4", "\"distance_m\":1e9", "no station has"),
+        ("\"turn\":[", "\"turn\":[3.0,", "not a view"),
+        ("\"side-by-side\"", "\"hologram\"", "display mode `hologram`"),
+        ("\"auto_convergence\":false", "\"auto_convergence\":false,\"zoom\":2", "unknown field"),
+    ] {
+        assert!(json.contains(from), "{json}");
+        let mut c = chunks.clone();
+        c[at].1 = json.replace(from, to).into_bytes();
+        both_refuse(&join(header, &c), why);
+    }
+    let mut c = chunks.clone();
+    c[at].1 = json.replace("\"turn\":[0.0,", "\"turn\":[0.5,").into_bytes();
+    both_refuse(&join(header, &c), "no station has");
 }

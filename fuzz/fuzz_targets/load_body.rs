@@ -21,6 +21,7 @@ pub fn check(data: &[u8]) {
             assert!(lazy.field.same_samples(&whole.field), "the lazy reader gives the same clay");
             assert_eq!(lazy.scene_toml, whole.scene_toml);
             assert_eq!(lazy.tools, whole.tools);
+            assert_eq!(lazy.view, whole.view);
             assert_eq!(lazy.field.history_stats(), whole.field.history_stats());
             whole
         }
@@ -32,11 +33,11 @@ pub fn check(data: &[u8]) {
         ),
     };
     let options = argile::io::EncodeOptions::default();
-    let scene = sculpt.scene_toml.as_deref();
-    let again = argile::io::encode_sculpt(&sculpt.field, scene, &sculpt.tools, options, &mut |_| {});
+    let again = argile::io::encode_sculpt(&sculpt.field, sculpt.scene_parts(), options, &mut |_| {});
     let back = argile::io::decode(&again, "again.argile", &mut |_| {})
         .expect("a loaded sculpt stores and loads again");
     assert!(back.field.same_samples(&sculpt.field));
     assert_eq!(back.scene_toml, sculpt.scene_toml);
     assert_eq!(back.tools, sculpt.tools);
+    assert_eq!(back.view, sculpt.view);
 }

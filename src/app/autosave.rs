@@ -85,14 +85,8 @@ pub fn recover_sessions() -> Vec<Result<RecoveredSculpt>> {
             let name = session.dir.file_name().and_then(|n| n.to_str()).unwrap_or("session");
             let path = out_dir.join(format!("sculpt-{name}.argile"));
             let sculpt = &recovered.sculpt;
-            let options = EncodeOptions::default();
-            let bytes = encode_sculpt(
-                &sculpt.field,
-                sculpt.scene_toml.as_deref(),
-                &sculpt.tools,
-                options,
-                &mut |_| {},
-            );
+            let bytes =
+                encode_sculpt(&sculpt.field, sculpt.scene_parts(), EncodeOptions::default(), &mut |_| {});
             write_atomically(&path, true, |w| {
                 w.write_all(&bytes).with_context(|| format!("cannot write {}", path.display()))
             })?;

@@ -11,7 +11,9 @@ use super::playback::Playback;
 use crate::field::{BRICK_SIZE, LEVELS};
 use crate::io::autosave::AutosaveConfig;
 use crate::io::write_atomically;
-use crate::io::{encode_sculpt, read_file, EncodeOptions, LazySculpt, Sculpt, VERSION};
+use crate::io::{
+    encode_sculpt, read_file, EncodeOptions, LazySculpt, SceneParts, Sculpt, StoredView, VERSION,
+};
 use crate::math::{IVec3, Vec3};
 use crate::scene::Scene;
 
@@ -60,7 +62,8 @@ pub fn save_scene_sculpt(
     let session = playback.finish_autosave();
     let tools = playback.stored_tools();
     let field = playback.into_field();
-    let bytes = encode_sculpt(&field, Some(&text), &tools, EncodeOptions::default(), &mut |_| {});
+    let scene = SceneParts { toml: Some(&text), tools: &tools, view: None };
+    let bytes = encode_sculpt(&field, scene, EncodeOptions::default(), &mut |_| {});
     write_atomically(out, overwrite, |w| {
         w.write_all(&bytes).with_context(|| format!("cannot write {}", out.display()))
     })?;
@@ -142,21 +145,26 @@ pub fn convert_sculpt(
         let mut playback = Playback::new(&scene);
         playback.advance_to(end_s(&scene), |_| {});
         let tools = playback.stored_tools();
-        Sculpt { field: playback.into_field(), scene_toml: Some(text), tools }
+        Sculpt { field: playback.into_field(), scene_toml: Some(text), tools, view: None }
     };
-    let scene_toml = sculpt.scene_toml.as_deref();
-    let bytes = encode_sculpt(&sculpt.field, scene_toml, &sculpt.tools, options, &mut |_| {});
+    let bytes = encode_sculpt(&sculpt.field, sculpt.scene_parts(), options, &mut |_| {});
     write_atomically(out, overwrite, |w| {
         w.write_all(&bytes).with_context(|| format!("cannot write {}", out.display()))
     })?;
     Ok(SavedSculpt { path: out.to_path_buf(), bricks: all_bricks(&sculpt.field), bytes: bytes.len() })
 }
 
-/// Writes the clay of `playback` (with its undo history), the scene text it plays and the
-/// scene's freeform tools to `path` as a sculpt, atomically.
-pub(crate) fn save_playback(playback: &Playback<'_>, scene_toml: Option<&str>, path: &Path) -> Result<()> {
+/// Writes the clay of `playback` (with its undo history), the scene text it plays, the
+/// scene's freeform tools and the station's `view` to `path` as a sculpt, atomically.
+pub(crate) fn save_playback(
+    playback: &Playback<'_>,
+    scene_toml: Option<&str>,
+    view: Option<&StoredView>,
+    path: &Path,
+) -> Result<()> {
     let tools = playback.stored_tools();
-    let bytes = encode_sculpt(playback.field(), scene_toml, &tools, EncodeOptions::default(), &mut |_| {});
+    let scene = SceneParts { toml: scene_toml, tools: &tools, view };
+    let bytes = encode_sculpt(playback.field(), scene, EncodeOptions::default(), &mut |_| {});
     write_atomically(path, true, |w| {
         w.write_all(&bytes).with_context(|| format!("cannot write {}", path.display()))
     })

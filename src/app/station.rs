@@ -41,6 +41,7 @@ use crate::input::reader::{HidSource, Mailbox, ReaderConfig, ReaderHandle};
 use crate::input::settings::InputSettings;
 use crate::input::spacenav::{Protocol, SpacenavSource, DEFAULT_SOCKET};
 use crate::io::autosave::{Autosave, AutosaveConfig};
+use crate::io::StoredView;
 use crate::math::{Pose, Quat, Vec2, Vec3, Vec4};
 use crate::mesh::Mesher;
 use crate::render::{Light, Presented, Renderer, RendererDesc, ValidationLog};
@@ -992,10 +993,60 @@ impl<'s> Station<'s> {
     /// Writes the sculpt to the save path, atomically.
     pub fn save(&mut self) -> Result<PathBuf> {
         let path = self.save_to.clone();
-        super::sculpt::save_playback(&self.playback, self.scene_toml.as_deref(), &path)?;
+        let view = self.stored_view();
+        super::sculpt::save_playback(&self.playback, self.scene_toml.as_deref(), Some(&view), &path)?;
         self.saved = Some(path.clone());
         self.unsaved_strokes = 0;
         Ok(path)
+    }
+
+    /// The view as a sculpt stores it: the camera's turn and distance, the scene's pose, the
+    /// stereo settings and the display mode.
+    pub fn stored_view(&self) -> StoredView {
+        let scene = self.desk.poses.get(Target::Scene);
+        StoredView {
+            turn: self.mouse.scene_rotation.to_array(),
+            distance_m: self.mouse.distance_m,
+            scene_position_m: scene.position_m.to_array(),
+            scene_rotation: scene.rotation.to_array(),
+            convergence_factor: self.convergence_factor,
+            interaxial_m: self.view.rig.interaxial_m,
+            lights_follow_viewer: self.lights_follow_viewer,
+            auto_convergence: self.auto_convergence.is_some(),
+            display_mode: self.display_mode.name().to_owned(),
+        }
+    }
+
+    /// Puts the view a sculpt stored (see [`Station::stored_view`]) in place; a display mode
+    /// this window cannot show is left as it is, and said.
+    pub fn apply_view(&mut self, view: &StoredView) {
+        self.mouse.scene_rotation = Quat::from_array(view.turn).normalize();
+        self.mouse.distance_m = view.distance_m;
+        *self.desk.poses.get_mut(Target::Scene) = crate::math::Pose {
+            position_m: Vec3::from_array(view.scene_position_m),
+            rotation: Quat::from_array(view.scene_rotation).normalize(),
+        };
+        self.convergence_factor = view.convergence_factor;
+        self.view.rig.interaxial_m = view.interaxial_m;
+        self.lights_follow_viewer = view.lights_follow_viewer;
+        self.auto_convergence = view.auto_convergence.then(|| {
+            AutoConvergence::new(
+                self.mouse.distance_m * self.convergence_factor,
+                AutoConvergence::DEFAULT_TIME_CONSTANT_S,
+                (self.view.rig.near_m * 2.0, self.view.rig.far_m * 0.5),
+            )
+        });
+        match view.display_mode.parse::<DisplayMode>() {
+            Ok(mode) if self.quad_buffer || mode.layers() == 1 => {
+                self.display_mode = mode;
+                self.fit_views();
+            }
+            _ => self.messages.push(format!(
+                "the sculpt was shown in the {} display mode, which this window cannot show; it stays {}",
+                view.display_mode,
+                self.display_mode.name()
+            )),
+        }
     }
 
     /// The text of the scene the station plays (a scene file's, or the one a sculpt file
@@ -1018,7 +1069,8 @@ impl<'s> Station<'s> {
 
     /// Opens the sculpt file at `path`: its clay replaces the station's (the scene's tools,
     /// lights and view stay; when the file was made in the station's scene, its freeform
-    /// tools are the ones it stores), a stroke in progress ends, and saving writes back to it. The
+    /// tools and its view are the ones it stores), a stroke in progress ends, and saving
+    /// writes back to it. The
     /// autosave session of the clay it replaces is closed, or left for recovery at the next
     /// start when it holds unsaved strokes. A file that cannot be read changes nothing and the
     /// error names it.
@@ -1034,6 +1086,9 @@ impl<'s> Station<'s> {
                     self.desk_tool.shape = shape;
                 }
             }
+        }
+        if let Some(view) = sculpt.view.as_ref().filter(|_| same_scene) {
+            self.apply_view(view);
         }
         let restart = self.autosave_restart.clone();
         let source = path.display().to_string();
@@ -2101,7 +2156,7 @@ mod tests {
     }
 
     #[test]
-    fn saving_stores_the_scene_and_its_freeform_tools_and_opening_in_that_scene_brings_them_back() {
+    fn saving_stores_the_scene_its_freeform_tools_and_the_view_and_opening_in_that_scene_brings_them_back() {
         let dir = std::env::temp_dir().join(format!("argile-station-tools-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
@@ -2115,11 +2170,27 @@ mod tests {
         let mut maker = Station::new(&scene, KeyBindings::shipped(), (64, 64), path.clone());
         maker.set_scene_toml(Some(text.to_owned()));
         let made = maker.desk_tool.shape.clone();
+        // The view changed: turned, stereo keys, lights, the next display mode.
+        maker.mouse.scene_rotation = Quat::from_rotation_y(0.7) * Quat::from_rotation_x(-0.2);
+        for action in [
+            StationAction::InteraxialWider,
+            StationAction::ConvergenceNearer,
+            StationAction::ToggleLights,
+            StationAction::NextDisplayMode,
+            StationAction::ToggleAutoConvergence,
+        ] {
+            maker.act(action);
+        }
+        let view = maker.stored_view();
+        let fresh =
+            Station::new(&scene, KeyBindings::shipped(), (64, 64), dir.join("y.argile")).stored_view();
+        assert_ne!(view, fresh);
         assert!(matches!(&made, ToolShape::Freeform(f) if f.mass() > 0.0));
         maker.save().unwrap();
         let saved = crate::io::read_file(&path, &mut |_| {}).unwrap();
         assert_eq!(saved.scene_toml.as_deref(), Some(text), "the scene is stored");
         assert_eq!(saved.tools.len(), 1);
+        assert_eq!(saved.view.as_ref(), Some(&view), "the view is stored");
 
         // The scene as `open_sculpt` shows a sculpt: without its initial clay, so its freeform
         // tool, copied from no clay, is empty until the sculpt brings back the one it stores.
@@ -2133,6 +2204,7 @@ mod tests {
             station.open(&path).unwrap();
             let tools_made = station.playback.tools()[0].shape == made && station.desk_tool.shape == made;
             assert_eq!(tools_made, restored, "in {scene_text:?}");
+            assert_eq!(station.stored_view() == view, restored, "the view too, in {scene_text:?}");
         }
         std::fs::remove_dir_all(&dir).unwrap();
     }

@@ -191,7 +191,7 @@ impl<'s> XrSculptor<'s> {
             self.playback.journal();
         }
         let path = self.save_to.clone();
-        super::sculpt::save_playback(&self.playback, self.scene_toml.as_deref(), &path)?;
+        super::sculpt::save_playback(&self.playback, self.scene_toml.as_deref(), None, &path)?;
         self.saved = Some(path.clone());
         Ok(path)
     }

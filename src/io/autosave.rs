@@ -35,7 +35,7 @@ use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 
 use super::journal::{self, Reader};
-use super::{decode, encode_bricks, write_atomically, Sculpt, StoredTool};
+use super::{decode, encode_bricks, write_atomically, SceneParts, Sculpt, StoredTool};
 use crate::field::{Brick, Field, LevelKey};
 
 /// When autosave syncs and checkpoints.
@@ -569,7 +569,8 @@ impl Writer {
         let n = job.stroke;
         let spawned = std::thread::Builder::new().name("autosave-checkpoint".into()).spawn(move || {
             let bricks = job.bricks.iter().map(|(k, b)| (*k, &**b)).collect();
-            let bytes = encode_bricks(voxel, iso, bricks, (scene.as_deref(), &tools), &mut |_| {});
+            let parts = SceneParts { toml: scene.as_deref(), tools: &tools, view: None };
+            let bytes = encode_bricks(voxel, iso, bricks, parts, &mut |_| {});
             let result =
                 disk.write_whole(&snapshot_path(&dir, job.stroke), &bytes).map_err(|e| format!("{e:#}"));
             let _ = tx.send(Msg::Checkpointed(job.stroke, result));

@@ -13,7 +13,7 @@ use std::collections::HashSet;
 
 use super::{
     decode_from, read_brick_chunk, read_chunk_from, read_head, Chunk, FileSource, Head, HistoryReader,
-    IndexEntry, Sculpt, SculptError, Slice, Source, StoredTool, BLOCK_SHIFT,
+    IndexEntry, Sculpt, SculptError, Slice, Source, StoredTool, StoredView, BLOCK_SHIFT,
 };
 use crate::field::{Field, BRICK_SIZE};
 use crate::math::IVec3;
@@ -56,6 +56,7 @@ pub struct LazySculpt {
     field: Field,
     scene_toml: Option<String>,
     tools: Vec<StoredTool>,
+    view: Option<StoredView>,
     entries: Vec<IndexEntry>,
     chunks: Vec<ChunkInfo>,
     /// Per chunk, its bytes in the file once it has been read.
@@ -106,7 +107,8 @@ impl LazySculpt {
         let fail = |reason: String| SculptError { file: file.clone(), reason };
         let (mut raw, mut buf) = (Vec::new(), Vec::new());
         let head = read_head(&mut *source, &mut raw, &mut buf, &mut None).map_err(fail)?;
-        let Head { version, chunk_count, meta, field, scene_toml, tools, index, base, chunks_read } = head;
+        let Head { version, chunk_count, meta, field, scene_toml, tools, view, index, base, chunks_read } =
+            head;
         let mut sculpt = Self {
             file: file.clone(),
             source,
@@ -116,6 +118,7 @@ impl LazySculpt {
             field,
             scene_toml,
             tools,
+            view,
             entries: Vec::new(),
             chunks: Vec::new(),
             read: Vec::new(),
@@ -142,6 +145,7 @@ impl LazySculpt {
                 sculpt.bytes_read = sculpt.source.len();
                 sculpt.field = whole.field;
                 sculpt.tools = whole.tools;
+                sculpt.view = whole.view;
                 sculpt.whole = true;
             }
         }
@@ -279,7 +283,12 @@ impl LazySculpt {
     pub fn finish(mut self, progress: &mut dyn FnMut(f32)) -> Result<Sculpt, SculptError> {
         if self.whole {
             progress(1.0);
-            return Ok(Sculpt { field: self.field, scene_toml: self.scene_toml, tools: self.tools });
+            return Ok(Sculpt {
+                field: self.field,
+                scene_toml: self.scene_toml,
+                tools: self.tools,
+                view: self.view,
+            });
         }
         let total = self.chunks.len().max(1) as f32;
         for i in 0..self.chunks.len() {
@@ -319,6 +328,6 @@ impl LazySculpt {
         let mut field = self.field;
         field.take_dirty();
         field.set_history(history.undo, history.redo);
-        Ok(Sculpt { field, scene_toml: self.scene_toml, tools: self.tools })
+        Ok(Sculpt { field, scene_toml: self.scene_toml, tools: self.tools, view: self.view })
     }
 }

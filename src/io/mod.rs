@@ -12,6 +12,9 @@
 //!
 //!  chunks  META  (first, once)  JSON: format, voxel size, iso-level, brick size, brick count
 //!          SCNE  (at most once) the scene file's TOML text the sculpt was made in
+//!          VIEW  (at most once, before INDX) JSON: the station's view when it was saved (turn
+//!                               and distance of the camera, the scene's pose, stereo
+//!                               settings, display mode; see [`StoredView`])
 //!          TOOL  (any number, before INDX) a freeform tool of that scene as it was saved (a
 //!                               copy of clay the scene's clay no longer holds): the scene
 //!                               tool's index u32 · sample counts (3 × u32) · spacing f32
@@ -44,7 +47,7 @@
 //! META, SCNE and INDX, and any brick chunk can then be read on its own, by where its block
 //! lies (loading a box reads the chunks whose samples reach into it, and nothing else).
 //!
-//! Version 3 is version 4 without INDX and TOOL, its brick chunks holding up to 512 bricks of one level
+//! Version 3 is version 4 without INDX, TOOL and VIEW, its brick chunks holding up to 512 bricks of one level
 //! in key order (not by block). Version 2 is version 3 without BRKL chunks and with the finest
 //! level alone in entries; version 1 is version 2 without HIST chunks. This build reads all
 //! four and writes any (`argile convert`): a sculpt with coarse levels written as version 1
@@ -160,6 +163,82 @@ pub struct Sculpt {
     pub scene_toml: Option<String>,
     /// The scene's freeform tools as they were saved.
     pub tools: Vec<StoredTool>,
+    /// The station's view when it was saved.
+    pub view: Option<StoredView>,
+}
+
+impl Sculpt {
+    /// What it stores besides its clay, to encode it again.
+    pub fn scene_parts(&self) -> SceneParts<'_> {
+        SceneParts { toml: self.scene_toml.as_deref(), tools: &self.tools, view: self.view.as_ref() }
+    }
+}
+
+/// What a sculpt stores besides its clay: the scene it was made in, that scene's freeform
+/// tools as they were copied, and the view it was last seen in.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SceneParts<'a> {
+    /// The scene file's text.
+    pub toml: Option<&'a str>,
+    /// The scene's freeform tools.
+    pub tools: &'a [StoredTool],
+    /// The station's view.
+    pub view: Option<&'a StoredView>,
+}
+
+/// The station's view when a sculpt was saved: where the camera looks from, the stereo
+/// settings and the display, so that the sculpt opens as it was left.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StoredView {
+    /// The trackball's turn of the scene about the camera's target (quaternion x, y, z, w).
+    pub turn: [f32; 4],
+    /// The camera's distance from its target, metres.
+    pub distance_m: f32,
+    /// The scene's pose as the 6-DoF devices left it: position (metres) and rotation
+    /// (quaternion x, y, z, w).
+    pub scene_position_m: [f32; 3],
+    /// See `scene_position_m`.
+    pub scene_rotation: [f32; 4],
+    /// The convergence distance over the camera's distance.
+    pub convergence_factor: f32,
+    /// The distance between the eyes, metres.
+    pub interaxial_m: f32,
+    /// Whether the lights attached to the viewer follow it.
+    pub lights_follow_viewer: bool,
+    /// Whether automatic convergence was on.
+    pub auto_convergence: bool,
+    /// The display mode's name (see `stereo::DisplayMode`).
+    pub display_mode: String,
+}
+
+impl StoredView {
+    /// Reads a VIEW chunk's bytes, refusing what a saved view cannot be: numbers that are not
+    /// finite, a rotation that is not one, distances out of range, an unknown display mode.
+    fn read(raw: &[u8], chunk: u32) -> Result<Self, String> {
+        let v: Self =
+            serde_json::from_slice(raw).map_err(|e| format!("chunk {chunk} (VIEW) is not a view: {e}"))?;
+        let unit = |q: [f32; 4]| (crate::math::Quat::from_array(q).length() - 1.0).abs() < 1e-3;
+        let numbers = v.turn.iter().chain(&v.scene_position_m).chain(&v.scene_rotation);
+        let fine =
+            numbers.chain([&v.distance_m, &v.convergence_factor, &v.interaxial_m]).all(|x| x.is_finite())
+                && unit(v.turn)
+                && unit(v.scene_rotation)
+                && v.scene_position_m.iter().all(|x| x.abs() < 1e3)
+                && (1e-4..1e3).contains(&v.distance_m)
+                && (1e-4..1e3).contains(&v.convergence_factor)
+                && (0.0..1.0).contains(&v.interaxial_m);
+        if !fine {
+            return Err(format!("chunk {chunk} (VIEW) holds a view no station has: {v:?}"));
+        }
+        if v.display_mode.parse::<crate::stereo::display::DisplayMode>().is_err() {
+            return Err(format!(
+                "chunk {chunk} (VIEW) names display mode `{}`, which this Argile has not",
+                v.display_mode
+            ));
+        }
+        Ok(v)
+    }
 }
 
 /// A freeform tool as a sculpt stores it: a box of densities copied from clay (see
@@ -272,15 +351,14 @@ pub fn encode_with(
     options: EncodeOptions,
     progress: &mut dyn FnMut(f32),
 ) -> Vec<u8> {
-    encode_sculpt(field, scene_toml, &[], options, progress)
+    encode_sculpt(field, SceneParts { toml: scene_toml, ..SceneParts::default() }, options, progress)
 }
 
-/// Encodes a sculpt with its scene's freeform tools as `options` say (versions before 4 leave
-/// the tools out).
+/// Encodes a sculpt with what it stores besides its clay (`scene`) as `options` say
+/// (versions before 4 leave the scene's freeform tools and the view out).
 pub fn encode_sculpt(
     field: &Field,
-    scene_toml: Option<&str>,
-    tools: &[StoredTool],
+    scene: SceneParts<'_>,
     options: EncodeOptions,
     progress: &mut dyn FnMut(f32),
 ) -> Vec<u8> {
@@ -306,8 +384,9 @@ pub fn encode_sculpt(
     // the finest, they would undo into holes.
     let history = (options.history && options.version >= 2 && levels).then(|| field.history_in_memory());
     let settings = (field.transform().voxel_size_m, field.iso());
-    let tools = if options.version >= 4 { tools } else { &[] };
-    encode_parts(options.version, settings, bricks, (scene_toml, tools), history.as_ref(), progress)
+    let scene =
+        if options.version >= 4 { scene } else { SceneParts { toml: scene.toml, ..SceneParts::default() } };
+    encode_parts(options.version, settings, bricks, scene, history.as_ref(), progress)
 }
 
 /// Encodes a sculpt given as its settings, bricks (in any order), scene text and freeform
@@ -316,7 +395,7 @@ pub(crate) fn encode_bricks(
     voxel_size_m: f32,
     iso: f32,
     bricks: Vec<(LevelKey, &Brick)>,
-    scene: (Option<&str>, &[StoredTool]),
+    scene: SceneParts<'_>,
     progress: &mut dyn FnMut(f32),
 ) -> Vec<u8> {
     encode_parts(VERSION, (voxel_size_m, iso), bricks, scene, None, progress)
@@ -328,7 +407,7 @@ fn encode_parts(
     version: u32,
     (voxel_size_m, iso): (f32, f32),
     mut bricks: Vec<(LevelKey, &Brick)>,
-    (scene_toml, tools): (Option<&str>, &[StoredTool]),
+    SceneParts { toml: scene_toml, tools, view }: SceneParts<'_>,
     history: Option<&History>,
     progress: &mut dyn FnMut(f32),
 ) -> Vec<u8> {
@@ -383,6 +462,7 @@ fn encode_parts(
     }
     let chunk_count = 1
         + u32::from(scene_toml.is_some())
+        + u32::from(view.is_some())
         + tools.len() as u32
         + u32::from(indexed)
         + stored.len() as u32
@@ -394,6 +474,9 @@ fn encode_parts(
     put_chunk(&mut out, *b"META", &serde_json::to_vec(&meta).expect("plain values serialise"));
     if let Some(text) = scene_toml {
         put_chunk(&mut out, *b"SCNE", text.as_bytes());
+    }
+    if let Some(view) = view {
+        put_chunk(&mut out, *b"VIEW", &serde_json::to_vec(view).expect("plain values serialise"));
     }
     for tool in tools {
         put_chunk(&mut out, *b"TOOL", &tool.put());
@@ -945,6 +1028,7 @@ struct Head {
     field: Field,
     scene_toml: Option<String>,
     tools: Vec<StoredTool>,
+    view: Option<StoredView>,
     /// Version 4: the brick chunks, and where the history starts, both from `base`.
     index: Option<(Vec<IndexEntry>, u64)>,
     /// The first byte after the index (version 4), else after META and SCNE.
@@ -977,6 +1061,7 @@ fn read_head(
         field,
         scene_toml: None,
         tools: Vec::new(),
+        view: None,
         index: None,
         base: source.position(),
         chunks_read: 1,
@@ -991,6 +1076,9 @@ fn read_head(
                     String::from_utf8(raw.clone()).map_err(|_| "its scene text is not UTF-8".to_owned())?;
                 head.scene_toml = Some(text);
                 head.base = source.position();
+            }
+            b"VIEW" if version >= 4 && head.view.is_none() => {
+                head.view = Some(StoredView::read(raw, index)?);
             }
             b"TOOL" if version >= 4 => {
                 let tool = StoredTool::read(raw, index)?;
@@ -1038,6 +1126,7 @@ fn decode_from(source: &mut dyn Source, progress: &mut dyn FnMut(f32)) -> Result
         mut field,
         scene_toml,
         tools,
+        view,
         index: directory,
         base,
         chunks_read,
@@ -1098,7 +1187,7 @@ fn decode_from(source: &mut dyn Source, progress: &mut dyn FnMut(f32)) -> Result
     }
     field.take_dirty();
     field.set_history(history.undo, history.redo);
-    Ok(Sculpt { field, scene_toml, tools })
+    Ok(Sculpt { field, scene_toml, tools, view })
 }
 
 #[cfg(test)]
