@@ -687,6 +687,14 @@ fn a_sculpt_keeps_its_scenes_freeform_tools_as_they_were_made() {
     let mut c = chunks.clone();
     c.insert(at, c[at].clone());
     both_refuse(&join(header, &c), "a second copy of tool 0");
+    // More tools than a file may hold.
+    let mut c = chunks.clone();
+    for i in 1..=argile::io::MAX_TOOLS as u32 {
+        let mut tool = c[at].clone();
+        tool.1[..4].copy_from_slice(&i.to_le_bytes());
+        c.insert(at, tool);
+    }
+    both_refuse(&join(header, &c), "more than 64 freeform tools");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

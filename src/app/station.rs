@@ -471,6 +471,8 @@ pub struct Station<'s> {
     autosave_restart: Option<(AutosaveConfig, Option<String>)>,
     /// The text of the scene the station plays, stored in the sculpts it saves.
     scene_toml: Option<String>,
+    /// Where a save that cannot write its file writes instead.
+    fallback_dir: Option<PathBuf>,
     quit: bool,
     frame_ms: f32,
     times: StepTimes,
@@ -558,6 +560,7 @@ impl<'s> Station<'s> {
             confirm_open: None,
             autosave_restart: None,
             scene_toml: None,
+            fallback_dir: None,
             quit: false,
             frame_ms: 0.0,
             times: StepTimes::default(),
@@ -990,14 +993,52 @@ impl<'s> Station<'s> {
         self.frame_ms = ms;
     }
 
-    /// Writes the sculpt to the save path, atomically.
+    /// Writes the sculpt to the save path, atomically. Where that fails (a full disk, a
+    /// folder that cannot be written), nothing already there is damaged and the sculpt is
+    /// written to the fallback folder instead (see [`Station::set_fallback_dir`]), where the
+    /// save key writes from then on, and a message says so; without one, or when that fails
+    /// too, the error says the sculpt stays in memory.
     pub fn save(&mut self) -> Result<PathBuf> {
-        let path = self.save_to.clone();
         let view = self.stored_view();
-        super::sculpt::save_playback(&self.playback, self.scene_toml.as_deref(), Some(&view), &path)?;
+        let scene = self.scene_toml.as_deref();
+        let write = |path: &Path| super::sculpt::save_playback(&self.playback, scene, Some(&view), path);
+        let path = match write(&self.save_to) {
+            Ok(()) => self.save_to.clone(),
+            Err(e) => {
+                let kept = "the sculpt stays in memory; `argile run --save-to FILE` saves it elsewhere";
+                let Some(dir) = &self.fallback_dir else { return Err(e.context(kept)) };
+                let stem = self.save_to.file_stem().map_or("sculpt".into(), |s| s.to_string_lossy());
+                let stamp = std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .map_or(0, |d| d.as_secs());
+                let other = dir.join(format!("{stem}-{stamp}.{}", super::SCULPT_EXTENSION));
+                let written = std::fs::create_dir_all(dir)
+                    .with_context(|| format!("cannot create {}", dir.display()))
+                    .and_then(|()| write(&other));
+                if let Err(again) = written {
+                    return Err(e.context(format!(
+                        "{kept} (nor could it be saved to {}: {again:#})",
+                        other.display()
+                    )));
+                }
+                self.messages.push(format!(
+                    "cannot save to {}: {e:#}; saved the sculpt to {} instead, where the save key writes from now on",
+                    self.save_to.display(),
+                    other.display()
+                ));
+                self.save_to = other.clone();
+                other
+            }
+        };
         self.saved = Some(path.clone());
         self.unsaved_strokes = 0;
         Ok(path)
+    }
+
+    /// Where a save that cannot write its file writes the sculpt instead (the station uses
+    /// `saved/` in the state folder).
+    pub fn set_fallback_dir(&mut self, dir: Option<PathBuf>) {
+        self.fallback_dir = dir;
     }
 
     /// The view as a sculpt stores it: the camera's turn and distance, the scene's pose, the
@@ -1364,6 +1405,7 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
                 station.set_autosave_restart(config.clone(), options.scene_toml.clone());
             }
             station.set_scene_toml(options.scene_toml.clone());
+            station.set_fallback_dir(super::state_dir().map(|d| d.join("saved")));
             if let Some(dir) = &options.open_dir {
                 station.set_open_dir(dir.clone());
             }
@@ -2206,6 +2248,41 @@ mod tests {
             assert_eq!(tools_made, restored, "in {scene_text:?}");
             assert_eq!(station.stored_view() == view, restored, "the view too, in {scene_text:?}");
         }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_save_that_cannot_write_its_file_saves_to_the_fallback_folder_or_keeps_the_sculpt() {
+        let dir = std::env::temp_dir().join(format!("argile-station-fallback-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        // A file where the save folder should be: no write there succeeds, even as root.
+        std::fs::write(dir.join("not-a-folder"), "x").unwrap();
+        let scene = ball_scene();
+        let blocked = dir.join("not-a-folder").join("ball.argile");
+        let mut station = Station::new(&scene, KeyBindings::shipped(), (64, 64), blocked.clone());
+        station.key(KeyCode::Space, true);
+        for _ in 0..3 {
+            station.step(SCRIPTED_STEP_S, |_| {});
+        }
+        station.key(KeyCode::Space, false);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        let mass = station.field().mass();
+        assert!(mass > 0.0);
+
+        let e = format!("{:#}", station.save().unwrap_err());
+        assert!(e.contains("stays in memory") && e.contains("not-a-folder"), "{e}");
+        assert_eq!(station.field().mass(), mass, "nothing lost");
+
+        station.set_fallback_dir(Some(dir.join("saved")));
+        let path = station.save().unwrap();
+        assert!(path.starts_with(dir.join("saved")) && path.extension().unwrap() == "argile", "{path:?}");
+        let said = station.messages.pop().unwrap();
+        assert!(said.contains("cannot save to") && said.contains(&path.display().to_string()), "{said}");
+        let saved = crate::io::read_file(&path, &mut |_| {}).unwrap();
+        assert_eq!(saved.field.mass(), mass);
+        assert_eq!(station.save().unwrap(), path, "the save key writes there from now on");
+        assert!(std::fs::read_to_string(dir.join("not-a-folder")).unwrap() == "x", "nothing damaged");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -143,6 +143,13 @@ pub const VERSION: u32 = 4;
 pub const MAX_CHUNK_BYTES: usize = 64 << 20;
 /// The most chunks a file may declare.
 pub const MAX_CHUNKS: u32 = 1 << 20;
+/// The most freeform tools a file may hold, and the most samples of them all (far beyond a
+/// scene's few tools, each a box of clay of a hundred samples a side).
+pub const MAX_TOOLS: usize = 64;
+/// See [`MAX_TOOLS`].
+pub const MAX_TOOL_SAMPLES: usize = 1 << 25;
+/// The largest view (a few hundred bytes of JSON) a file may hold.
+const MAX_VIEW_BYTES: usize = 1 << 16;
 /// Bricks per `BRKS` chunk written, and per `HIST` or journal chunk.
 pub const BRICKS_PER_CHUNK: usize = 512;
 
@@ -1078,12 +1085,24 @@ fn read_head(
                 head.base = source.position();
             }
             b"VIEW" if version >= 4 && head.view.is_none() => {
+                if raw.len() > MAX_VIEW_BYTES {
+                    return Err(format!(
+                        "chunk {index} (VIEW) holds {} bytes, more than a view takes",
+                        raw.len()
+                    ));
+                }
                 head.view = Some(StoredView::read(raw, index)?);
             }
             b"TOOL" if version >= 4 => {
                 let tool = StoredTool::read(raw, index)?;
                 if head.tools.iter().any(|t| t.index == tool.index) {
                     return Err(format!("chunk {index} (TOOL) is a second copy of tool {}", tool.index));
+                }
+                let samples = head.tools.iter().map(|t| t.samples.len()).sum::<usize>() + tool.samples.len();
+                if head.tools.len() == MAX_TOOLS || samples > MAX_TOOL_SAMPLES {
+                    return Err(format!(
+                        "chunk {index} (TOOL) makes more than {MAX_TOOLS} freeform tools or {MAX_TOOL_SAMPLES} samples of them"
+                    ));
                 }
                 head.tools.push(tool);
             }
@@ -1102,7 +1121,10 @@ fn read_head(
                 return Ok(head);
             }
             _ if version >= 4 => {
-                return Err(format!("chunk {index} ({}) comes before the index (INDX)", chunk.name));
+                return Err(format!(
+                    "chunk {index} (`{}`) is unknown, repeated or out of place before the index (INDX)",
+                    chunk.name
+                ));
             }
             _ => {
                 *pending = Some(chunk);
