@@ -207,6 +207,9 @@ impl LazySculpt {
     }
 
     /// Whether chunk `i` has been loaded.
+    ///
+    /// # Panics
+    /// If `i` is not below `chunks().len()` (a caller bug).
     pub fn is_loaded(&self, i: usize) -> bool {
         self.read[i].is_some()
     }
@@ -217,6 +220,9 @@ impl LazySculpt {
     }
 
     /// Loads chunk `i` (nothing if it is loaded), checking it against its index entry.
+    ///
+    /// # Panics
+    /// If `i` is not below `chunks().len()` (a caller bug).
     pub fn load_chunk(&mut self, i: usize) -> Result<(), SculptError> {
         if let Some(reason) = &self.refused {
             return Err(SculptError { file: self.file.clone(), reason: reason.clone() });
