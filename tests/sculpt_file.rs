@@ -454,6 +454,12 @@ fn opening_a_sculpt_reads_its_index_and_a_box_reads_the_chunks_reaching_into_it(
     assert_eq!(lazy.brick_count() as usize, whole.brick_count() + whole.level_brick_count(2));
     let levels: Vec<usize> = lazy.chunks().iter().map(|c| c.level).collect();
     assert!(levels.contains(&0) && levels.contains(&2), "{levels:?}");
+    // A level alone: its chunks, and every brick of it.
+    let mut coarse = LazySculpt::from_bytes(bytes.clone(), "lazy.argile").unwrap();
+    assert_eq!(coarse.load_level(2).unwrap(), levels.iter().filter(|&&l| l == 2).count());
+    assert_eq!(coarse.field().level_brick_count(2), whole.level_brick_count(2));
+    assert_eq!(coarse.field().level_brick_count(0), 0);
+    assert_eq!(coarse.chunks_left(), levels.iter().filter(|&&l| l != 2).count());
     assert!(
         lazy.bytes_read() * 20 < lazy.file_len(),
         "opening read {} of {} bytes",

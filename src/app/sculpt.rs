@@ -193,9 +193,7 @@ pub fn describe_sculpt(path: &Path) -> Result<String> {
         }
     } else {
         for c in lazy.chunks() {
-            let step = 1 << c.level;
-            let (lo, hi) = c.reach();
-            let (lo, hi) = (lo + IVec3::splat(step - 1), hi - IVec3::splat(step - 1));
+            let (lo, hi) = c.samples();
             let stats = &mut levels[c.level];
             *stats = (stats.0 + u64::from(c.bricks), stats.1 + 1, stats.2.min(lo), stats.3.max(hi));
         }

@@ -30,15 +30,21 @@ pub struct ChunkInfo {
 }
 
 impl ChunkInfo {
+    /// Where its block's samples lie on the finest lattice: the lowest and highest
+    /// (inclusive), its level's voxel apart.
+    pub fn samples(&self) -> (IVec3, IVec3) {
+        let step = 1 << self.level;
+        let side = BRICK_SIZE << BLOCK_SHIFT;
+        let lo = self.block * side * step;
+        (lo, lo + IVec3::splat((side - 1) * step))
+    }
+
     /// The points of the finest lattice whose values its samples take part in (lowest and
     /// highest, inclusive): its block's samples, and as far on each side as interpolation
     /// between them and the next sample of its level reaches.
     pub fn reach(&self) -> (IVec3, IVec3) {
-        let step = 1 << self.level;
-        let side = BRICK_SIZE << BLOCK_SHIFT;
-        let lo = self.block * side * step;
-        let hi = lo + IVec3::splat((side - 1) * step);
-        (lo - IVec3::splat(step - 1), hi + IVec3::splat(step - 1))
+        let ((lo, hi), apron) = (self.samples(), IVec3::splat((1 << self.level) - 1));
+        (lo - apron, hi + apron)
     }
 
     fn from_entry(e: &IndexEntry) -> Self {
@@ -187,11 +193,6 @@ impl LazySculpt {
     /// file without an index is loaded whole, its history with it.
     pub fn field(&self) -> &Field {
         &self.field
-    }
-
-    /// The clay loaded so far, to take its dirty set (see [`LazySculpt::field`]).
-    pub fn field_mut(&mut self) -> &mut Field {
-        &mut self.field
     }
 
     /// The brick chunks, in file order (none for a file without an index: it is loaded).

@@ -1038,7 +1038,7 @@ struct Head {
     view: Option<StoredView>,
     /// Version 4: the brick chunks, and where the history starts, both from `base`.
     index: Option<(Vec<IndexEntry>, u64)>,
-    /// The first byte after the index (version 4), else after META and SCNE.
+    /// The first byte after the index (version 4; before, it means nothing).
     base: u64,
     /// Chunks read.
     chunks_read: u32,
@@ -1082,7 +1082,6 @@ fn read_head(
                 let text =
                     String::from_utf8(raw.clone()).map_err(|_| "its scene text is not UTF-8".to_owned())?;
                 head.scene_toml = Some(text);
-                head.base = source.position();
             }
             b"VIEW" if version >= 4 && head.view.is_none() => {
                 if raw.len() > MAX_VIEW_BYTES {
