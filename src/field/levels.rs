@@ -38,7 +38,7 @@
 use super::brick::{
     keys_over, Brick, BrickColours, BrickKey, Colour, LevelKey, BRICK_SIZE, DEFAULT_COLOUR, LEVELS,
 };
-use super::tree::{Field, Walk};
+use super::tree::{Field, Ranges, Walk};
 use crate::math::IVec3;
 
 /// A sample: density and colour.
@@ -310,7 +310,7 @@ impl Field {
     /// coarser levels' interpolation there; `None` where the field is surely empty.
     pub fn read_range(&self, key: BrickKey) -> Option<(f32, f32)> {
         if let Some(r) = self.levels[0].ranges.get(&key) {
-            return Some(*r);
+            return Some(r.all);
         }
         let base = key * BRICK_SIZE;
         let top = base + IVec3::splat(BRICK_SIZE - 1);
@@ -326,7 +326,9 @@ impl Field {
             let mut all = true;
             for k in keys_over(lo, hi) {
                 match self.levels[m].ranges.get(&k) {
-                    Some(&(a, b)) => range = Some(range.map_or((a, b), |(lo, hi)| (lo.min(a), hi.max(b)))),
+                    Some(&Ranges { all: (a, b), .. }) => {
+                        range = Some(range.map_or((a, b), |(lo, hi)| (lo.min(a), hi.max(b))))
+                    }
                     None => all = false,
                 }
             }

@@ -34,9 +34,18 @@ pub type HistoryStep = Vec<(LevelKey, Option<Arc<Brick>>)>;
 #[derive(Clone, Debug, Default)]
 pub(super) struct Level {
     pub(super) bricks: HashMap<BrickKey, Arc<Brick>>,
-    /// Lowest and highest density of each stored brick, kept with every edit, so that whole
-    /// bricks can be classified (inside, outside, crossing the surface) without reading them.
-    pub(super) ranges: HashMap<BrickKey, (f32, f32)>,
+    /// Density ranges of each stored brick, kept with every edit, so that whole bricks can be
+    /// classified (inside, outside, crossing the surface) without reading them.
+    pub(super) ranges: HashMap<BrickKey, Ranges>,
+}
+
+/// A brick's lowest and highest density over all its samples, and over those of each of its
+/// three lower faces (local x, y or z 0): the only ones of its samples that the mesh cells of
+/// the bricks below it read.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Ranges {
+    pub(super) all: (f32, f32),
+    pub(super) low_faces: [(f32, f32); 3],
 }
 
 /// A sparse density + colour field on a regular lattice.
@@ -280,13 +289,23 @@ impl Field {
     /// brick; its samples read the coarser levels, see [`Field::read_range`]).
     #[inline]
     pub fn density_range(&self, key: BrickKey) -> Option<(f32, f32)> {
-        self.levels[0].ranges.get(&key).copied()
+        self.levels[0].ranges.get(&key).map(|r| r.all)
+    }
+
+    /// The lowest and highest density, as readers see them, on each lower face of
+    /// finest-level brick `key` (its samples of local x, y, z 0), the only ones the mesh cells
+    /// of the bricks below it read: exact for a stored brick, else [`Field::read_range`].
+    pub fn read_low_face_ranges(&self, key: BrickKey) -> Option<[(f32, f32); 3]> {
+        match self.levels[0].ranges.get(&key) {
+            Some(r) => Some(r.low_faces),
+            None => self.read_range(key).map(|r| [r; 3]),
+        }
     }
 
     /// The lowest and highest density of a stored brick of any level.
     #[inline]
     pub fn level_density_range(&self, key: LevelKey) -> Option<(f32, f32)> {
-        self.levels[usize::from(key.level)].ranges.get(&key.key).copied()
+        self.levels[usize::from(key.level)].ranges.get(&key.key).map(|r| r.all)
     }
 
     /// Keys of every stored brick of the finest level, in no particular order.
@@ -299,7 +318,7 @@ impl Field {
     /// ranges), not counting the undo history.
     pub fn memory_bytes(&self) -> usize {
         let per_key =
-            std::mem::size_of::<(BrickKey, Arc<Brick>)>() + std::mem::size_of::<(BrickKey, (f32, f32))>();
+            std::mem::size_of::<(BrickKey, Arc<Brick>)>() + std::mem::size_of::<(BrickKey, Ranges)>();
         let per_brick = std::mem::size_of::<Brick>() + 2 * std::mem::size_of::<usize>();
         let mut seen = HashSet::<*const Brick>::default();
         let keys: usize = self.levels.iter().map(|l| l.bricks.len()).sum();
@@ -327,7 +346,7 @@ impl Field {
     /// records its density range; returns what was there.
     pub(super) fn store(&mut self, key: LevelKey, brick: Arc<Brick>) -> Option<Arc<Brick>> {
         let level = &mut self.levels[usize::from(key.level)];
-        level.ranges.insert(key.key, density_range(&brick));
+        level.ranges.insert(key.key, brick_ranges(&brick));
         let brick = match brick.uniform_value() {
             Some(value) => self.tile(value, brick),
             None => brick,
@@ -524,7 +543,7 @@ impl Field {
             if !stored && walk.refine && above && self.reads_above(level, key) {
                 // The coarser levels hold clay here: the level's brick is theirs first.
                 if let Some(refined) = self.interpolated_brick(level, key) {
-                    if !changes(base + a, base + b, Some(density_range(&refined))) {
+                    if !changes(base + a, base + b, Some(brick_ranges(&refined).all)) {
                         continue;
                     }
                     self.history.touch(level_key, None);
@@ -532,7 +551,7 @@ impl Field {
                     stored = true;
                 }
             }
-            if !changes(base + a, base + b, self.levels[level].ranges.get(&key).copied()) {
+            if !changes(base + a, base + b, self.levels[level].ranges.get(&key).map(|r| r.all)) {
                 continue;
             }
             if !stored && !walk.create {
@@ -552,23 +571,28 @@ impl Field {
             let brick = Arc::make_mut(self.levels[level].bricks.entry(key).or_default());
             samples(brick, base, a, b, fresh);
             brick.compact();
-            let range = density_range(brick);
+            let ranges = brick_ranges(brick);
+            let range = ranges.all;
+            // One density everywhere (the range says so without another pass) and one
+            // colour: a constant tile.
+            let uniform = match (range.0.to_bits() == range.1.to_bits(), &brick.colour) {
+                (true, &BrickColours::Uniform(colour)) => Some(colour),
+                _ => None,
+            };
+            // Only the walked share of the box can have changed: the bricks the edit skipped
+            // (out of its reach, or unchanged by it) keep their meshes.
+            self.mark_level_dirty(level, base + a, base + b);
             if range.1 == 0.0 && !keep_empty {
                 self.remove(level_key);
                 continue;
             }
-            // One density everywhere (the range says so without another pass) and one
-            // colour: a constant tile.
-            if let (true, &BrickColours::Uniform(colour)) =
-                (range.0.to_bits() == range.1.to_bits(), &brick.colour)
-            {
+            if let Some(colour) = uniform {
                 let edited = self.levels[level].bricks[&key].clone();
                 let tile = self.tile((range.0, colour), edited);
                 self.levels[level].bricks.insert(key, tile);
             }
-            self.levels[level].ranges.insert(key, range);
+            self.levels[level].ranges.insert(key, ranges);
         }
-        self.mark_level_dirty(level, lo, hi);
         if above {
             self.coarsen(level, &walked);
         }
@@ -656,9 +680,20 @@ type TileValue = [u32; 5];
 /// Distinct tile values kept before those no key shares are forgotten.
 const MAX_UNUSED_TILES: usize = 64;
 
-/// Lowest and highest density of a brick, in one pass.
-fn density_range(brick: &Brick) -> (f32, f32) {
-    brick.density.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &d| (lo.min(d), hi.max(d)))
+/// Lowest and highest density of a brick's samples, and of those on each lower face.
+fn brick_ranges(brick: &Brick) -> Ranges {
+    let widen = |(lo, hi): (f32, f32), &d: &f32| (lo.min(d), hi.max(d));
+    let none = (f32::INFINITY, f32::NEG_INFINITY);
+    let s = BRICK_SIZE as usize;
+    let d = &brick.density[..];
+    let mut faces = [none; 3];
+    for plane in d.chunks_exact(s * s) {
+        // x = 0 is every row's first sample, y = 0 every plane's first row.
+        faces[0] = plane.iter().step_by(s).fold(faces[0], widen);
+        faces[1] = plane[..s].iter().fold(faces[1], widen);
+    }
+    faces[2] = d[..s * s].iter().fold(none, widen);
+    Ranges { all: d.iter().fold(none, widen), low_faces: faces }
 }
 
 #[cfg(test)]
@@ -793,5 +828,51 @@ mod tests {
         // Points 2..=6 are read by brick 0 alone.
         let (first, last) = bricks_reading(IVec3::splat(2), IVec3::splat(6));
         assert_eq!((first, last), (IVec3::ZERO, IVec3::ZERO));
+    }
+
+    #[test]
+    fn an_edit_marks_only_the_bricks_reading_what_it_walked() {
+        let mut f = Field::new(0.001, 0.5);
+        // Matter in brick 0 alone; a carve over the box of bricks −2 ..= 2 walks brick 0 only
+        // (no other brick exists to carve), so only the bricks reading brick 0 are dirty.
+        f.edit_box(IVec3::ZERO, IVec3::splat(7), true, |_, d, _| *d = 1.0);
+        f.take_dirty();
+        f.edit_box(IVec3::splat(-16), IVec3::splat(23), false, |_, d, _| *d *= 0.5);
+        let dirty = f.take_dirty();
+        let (first, last) = bricks_reading(IVec3::ZERO, IVec3::splat(7));
+        assert_eq!((first, last), (IVec3::splat(-1), IVec3::ONE));
+        assert_eq!(dirty.len(), 27);
+        assert!(dirty.iter().all(|k| k.cmpge(first).all() && k.cmple(last).all()), "{dirty:?}");
+        // A region edit marks the bricks it walks, not the ones it rules out.
+        f.edit_region(IVec3::splat(-16), IVec3::splat(23), true, |a, _| a.x >= 16, |_, d, _| *d = 1.0);
+        let dirty = f.take_dirty();
+        assert!(dirty.contains(&IVec3::new(2, 0, 0)) && dirty.contains(&IVec3::new(1, -2, 2)));
+        assert!(dirty.iter().all(|k| k.x >= 1), "{dirty:?}");
+    }
+
+    #[test]
+    fn brick_ranges_hold_the_whole_brick_and_each_lower_face() {
+        let mut brick = Brick::default();
+        for (i, d) in brick.density.iter_mut().enumerate() {
+            *d = ((i * 7919) % 1000) as f32 / 1000.0;
+        }
+        let mut want = [(f32::INFINITY, f32::NEG_INFINITY); 4];
+        for (i, &d) in brick.density.iter().enumerate() {
+            let local = IVec3::new(i as i32 % 8, i as i32 / 8 % 8, i as i32 / 64);
+            for (r, on) in want.iter_mut().zip([true, local.x == 0, local.y == 0, local.z == 0]) {
+                if on {
+                    *r = (r.0.min(d), r.1.max(d));
+                }
+            }
+        }
+        let got = brick_ranges(&brick);
+        assert_eq!(got.all, want[0]);
+        assert_eq!(got.low_faces, [want[1], want[2], want[3]]);
+        // A ramp along x: its lower x face is one value, the others span the ramp.
+        for (i, d) in brick.density.iter_mut().enumerate() {
+            *d = (i % 8) as f32 / 7.0;
+        }
+        let ramp = brick_ranges(&brick);
+        assert_eq!((ramp.all, ramp.low_faces), ((0.0, 1.0), [(0.0, 0.0), (0.0, 1.0), (0.0, 1.0)]));
     }
 }

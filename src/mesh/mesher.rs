@@ -5,7 +5,7 @@ use rayon::prelude::*;
 use std::sync::Mutex;
 
 use super::cases::flat_cases;
-use super::march::{march_brick, Block, MarchScratch, Neighbourhood, BLOCK};
+use super::march::{march_brick, Block, MarchScratch, Neighbourhood, BLOCK, BLOCK_VOLUME};
 use super::types::{ChunkMesh, MeshDiff};
 use crate::field::{Brick, BrickKey, Field, BRICK_SIZE, BRICK_VOLUME};
 use crate::math::IVec3;
@@ -38,7 +38,7 @@ pub fn gather_block<'f>(
     let stored = around.bricks;
     let reading: [Option<&Brick>; 27] =
         std::array::from_fn(|i| if made[i] { Some(&refined[i]) } else { stored[i] });
-    copy_block(key, &reading, &mut block.density);
+    copy_block(&reading, &mut block.density);
     block.origin = key * BRICK_SIZE - IVec3::ONE;
     let block: &'f Block = block;
     around.bricks = std::array::from_fn(|i| if made[i] { Some(&block.refined[i]) } else { stored[i] });
@@ -51,32 +51,34 @@ fn neighbour(key: BrickKey, i: usize) -> BrickKey {
     key + IVec3::new(i % 3 - 1, (i / 3) % 3 - 1, i / 9 - 1)
 }
 
-/// Copies the densities of brick `key`'s block from the bricks around it.
-fn copy_block(key: BrickKey, around: &[Option<&Brick>; 27], density: &mut [f32]) {
-    let s = BRICK_SIZE;
-    let lo = key * s - IVec3::ONE;
-    let hi = lo + IVec3::splat(BLOCK as i32 - 1);
-    for (i, brick) in around.iter().enumerate() {
-        let base = neighbour(key, i) * s;
-        let a = lo.max(base);
-        let b = hi.min(base + IVec3::splat(s - 1));
-        if a.cmpgt(b).any() {
-            continue;
-        }
-        let len = (b.x - a.x + 1) as usize;
-        for z in a.z..=b.z {
-            for y in a.y..=b.y {
-                let q = (IVec3::new(a.x, y, z) - lo).as_uvec3();
-                let dst = q.x as usize + BLOCK * (q.y as usize + BLOCK * q.z as usize);
-                let row = &mut density[dst..dst + len];
-                match brick {
-                    Some(brick) => {
-                        let src = Brick::linear(IVec3::new(a.x, y, z) - base);
-                        row.copy_from_slice(&brick.density[src..src + len]);
-                    }
-                    None => row.fill(0.0),
-                }
-            }
+/// Copies the densities of a brick's block from the bricks around it (ordered as
+/// [`Neighbourhood::bricks`]; absent ones are empty). On each axis, block coordinate 0 is the
+/// lower neighbour's last sample, `1 ..= S` the centre brick's and `S + 1`, `S + 2` the upper
+/// neighbour's first two; so each block row (one `y`, `z`) is three pieces of fixed length,
+/// copied without a call.
+fn copy_block(around: &[Option<&Brick>; 27], density: &mut [f32]) {
+    const S: usize = BRICK_SIZE as usize;
+    let density: &mut [f32; BLOCK_VOLUME] = density.try_into().expect("a block holds BLOCK_VOLUME samples");
+    // Which neighbour (0, 1, 2 along the axis) and which of its samples block coordinate `c` is.
+    let split = |c: usize| {
+        let shifted = c + S - 1;
+        (shifted / S, shifted % S)
+    };
+    for z in 0..BLOCK {
+        let (bz, lz) = split(z);
+        for y in 0..BLOCK {
+            let (by, ly) = split(y);
+            let from = S * (ly + S * lz);
+            let row = |bx: usize| -> Option<&[f32; S]> {
+                around[bx + 3 * (by + 3 * bz)]
+                    .map(|b| b.density[from..from + S].try_into().expect("a brick row"))
+            };
+            let (lower, centre, upper) = (row(0), row(1), row(2));
+            let dst: &mut [f32; BLOCK] =
+                (&mut density[BLOCK * (y + BLOCK * z)..][..BLOCK]).try_into().expect("a block row");
+            dst[0] = lower.map_or(0.0, |r| r[S - 1]);
+            dst[1..=S].copy_from_slice(centre.unwrap_or(&[0.0; S]));
+            dst[S + 1..].copy_from_slice(&upper.map_or([0.0; 2], |r| [r[0], r[1]]));
         }
     }
 }
@@ -93,24 +95,55 @@ pub fn mesh_brick(
     march_brick(block, &around, field.iso(), field.transform(), scratch, out);
 }
 
-/// How a stored brick's density range lies against the iso-level (absent bricks are empty).
+/// How a density range lies against the iso-level (`None`, no clay, is outside).
 const OUTSIDE: u8 = 0;
 const INSIDE: u8 = 1;
 const CROSSING: u8 = 2;
 
-fn class(field: &Field, key: BrickKey) -> u8 {
-    match field.read_range(key) {
+fn range_class(range: Option<(f32, f32)>, iso: f32) -> u8 {
+    match range {
         None => OUTSIDE,
-        Some((_, hi)) if hi < field.iso() => OUTSIDE,
-        Some((lo, _)) if lo >= field.iso() => INSIDE,
+        Some((_, hi)) if hi < iso => OUTSIDE,
+        Some((lo, _)) if lo >= iso => INSIDE,
         Some(_) => CROSSING,
     }
 }
 
-/// Whether the eight bricks a brick's cells read, of these classes, surely hold no triangle.
+/// A brick's classes as the mesh cells around it read it, two bits each: bits 0–1 for all
+/// its samples (what its own cells read), bits 2–3, 4–5, 6–7 for its lower x, y and z faces
+/// (see [`Field::read_low_face_ranges`]), of which the cells of the bricks below it read one
+/// or the samples two or three of them share.
+fn class(field: &Field, key: BrickKey) -> u8 {
+    let iso = field.iso();
+    let all = range_class(field.read_range(key), iso);
+    // A brick on one side of the iso-level has its faces there too.
+    let faces = match all {
+        CROSSING => {
+            field.read_low_face_ranges(key).map_or([OUTSIDE; 3], |f| f.map(|r| range_class(Some(r), iso)))
+        }
+        _ => [all; 3],
+    };
+    all | faces[0] << 2 | faces[1] << 4 | faces[2] << 6
+}
+
+/// The class of what the cells of brick `key` read of brick `key + GROUP[c]`, from its
+/// [`class`]: all of it for `c = 0`; else the samples its lower faces across the axes of
+/// `c` share, whose range lies in each face's range (so one face on one side settles it).
+#[inline]
+fn read_class(c: usize, class: u8) -> u8 {
+    if c == 0 {
+        return class & 3;
+    }
+    let faces = (0..3).filter(|a| c >> a & 1 == 1).map(|a| class >> (2 + 2 * a) & 3);
+    faces.fold(CROSSING, |read, face| if read == CROSSING { face } else { read })
+}
+
+/// Whether the cells of a brick, reading the eight bricks of [`GROUP`] of these classes (see
+/// [`class`]; the first is the brick itself), surely hold no triangle.
 #[inline]
 fn group_is_empty(classes: impl IntoIterator<Item = u8>) -> bool {
-    let (any, all) = classes.into_iter().fold((OUTSIDE, INSIDE), |(any, all), c| (any | c, all & c));
+    let read = classes.into_iter().enumerate().map(|(c, class)| read_class(c, class));
+    let (any, all) = read.fold((OUTSIDE, INSIDE), |(any, all), c| (any | c, all & c));
     any == OUTSIDE || (any == INSIDE && all == INSIDE)
 }
 
@@ -335,11 +368,16 @@ impl Mesher {
             let index = rayon::current_thread_index().unwrap_or(0) % workers.len();
             let mut worker = workers[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
             let Worker { block, scratch, mesh } = &mut *worker;
-            mesh_brick(field, key, block, scratch, mesh);
-            // The slot keeps its vectors: they grow to the chunk once and are reused.
-            slot.reset();
-            slot.vertices.extend_from_slice(&mesh.vertices);
-            slot.indices.extend_from_slice(&mesh.indices);
+            if slot.vertices.capacity() == 0 {
+                // A new slot: marched into the worker's chunk, which never grows, and given
+                // just what it needs, rather than grown by doublings.
+                mesh_brick(field, key, block, scratch, mesh);
+                slot.vertices.extend_from_slice(&mesh.vertices);
+                slot.indices.extend_from_slice(&mesh.indices);
+            } else {
+                // A slot that held a chunk before keeps its vectors and takes this one in place.
+                mesh_brick(field, key, block, scratch, slot);
+            }
         });
         for (i, (&key, slot)) in self.keys.iter().zip(&mut self.slots).enumerate() {
             if slot.is_empty() {
@@ -452,6 +490,36 @@ mod tests {
         assert_eq!(again.upserted, remesh(&f, dirty.iter().copied()).upserted);
         assert!(again.upserted.len() < first.upserted.len() && !again.is_empty());
         assert!(mesher.remesh(&f, []).is_empty());
+    }
+
+    #[test]
+    fn a_brick_whose_upper_neighbour_crosses_away_from_their_shared_face_is_surely_empty() {
+        // A small ball inside brick (1, 0, 0): its clay (out to 4 voxels from x = 12) stops
+        // short of the brick's lower x face, the only part of it brick 0's cells read.
+        let mut f = Field::new(0.001, 0.5);
+        add_ball(&mut f, IVec3::new(12, 4, 4), 2);
+        assert!(!surely_empty(&f, IVec3::new(1, 0, 0)));
+        assert!(surely_empty(&f, IVec3::ZERO));
+        // Moved to touch the face, it puts triangles in brick 0, which is no longer ruled out.
+        let mut g = Field::new(0.001, 0.5);
+        add_ball(&mut g, IVec3::new(10, 4, 4), 2);
+        let mut mesh = ChunkMesh::default();
+        mesh_brick(&g, IVec3::ZERO, &mut Block::default(), &mut MarchScratch::default(), &mut mesh);
+        assert!(!mesh.is_empty() && !surely_empty(&g, IVec3::ZERO));
+        // Both classifications (key by key and on a grid) agree with the definition.
+        for field in [&f, &g] {
+            let keys = meshable_bricks(field);
+            let want: Vec<BrickKey> = keys
+                .iter()
+                .copied()
+                .filter(|&k| {
+                    mesh_brick(field, k, &mut Block::default(), &mut MarchScratch::default(), &mut mesh);
+                    !mesh.is_empty()
+                })
+                .collect();
+            let got: Vec<BrickKey> = remesh(field, keys).upserted.iter().map(|(k, _)| *k).collect();
+            assert_eq!(got, want);
+        }
     }
 
     #[test]
