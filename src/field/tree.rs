@@ -447,15 +447,18 @@ impl Field {
         mut edit: impl FnMut(IVec3, &mut f32, &mut Colour),
     ) {
         self.edit_bricks(level, lo, hi, walk, changes, |brick, base, a, b, mut fresh| {
+            let mut changed = Changed::NONE;
             for z in a.z..=b.z {
                 for y in a.y..=b.y {
                     for x in a.x..=b.x {
                         let local = IVec3::new(x, y, z);
                         let i = Brick::linear(local);
-                        let mut colour = brick.colour[i];
+                        let (density, old) = (brick.density[i], brick.colour[i]);
+                        let mut colour = old;
                         edit(base + local, &mut brick.density[i], &mut colour);
                         // An empty sample's colour means nothing: it is not stored.
-                        if brick.density[i] > 0.0 {
+                        let d = brick.density[i];
+                        if d > 0.0 {
                             if fresh {
                                 brick.colour = BrickColours::Uniform(colour);
                                 fresh = false;
@@ -463,9 +466,13 @@ impl Field {
                                 brick.colour.set(i, colour);
                             }
                         }
+                        if d.to_bits() != density.to_bits() || (d > 0.0 && colour != old) {
+                            changed.add(local);
+                        }
                     }
                 }
             }
+            changed
         });
     }
 
@@ -486,14 +493,21 @@ impl Field {
             Walk { create: false, refine: true },
             |a, b, _| reaches(a, b),
             |brick, base, a, b, _| {
+                let mut changed = Changed::NONE;
                 for z in a.z..=b.z {
                     for y in a.y..=b.y {
                         let row = Brick::linear(IVec3::new(0, y, z));
                         for x in a.x..=b.x {
-                            edit(base + IVec3::new(x, y, z), &mut brick.density[row + x as usize]);
+                            let density = &mut brick.density[row + x as usize];
+                            let old = density.to_bits();
+                            edit(base + IVec3::new(x, y, z), density);
+                            if density.to_bits() != old {
+                                changed.add(IVec3::new(x, y, z));
+                            }
                         }
                     }
                 }
+                changed
             },
         );
     }
@@ -513,8 +527,8 @@ impl Field {
     /// The brick walk under every edit: for each brick of `level` over `lo ..= hi` that
     /// `changes`, records it for undo, copies it if shared, lets `samples(brick, base, a, b,
     /// fresh)` edit its points `base + (a ..= b)` (`fresh`: the brick was made empty for this
-    /// edit), then drops it if empty, shares it as a tile if uniform, and keeps its density
-    /// range. Where the level holds no brick, `walk` says whether to refine one from the
+    /// edit) and say which it changed, marks the bricks reading those dirty, then drops the
+    /// brick if empty, shares it as a tile if uniform, and keeps its density ranges. Where the level holds no brick, `walk` says whether to refine one from the
     /// coarser levels (where they hold clay) and whether to create an empty one.
     ///
     /// Afterwards, the walked bricks that hold no detail over the coarser levels are dropped
@@ -526,7 +540,7 @@ impl Field {
         hi: IVec3,
         walk: Walk,
         changes: impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool,
-        mut samples: impl FnMut(&mut Brick, IVec3, IVec3, IVec3, bool),
+        mut samples: impl FnMut(&mut Brick, IVec3, IVec3, IVec3, bool) -> Changed,
     ) {
         if lo.cmpgt(hi).any() {
             return;
@@ -569,7 +583,7 @@ impl Field {
             let keep_empty = above && self.reads_above(level, key);
             // Copies the brick if the history, the journal or a tile shares it.
             let brick = Arc::make_mut(self.levels[level].bricks.entry(key).or_default());
-            samples(brick, base, a, b, fresh);
+            let changed = samples(brick, base, a, b, fresh);
             brick.compact();
             let ranges = brick_ranges(brick);
             let range = ranges.all;
@@ -579,9 +593,11 @@ impl Field {
                 (true, &BrickColours::Uniform(colour)) => Some(colour),
                 _ => None,
             };
-            // Only the walked share of the box can have changed: the bricks the edit skipped
-            // (out of its reach, or unchanged by it) keep their meshes.
-            self.mark_level_dirty(level, base + a, base + b);
+            // Only the samples the edit changed: the bricks it skipped (out of its reach, or
+            // unchanged by it) and the parts of walked bricks it left alone keep their meshes.
+            if let Some((a, b)) = changed.bounds() {
+                self.mark_level_dirty(level, base + a, base + b);
+            }
             if range.1 == 0.0 && !keep_empty {
                 self.remove(level_key);
                 continue;
@@ -679,6 +695,29 @@ type TileValue = [u32; 5];
 
 /// Distinct tile values kept before those no key shares are forgotten.
 const MAX_UNUSED_TILES: usize = 64;
+
+/// The box of the samples an edit changed in one brick (local coordinates), grown sample by
+/// sample; empty until the first.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Changed {
+    lo: IVec3,
+    hi: IVec3,
+}
+
+impl Changed {
+    pub(super) const NONE: Changed = Changed { lo: IVec3::MAX, hi: IVec3::MIN };
+
+    #[inline]
+    pub(super) fn add(&mut self, local: IVec3) {
+        self.lo = self.lo.min(local);
+        self.hi = self.hi.max(local);
+    }
+
+    /// The box, or `None` where nothing changed.
+    pub(super) fn bounds(self) -> Option<(IVec3, IVec3)> {
+        self.lo.cmple(self.hi).all().then_some((self.lo, self.hi))
+    }
+}
 
 /// Lowest and highest density of a brick's samples, and of those on each lower face.
 fn brick_ranges(brick: &Brick) -> Ranges {
@@ -843,6 +882,28 @@ mod tests {
         assert_eq!((first, last), (IVec3::splat(-1), IVec3::ONE));
         assert_eq!(dirty.len(), 27);
         assert!(dirty.iter().all(|k| k.cmpge(first).all() && k.cmple(last).all()), "{dirty:?}");
+        // Within a walked brick, only what changed: one sample in the brick's middle is read
+        // by brick 0 alone, and an edit that leaves every value as it was marks nothing.
+        f.edit_density(
+            IVec3::splat(-16),
+            IVec3::splat(23),
+            |_, _| true,
+            |p, d| {
+                if p == IVec3::splat(4) {
+                    *d = 0.75;
+                }
+            },
+        );
+        assert_eq!(f.take_dirty().into_iter().collect::<Vec<_>>(), [IVec3::ZERO]);
+        f.edit_box(IVec3::splat(-16), IVec3::splat(23), true, |_, _, _| {});
+        assert!(f.take_dirty().is_empty());
+        // A new colour is a change (the mesh's vertex colours read it).
+        f.edit_box(IVec3::splat(-16), IVec3::splat(23), false, |p, _, c| {
+            if p == IVec3::splat(4) {
+                *c = [1.0, 0.0, 0.0, 1.0];
+            }
+        });
+        assert_eq!(f.take_dirty().into_iter().collect::<Vec<_>>(), [IVec3::ZERO]);
         // A region edit marks the bricks it walks, not the ones it rules out.
         f.edit_region(IVec3::splat(-16), IVec3::splat(23), true, |a, _| a.x >= 16, |_, d, _| *d = 1.0);
         let dirty = f.take_dirty();

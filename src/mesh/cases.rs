@@ -187,6 +187,24 @@ mod tests {
     }
 
     #[test]
+    fn every_case_uses_exactly_the_edges_it_crosses() {
+        // The kernel makes a vertex on every crossed edge before it reads the cells' cases.
+        for mask in 0..256usize {
+            let mut used: Vec<u8> = flat_cases().edges(mask).to_vec();
+            used.sort_unstable();
+            used.dedup();
+            let crossed: Vec<u8> = (0..12u8)
+                .filter(|&e| {
+                    let (lower, axis) = EDGES[usize::from(e)];
+                    let upper = usize::from(lower) | 1 << axis;
+                    (mask >> lower & 1) != (mask >> upper & 1)
+                })
+                .collect();
+            assert_eq!(used, crossed, "mask {mask}");
+        }
+    }
+
+    #[test]
     fn complement_cases_have_as_many_crossings() {
         for mask in 0..256usize {
             let edges = |m: usize| {

@@ -3,7 +3,7 @@
 use super::cases::{flat_cases, CORNER_OFFSETS, EDGES};
 use super::types::{ChunkMesh, Vertex};
 use crate::field::{split_index, Brick, BrickKey, Colour, Field, BRICK_SIZE, DEFAULT_COLOUR};
-use crate::math::{IVec3, Vec3, VoxelTransform};
+use crate::math::{IVec3, Vec3, Vec4, VoxelTransform};
 
 /// Samples per axis of a gathered block: the brick plus one sample below (for gradients) and
 /// two above (the cells' far corners, and their gradients).
@@ -11,6 +11,8 @@ pub const BLOCK: usize = BRICK_SIZE as usize + 3;
 /// Samples in a gathered block.
 pub const BLOCK_VOLUME: usize = BLOCK * BLOCK * BLOCK;
 const CORNERS_PER_AXIS: usize = BRICK_SIZE as usize + 1;
+// `Block::classify` compares a row of corners as 4 + 4 + 1.
+const _: () = assert!(CORNERS_PER_AXIS == 9);
 
 /// One brick's densities and their apron, gathered from the field so the kernel never looks
 /// up a brick: block point `(x, y, z)` is lattice point `key·S − 1 + (x, y, z)`.
@@ -92,6 +94,8 @@ const FULL_ROW: u16 = (1 << CORNERS_PER_AXIS) - 1;
 /// corners' classification.
 #[derive(Clone, Debug)]
 pub struct MarchScratch {
+    /// Vertex of each crossing edge, slot `3·(x + C·(y + C·z)) + axis` for the edge from
+    /// corner `(x, y, z)`; other slots hold whatever an earlier brick left.
     edge_vertex: Vec<u32>,
     /// Bit `x` of `dense[y + C·z]`: whether corner `(x, y, z)` (block point `(x, y, z) + 1`)
     /// is at least the iso-level.
@@ -126,8 +130,12 @@ impl Block {
         let (mut any, mut all) = (0u16, FULL_ROW);
         for (i, bits) in dense.iter_mut().enumerate() {
             let row = at(1, 1 + i % CORNERS_PER_AXIS, 1 + i / CORNERS_PER_AXIS);
-            let samples = &self.density[row..row + CORNERS_PER_AXIS];
-            *bits = samples.iter().enumerate().fold(0, |b, (x, &d)| b | (u16::from(d >= iso) << x));
+            let samples: &[f32; CORNERS_PER_AXIS] =
+                self.density[row..row + CORNERS_PER_AXIS].try_into().expect("a row of corners");
+            // Four samples to a comparison (the row is 9: 4 + 4 + 1).
+            let four =
+                |i: usize| Vec4::from_slice(&samples[i..i + 4]).cmpge(Vec4::splat(iso)).bitmask() as u16;
+            *bits = four(0) | four(4) << 4 | u16::from(samples[8] >= iso) << 8;
             any |= *bits;
             all &= *bits;
         }
@@ -154,8 +162,11 @@ impl Block {
 /// towards the higher one, in lattice coordinates, from samples both neighbouring bricks gather
 /// identically; so a vertex on a shared face is bit-identical in both bricks' meshes.
 ///
-/// Cells are visited in z, y, x order (x fastest) and each cell's triangles in case-table
-/// order; a vertex is made when an edge is first used.
+/// Vertices first: one on every edge of the cells' corner grid that the surface crosses
+/// (each such edge is one that some cell's case uses, see the `cases` module), made in z, y, x
+/// order of their lower corner and x, y, z order of axis. Then the cells, in z, y, x order (x
+/// fastest), each with its triangles in case-table order, read their vertices from the
+/// edge → vertex map, where every edge they use has one: no cell checks or clears a slot.
 pub fn march_brick(
     block: &Block,
     colours: &Neighbourhood<'_>,
@@ -168,12 +179,45 @@ pub fn march_brick(
     if block.classify(iso, &mut scratch.dense) {
         return;
     }
-    scratch.edge_vertex.fill(u32::MAX);
-    let cases = flat_cases();
     let c = CORNERS_PER_AXIS;
-    let dense = &scratch.dense;
-    for cz in 0..BRICK_SIZE as usize {
-        for cy in 0..BRICK_SIZE as usize {
+    let s = BRICK_SIZE as usize;
+    let MarchScratch { edge_vertex: map, dense } = scratch;
+    let dense = &*dense;
+    // Edges along x run from corners x = 0 ..= S − 1; along y and z from y or z ≤ S − 1.
+    let along_x = FULL_ROW >> 1;
+    for z in 0..c {
+        for y in 0..c {
+            let row = dense[y + c * z];
+            let crossing = [
+                (row ^ (row >> 1)) & along_x,
+                if y < s { row ^ dense[y + 1 + c * z] } else { 0 },
+                if z < s { row ^ dense[y + c * (z + 1)] } else { 0 },
+            ];
+            let mut any = crossing[0] | crossing[1] | crossing[2];
+            while any != 0 {
+                let x = any.trailing_zeros() as usize;
+                any &= any - 1;
+                let slot = 3 * (x + c * (y + c * z));
+                let corner = [x + 1, y + 1, z + 1];
+                let mut add = |axis: usize, vertex: Vertex| {
+                    map[slot + axis] = out.vertices.len() as u32;
+                    out.vertices.push(vertex);
+                };
+                if crossing[0] >> x & 1 == 1 {
+                    add(0, edge_vertex::<0>(block, colours, iso, transform, corner));
+                }
+                if crossing[1] >> x & 1 == 1 {
+                    add(1, edge_vertex::<1>(block, colours, iso, transform, corner));
+                }
+                if crossing[2] >> x & 1 == 1 {
+                    add(2, edge_vertex::<2>(block, colours, iso, transform, corner));
+                }
+            }
+        }
+    }
+    let cases = flat_cases();
+    for cz in 0..s {
+        for cy in 0..s {
             // The four rows of corners around this row of cells.
             let rows = [
                 dense[cy + c * cz],
@@ -185,7 +229,7 @@ pub fn march_brick(
             if any == 0 || all == FULL_ROW {
                 continue;
             }
-            for cx in 0..BRICK_SIZE as usize {
+            for cx in 0..s {
                 // Corner c = x + 2y + 4z: bits (x, x + 1) of each row, rows in (y, z) order.
                 let mask = usize::from(
                     ((rows[0] >> cx) & 3)
@@ -193,46 +237,24 @@ pub fn march_brick(
                         | (((rows[2] >> cx) & 3) << 4)
                         | (((rows[3] >> cx) & 3) << 6),
                 );
-                let edges = cases.edges(mask);
-                if edges.is_empty() {
-                    continue;
-                }
                 let cell_slot = 3 * (cx + c * (cy + c * cz));
-                for &e in edges {
-                    let slot = cell_slot + EDGE_SLOT[usize::from(e)];
-                    let mut index = scratch.edge_vertex[slot];
-                    if index == u32::MAX {
-                        let (lower, axis) = EDGES[usize::from(e)];
-                        let o = CORNER_OFFSETS[usize::from(lower)];
-                        let corner = [cx + 1 + o[0] as usize, cy + 1 + o[1] as usize, cz + 1 + o[2] as usize];
-                        index = out.vertices.len() as u32;
-                        out.vertices.push(edge_vertex(
-                            block,
-                            colours,
-                            iso,
-                            transform,
-                            corner,
-                            usize::from(axis),
-                        ));
-                        scratch.edge_vertex[slot] = index;
-                    }
-                    out.indices.push(index);
-                }
+                out.indices
+                    .extend(cases.edges(mask).iter().map(|&e| map[cell_slot + EDGE_SLOT[usize::from(e)]]));
             }
         }
     }
 }
 
-/// The vertex on the edge from block point `corner` one step along `axis`.
+/// The vertex on the edge from block point `corner` one step along axis `AXIS`.
 #[inline]
-fn edge_vertex(
+fn edge_vertex<const AXIS: usize>(
     block: &Block,
     colours: &Neighbourhood<'_>,
     iso: f32,
     transform: &VoxelTransform,
     corner: [usize; 3],
-    axis: usize,
 ) -> Vertex {
+    let axis = AXIS;
     let [x, y, z] = corner;
     let step = [usize::from(axis == 0), usize::from(axis == 1), usize::from(axis == 2)];
     let (x1, y1, z1) = (x + step[0], y + step[1], z + step[2]);

@@ -55,30 +55,29 @@ fn neighbour(key: BrickKey, i: usize) -> BrickKey {
 /// [`Neighbourhood::bricks`]; absent ones are empty). On each axis, block coordinate 0 is the
 /// lower neighbour's last sample, `1 ..= S` the centre brick's and `S + 1`, `S + 2` the upper
 /// neighbour's first two; so each block row (one `y`, `z`) is three pieces of fixed length,
-/// copied without a call.
+/// copied without a call, from three bricks looked up once for all the rows they serve.
 fn copy_block(around: &[Option<&Brick>; 27], density: &mut [f32]) {
     const S: usize = BRICK_SIZE as usize;
+    /// Per piece of an axis: the neighbour along it, its block coordinates, the local
+    /// coordinate of the first of them.
+    const PIECES: [(usize, (usize, usize), usize); 3] =
+        [(0, (0, 1), S - 1), (1, (1, S + 1), 0), (2, (S + 1, BLOCK), 0)];
+    static EMPTY: [f32; BRICK_VOLUME] = [0.0; BRICK_VOLUME];
     let density: &mut [f32; BLOCK_VOLUME] = density.try_into().expect("a block holds BLOCK_VOLUME samples");
-    // Which neighbour (0, 1, 2 along the axis) and which of its samples block coordinate `c` is.
-    let split = |c: usize| {
-        let shifted = c + S - 1;
-        (shifted / S, shifted % S)
-    };
-    for z in 0..BLOCK {
-        let (bz, lz) = split(z);
-        for y in 0..BLOCK {
-            let (by, ly) = split(y);
-            let from = S * (ly + S * lz);
-            let row = |bx: usize| -> Option<&[f32; S]> {
-                around[bx + 3 * (by + 3 * bz)]
-                    .map(|b| b.density[from..from + S].try_into().expect("a brick row"))
-            };
-            let (lower, centre, upper) = (row(0), row(1), row(2));
-            let dst: &mut [f32; BLOCK] =
-                (&mut density[BLOCK * (y + BLOCK * z)..][..BLOCK]).try_into().expect("a block row");
-            dst[0] = lower.map_or(0.0, |r| r[S - 1]);
-            dst[1..=S].copy_from_slice(centre.unwrap_or(&[0.0; S]));
-            dst[S + 1..].copy_from_slice(&upper.map_or([0.0; 2], |r| [r[0], r[1]]));
+    for (bz, (z0, z1), lz0) in PIECES {
+        for (by, (y0, y1), ly0) in PIECES {
+            let brick = |bx: usize| around[bx + 3 * (by + 3 * bz)].map_or(&EMPTY, |b| &*b.density);
+            let (lower, centre, upper) = (brick(0), brick(1), brick(2));
+            for (z, lz) in (z0..z1).zip(lz0..) {
+                for (y, ly) in (y0..y1).zip(ly0..) {
+                    let from = S * (ly + S * lz);
+                    let dst: &mut [f32; BLOCK] =
+                        (&mut density[BLOCK * (y + BLOCK * z)..][..BLOCK]).try_into().expect("a block row");
+                    dst[0] = lower[from + S - 1];
+                    dst[1..=S].copy_from_slice(&centre[from..from + S]);
+                    dst[S + 1..].copy_from_slice(&upper[from..from + 2]);
+                }
+            }
         }
     }
 }
