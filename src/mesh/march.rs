@@ -281,7 +281,10 @@ fn edge_vertex<const AXIS: usize>(
     let (ca, cb) = (colours.colour_in_block(x, y, z), colours.colour_in_block(x1, y1, z1));
     let (wa, wb) = (va.max(0.0) * (1.0 - t), vb.max(0.0) * t);
     let total = wa + wb;
-    let colour = if total > 0.0 {
+    let colour = if ca == cb {
+        // One colour at both ends (most edges): it is the vertex's, exactly.
+        ca
+    } else if total > 0.0 {
         std::array::from_fn(|i| (ca[i] * wa + cb[i] * wb) / total)
     } else {
         std::array::from_fn(|i| ca[i] + (cb[i] - ca[i]) * t)
