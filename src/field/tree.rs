@@ -6,7 +6,7 @@ use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 
 use super::brick::{keys_over, Brick, BrickColours, BrickKey, Colour, LevelKey, BRICK_SIZE, LEVELS};
 use super::history::{History, HistoryConfig, HistoryError, HistoryStats, Step};
-use crate::math::{IVec3, VoxelTransform};
+use crate::math::{IVec3, Vec4, VoxelTransform};
 
 /// Bricks whose mesh may have changed since the mesher last drained the set.
 ///
@@ -450,6 +450,7 @@ impl Field {
             let mut changed = Changed::NONE;
             for z in a.z..=b.z {
                 for y in a.y..=b.y {
+                    let mut row = Row::NONE;
                     for x in a.x..=b.x {
                         let local = IVec3::new(x, y, z);
                         let i = Brick::linear(local);
@@ -466,10 +467,13 @@ impl Field {
                                 brick.colour.set(i, colour);
                             }
                         }
-                        if d.to_bits() != density.to_bits() || (d > 0.0 && colour != old) {
-                            changed.add(local);
+                        if d.to_bits() != density.to_bits()
+                            || (d > 0.0 && colour_bits(colour) != colour_bits(old))
+                        {
+                            row.add(x);
                         }
                     }
+                    changed.add_row(row, y, z);
                 }
             }
             changed
@@ -496,15 +500,17 @@ impl Field {
                 let mut changed = Changed::NONE;
                 for z in a.z..=b.z {
                     for y in a.y..=b.y {
-                        let row = Brick::linear(IVec3::new(0, y, z));
+                        let start = Brick::linear(IVec3::new(0, y, z));
+                        let mut row = Row::NONE;
                         for x in a.x..=b.x {
-                            let density = &mut brick.density[row + x as usize];
+                            let density = &mut brick.density[start + x as usize];
                             let old = density.to_bits();
                             edit(base + IVec3::new(x, y, z), density);
                             if density.to_bits() != old {
-                                changed.add(IVec3::new(x, y, z));
+                                row.add(x);
                             }
                         }
+                        changed.add_row(row, y, z);
                     }
                 }
                 changed
@@ -707,10 +713,13 @@ pub(super) struct Changed {
 impl Changed {
     pub(super) const NONE: Changed = Changed { lo: IVec3::MAX, hi: IVec3::MIN };
 
+    /// Grows the box by the changed samples of row `(y, z)`, if any.
     #[inline]
-    pub(super) fn add(&mut self, local: IVec3) {
-        self.lo = self.lo.min(local);
-        self.hi = self.hi.max(local);
+    pub(super) fn add_row(&mut self, row: Row, y: i32, z: i32) {
+        if row.first <= row.last {
+            self.lo = self.lo.min(IVec3::new(row.first, y, z));
+            self.hi = self.hi.max(IVec3::new(row.last, y, z));
+        }
     }
 
     /// The box, or `None` where nothing changed.
@@ -719,20 +728,56 @@ impl Changed {
     }
 }
 
+/// A colour's bits, compared at once.
+#[inline]
+fn colour_bits(colour: Colour) -> u128 {
+    bytemuck::cast(colour)
+}
+
+/// The first and last changed sample of a row, walked in increasing `x`.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Row {
+    first: i32,
+    last: i32,
+}
+
+impl Row {
+    pub(super) const NONE: Row = Row { first: i32::MAX, last: i32::MIN };
+
+    #[inline]
+    pub(super) fn add(&mut self, x: i32) {
+        self.first = self.first.min(x);
+        self.last = x;
+    }
+}
+
 /// Lowest and highest density of a brick's samples, and of those on each lower face.
 fn brick_ranges(brick: &Brick) -> Ranges {
-    let widen = |(lo, hi): (f32, f32), &d: &f32| (lo.min(d), hi.max(d));
+    const S: usize = BRICK_SIZE as usize;
+    // A row is two groups of four samples, compared four at a time.
+    const _: () = assert!(S == 8);
+    let widen = |(lo, hi): (f32, f32), (a, b): (f32, f32)| (lo.min(a), hi.max(b));
     let none = (f32::INFINITY, f32::NEG_INFINITY);
-    let s = BRICK_SIZE as usize;
-    let d = &brick.density[..];
+    let (mut lo, mut hi) = (Vec4::INFINITY, Vec4::NEG_INFINITY);
     let mut faces = [none; 3];
-    for plane in d.chunks_exact(s * s) {
-        // x = 0 is every row's first sample, y = 0 every plane's first row.
-        faces[0] = plane.iter().step_by(s).fold(faces[0], widen);
-        faces[1] = plane[..s].iter().fold(faces[1], widen);
+    // Row by row (one y, z): x = 0 is each row's first sample, y = 0 every S-th row, z = 0
+    // the first S rows.
+    for (r, row) in brick.density.chunks_exact(S).enumerate() {
+        let (a, b) = (Vec4::from_slice(&row[..4]), Vec4::from_slice(&row[4..]));
+        let (row_lo, row_hi) = (a.min(b), a.max(b));
+        (lo, hi) = (lo.min(row_lo), hi.max(row_hi));
+        faces[0] = widen(faces[0], (row[0], row[0]));
+        if r % S == 0 || r < S {
+            let range = (row_lo.min_element(), row_hi.max_element());
+            if r % S == 0 {
+                faces[1] = widen(faces[1], range);
+            }
+            if r < S {
+                faces[2] = widen(faces[2], range);
+            }
+        }
     }
-    faces[2] = d[..s * s].iter().fold(none, widen);
-    Ranges { all: d.iter().fold(none, widen), low_faces: faces }
+    Ranges { all: (lo.min_element(), hi.max_element()), low_faces: faces }
 }
 
 #[cfg(test)]

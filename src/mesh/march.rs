@@ -238,8 +238,9 @@ pub fn march_brick(
                         | (((rows[3] >> cx) & 3) << 6),
                 );
                 let cell_slot = 3 * (cx + c * (cy + c * cz));
-                out.indices
-                    .extend(cases.edges(mask).iter().map(|&e| map[cell_slot + EDGE_SLOT[usize::from(e)]]));
+                for &e in cases.edges(mask) {
+                    out.indices.push(map[cell_slot + EDGE_SLOT[usize::from(e)]]);
+                }
             }
         }
     }
