@@ -395,7 +395,8 @@ impl Field {
     /// decides: `true` makes one (for edits that add matter), `false` skips those points (for
     /// edits that only remove or recolour matter). Bricks left empty are dropped. The colour
     /// given to a sample left empty is not kept (an empty sample's colour means nothing; see
-    /// [`Brick::compact`]). The bricks whose mesh reads the box are marked dirty.
+    /// [`Brick::compact`]). The bricks whose mesh reads a sample the edit changed (its density,
+    /// or the colour of a sample holding matter) are marked dirty.
     pub fn edit_box(
         &mut self,
         lo: IVec3,

@@ -157,9 +157,10 @@ const GROUP: [IVec3; 8] = {
     g
 };
 
-/// Whether brick `key` surely holds no triangle: the cells it meshes read bricks
-/// `key ..= key + 1` on each axis, and those are all inside the clay or all outside it.
-/// Decided from the field's per-brick density ranges, without reading a sample.
+/// Whether brick `key` surely holds no triangle: the cells it meshes read brick `key` and
+/// the lower faces of bricks `key + 1` on each axis, and what they read is all inside the clay
+/// or all outside it. Decided from the field's density ranges of each brick and each lower
+/// face, without reading a sample.
 pub fn surely_empty(field: &Field, key: BrickKey) -> bool {
     group_is_empty(GROUP.iter().map(|&o| class(field, key + o)))
 }
