@@ -292,13 +292,14 @@ impl Field {
         self.levels[0].ranges.get(&key).map(|r| r.all)
     }
 
-    /// The lowest and highest density, as readers see them, on each lower face of
-    /// finest-level brick `key` (its samples of local x, y, z 0), the only ones the mesh cells
-    /// of the bricks below it read: exact for a stored brick, else [`Field::read_range`].
-    pub fn read_low_face_ranges(&self, key: BrickKey) -> Option<[(f32, f32); 3]> {
+    /// [`Field::read_range`] of finest-level brick `key`, with the lowest and highest density
+    /// as readers see them on each of its lower faces (its samples of local x, y, z 0), the
+    /// only ones the mesh cells of the bricks below it read: exact for a stored brick, else
+    /// the whole brick's range. One look-up for both.
+    pub fn read_ranges(&self, key: BrickKey) -> Option<((f32, f32), [(f32, f32); 3])> {
         match self.levels[0].ranges.get(&key) {
-            Some(r) => Some(r.low_faces),
-            None => self.read_range(key).map(|r| [r; 3]),
+            Some(r) => Some((r.all, r.low_faces)),
+            None => self.read_range(key).map(|r| (r, [r; 3])),
         }
     }
 

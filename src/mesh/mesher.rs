@@ -110,18 +110,14 @@ fn range_class(range: Option<(f32, f32)>, iso: f32) -> u8 {
 
 /// A brick's classes as the mesh cells around it read it, two bits each: bits 0–1 for all
 /// its samples (what its own cells read), bits 2–3, 4–5, 6–7 for its lower x, y and z faces
-/// (see [`Field::read_low_face_ranges`]), of which the cells of the bricks below it read one
-/// or the samples two or three of them share.
+/// (see [`Field::read_ranges`]), of which the cells of the bricks below it read one or the
+/// samples two or three of them share.
 fn class(field: &Field, key: BrickKey) -> u8 {
     let iso = field.iso();
-    let all = range_class(field.read_range(key), iso);
+    let Some((all, faces)) = field.read_ranges(key) else { return OUTSIDE };
+    let all = range_class(Some(all), iso);
     // A brick on one side of the iso-level has its faces there too.
-    let faces = match all {
-        CROSSING => {
-            field.read_low_face_ranges(key).map_or([OUTSIDE; 3], |f| f.map(|r| range_class(Some(r), iso)))
-        }
-        _ => [all; 3],
-    };
+    let faces = if all == CROSSING { faces.map(|r| range_class(Some(r), iso)) } else { [all; 3] };
     all | faces[0] << 2 | faces[1] << 4 | faces[2] << 6
 }
 
