@@ -43,9 +43,11 @@ pub(super) struct Level {
 /// three lower faces (local x, y or z 0): the only ones of its samples that the mesh cells of
 /// the bricks below it read.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Ranges {
-    pub(super) all: (f32, f32),
-    pub(super) low_faces: [(f32, f32); 3],
+pub struct Ranges {
+    /// Lowest and highest density of all the brick's samples.
+    pub all: (f32, f32),
+    /// The same for its samples of local x = 0, y = 0 and z = 0.
+    pub low_faces: [(f32, f32); 3],
 }
 
 /// A sparse density + colour field on a regular lattice.
@@ -296,10 +298,10 @@ impl Field {
     /// as readers see them on each of its lower faces (its samples of local x, y, z 0), the
     /// only ones the mesh cells of the bricks below it read: exact for a stored brick, else
     /// the whole brick's range. One look-up for both.
-    pub fn read_ranges(&self, key: BrickKey) -> Option<((f32, f32), [(f32, f32); 3])> {
+    pub fn read_ranges(&self, key: BrickKey) -> Option<Ranges> {
         match self.levels[0].ranges.get(&key) {
-            Some(r) => Some((r.all, r.low_faces)),
-            None => self.read_range(key).map(|r| (r, [r; 3])),
+            Some(&r) => Some(r),
+            None => self.read_range(key).map(|r| Ranges { all: r, low_faces: [r; 3] }),
         }
     }
 

@@ -114,10 +114,10 @@ fn range_class(range: Option<(f32, f32)>, iso: f32) -> u8 {
 /// samples two or three of them share.
 fn class(field: &Field, key: BrickKey) -> u8 {
     let iso = field.iso();
-    let Some((all, faces)) = field.read_ranges(key) else { return OUTSIDE };
-    let all = range_class(Some(all), iso);
+    let Some(ranges) = field.read_ranges(key) else { return OUTSIDE };
+    let all = range_class(Some(ranges.all), iso);
     // A brick on one side of the iso-level has its faces there too.
-    let faces = if all == CROSSING { faces.map(|r| range_class(Some(r), iso)) } else { [all; 3] };
+    let faces = if all == CROSSING { ranges.low_faces.map(|r| range_class(Some(r), iso)) } else { [all; 3] };
     all | faces[0] << 2 | faces[1] << 4 | faces[2] << 6
 }
 
