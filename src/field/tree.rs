@@ -538,8 +538,9 @@ impl Field {
     /// `changes`, records it for undo, copies it if shared, lets `samples(brick, base, a, b,
     /// fresh)` edit its points `base + (a ..= b)` (`fresh`: the brick was made empty for this
     /// edit) and say which it changed, marks the bricks reading those dirty, then drops the
-    /// brick if empty, shares it as a tile if uniform, and keeps its density ranges. Where the level holds no brick, `walk` says whether to refine one from the
-    /// coarser levels (where they hold clay) and whether to create an empty one.
+    /// brick if empty, shares it as a tile if uniform, and keeps its density ranges. Where
+    /// the level holds no brick, `walk` says whether to refine one from the coarser levels
+    /// (where they hold clay) and whether to create an empty one.
     ///
     /// Afterwards, the walked bricks that hold no detail over the coarser levels are dropped
     /// (see the `levels` module).
@@ -706,8 +707,8 @@ type TileValue = [u32; 5];
 /// Distinct tile values kept before those no key shares are forgotten.
 const MAX_UNUSED_TILES: usize = 64;
 
-/// The box of the samples an edit changed in one brick (local coordinates), grown sample by
-/// sample; empty until the first.
+/// The box of the samples an edit changed in one brick (local coordinates), grown row by
+/// row; empty until the first.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Changed {
     lo: IVec3,
@@ -919,7 +920,7 @@ mod tests {
     }
 
     #[test]
-    fn an_edit_marks_only_the_bricks_reading_what_it_walked() {
+    fn an_edit_marks_only_the_bricks_reading_what_it_changed() {
         let mut f = Field::new(0.001, 0.5);
         // Matter in brick 0 alone; a carve over the box of bricks −2 ..= 2 walks brick 0 only
         // (no other brick exists to carve), so only the bricks reading brick 0 are dirty.

@@ -94,17 +94,18 @@ pub fn mesh_brick(
     march_brick(block, &around, field.iso(), field.transform(), scratch, out);
 }
 
-/// How a density range lies against the iso-level (`None`, no clay, is outside).
+/// How a density range lies against the iso-level (where there is no clay: outside).
 const OUTSIDE: u8 = 0;
 const INSIDE: u8 = 1;
 const CROSSING: u8 = 2;
 
-fn range_class(range: Option<(f32, f32)>, iso: f32) -> u8 {
-    match range {
-        None => OUTSIDE,
-        Some((_, hi)) if hi < iso => OUTSIDE,
-        Some((lo, _)) if lo >= iso => INSIDE,
-        Some(_) => CROSSING,
+fn range_class((lo, hi): (f32, f32), iso: f32) -> u8 {
+    if hi < iso {
+        OUTSIDE
+    } else if lo >= iso {
+        INSIDE
+    } else {
+        CROSSING
     }
 }
 
@@ -115,9 +116,9 @@ fn range_class(range: Option<(f32, f32)>, iso: f32) -> u8 {
 fn class(field: &Field, key: BrickKey) -> u8 {
     let iso = field.iso();
     let Some(ranges) = field.read_ranges(key) else { return OUTSIDE };
-    let all = range_class(Some(ranges.all), iso);
+    let all = range_class(ranges.all, iso);
     // A brick on one side of the iso-level has its faces there too.
-    let faces = if all == CROSSING { ranges.low_faces.map(|r| range_class(Some(r), iso)) } else { [all; 3] };
+    let faces = if all == CROSSING { ranges.low_faces.map(|r| range_class(r, iso)) } else { [all; 3] };
     all | faces[0] << 2 | faces[1] << 4 | faces[2] << 6
 }
 
