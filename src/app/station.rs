@@ -283,25 +283,6 @@ fn ms_since(t: Instant) -> f64 {
 /// What a parallax budget verdict depends on: the clay's bounds and the stereo rig.
 type BudgetKey = ([f32; 6], [f32; 3], f32, f32);
 
-/// The bounds of the bricks of `field` that hold matter.
-fn clay_bounds(field: &crate::field::Field) -> crate::math::Aabb {
-    use crate::field::BRICK_SIZE;
-    let t = field.transform();
-    let keys: Box<dyn Iterator<Item = crate::field::BrickKey>> = if field.has_levels_above(0) {
-        Box::new(field.covered_keys().into_iter())
-    } else {
-        Box::new(field.brick_keys())
-    };
-    keys.filter(|&k| field.read_range(k).is_some_and(|(_, max)| max > 0.0)).fold(
-        crate::math::Aabb::EMPTY,
-        |b, k| {
-            let lo = (k * BRICK_SIZE).as_vec3();
-            let hi = lo + Vec3::splat(BRICK_SIZE as f32);
-            b.union(&crate::math::Aabb { min: t.index_to_world(lo), max: t.index_to_world(hi) })
-        },
-    )
-}
-
 /// The sculpt files (`.argile`) in `dir`, newest first (by modification time, then name).
 fn sculpts_in(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     let mut found = Vec::new();
@@ -446,8 +427,10 @@ pub struct Station<'s> {
     head: Option<OpentrackHead>,
     /// Keeps the desk tool at zero parallax while on.
     auto_convergence: Option<AutoConvergence>,
-    /// The clay's bounds (bricks holding matter), updated as it changes.
+    /// The clay's bounds: those of the surface the renderer draws, updated as it changes.
     clay_bounds: crate::math::Aabb,
+    /// The bounds of each chunk of that surface.
+    chunk_bounds: std::collections::HashMap<crate::mesh::ChunkKey, crate::math::Aabb>,
     /// The parallax budget's verdict for the current clay and stereo settings: what it was
     /// judged on, the warning (if over budget) and the interaxial it allows in limit mode.
     budget: Option<(BudgetKey, Option<String>, Option<f32>)>,
@@ -544,6 +527,7 @@ impl<'s> Station<'s> {
             head: None,
             auto_convergence: None,
             clay_bounds: crate::math::Aabb::EMPTY,
+            chunk_bounds: std::collections::HashMap::new(),
             budget: None,
             display_mode: DisplayMode::Anaglyph,
             quad_buffer: false,
@@ -1276,8 +1260,12 @@ impl<'s> Station<'s> {
         let mesh_started = Instant::now();
         let diff = self.mesher.remesh_dirty(self.playback.field_mut());
         if !diff.is_empty() {
+            for key in &diff.removed {
+                self.chunk_bounds.remove(key);
+            }
+            self.chunk_bounds.extend(diff.upserted.iter().map(|(key, chunk)| (*key, chunk.bounds())));
             apply(diff);
-            self.clay_bounds = clay_bounds(self.playback.field());
+            self.clay_bounds = self.chunk_bounds.values().fold(crate::math::Aabb::EMPTY, |b, c| b.union(c));
         }
         self.times.mesh_ms = ms_since(mesh_started);
 
@@ -1970,6 +1958,34 @@ mod tests {
     }
 
     #[test]
+    fn the_default_scene_fits_the_parallax_budget() {
+        // The first thing a user sees warns of nothing: neither the headless render (judged
+        // on the mesh's bounds) nor the station (judged on the clay's bricks, a little larger).
+        let scene = Scene::default_scene();
+        let mut playback = Playback::new(&scene);
+        let end = scene.captures.last().map_or(0.0, |c| c.time_s);
+        playback.advance_to(end, |_| {});
+        let mesh = crate::mesh::mesh_all(playback.field());
+        let clay = mesh.upserted.iter().fold(crate::math::Aabb::EMPTY, |b, (_, c)| b.union(&c.bounds()));
+        assert!(!clay.is_empty());
+        let verdict = super::super::comfort::judge_parallax_budget(&scene, clay);
+        assert!(verdict.is_none(), "{:?}", verdict.map(|v| v.warning));
+        let mut station =
+            Station::new(&scene, KeyBindings::shipped(), (320, 240), PathBuf::from("unused.argile"));
+        station.step(SCRIPTED_STEP_S, |_| {});
+        // The station judges the surface it draws: the initial clay's, before the timeline.
+        let initial = crate::mesh::mesh_all(Playback::new(&scene).field());
+        let drawn = initial.upserted.iter().fold(crate::math::Aabb::EMPTY, |b, (_, c)| b.union(&c.bounds()));
+        assert_eq!(station.clay_bounds, drawn);
+        assert!(!station.hud_lines().iter().any(|l| l.contains("over the parallax budget")));
+        assert!(
+            !station.messages.iter().any(|m| m.contains("beyond the comfortable")),
+            "{:?}",
+            station.messages
+        );
+    }
+
+    #[test]
     fn the_hud_warns_while_the_clay_exceeds_the_parallax_budget() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tests/station.toml");
         let scene = Scene::load(&path).unwrap();
@@ -1979,7 +1995,7 @@ mod tests {
         station.step(SCRIPTED_STEP_S, |_| {});
         assert!(!station.hud_lines().iter().any(|l| l.contains("over the parallax budget")));
         // Zoomed in, the slab's depth spans more than ±1° on the shipped display.
-        station.script(&ScriptEvent::Wheel(3.0));
+        station.script(&ScriptEvent::Wheel(7.0));
         station.step(SCRIPTED_STEP_S, |_| {});
         assert!(!station.clay_bounds.is_empty());
         assert!(
