@@ -38,7 +38,7 @@
 use super::brick::{
     keys_over, Brick, BrickColours, BrickKey, Colour, LevelKey, BRICK_SIZE, DEFAULT_COLOUR, LEVELS,
 };
-use super::tree::{Field, Ranges, Walk};
+use super::tree::{whole_rows, Field, Ranges, Reach, Walk};
 use crate::math::IVec3;
 
 /// A sample: density and colour.
@@ -455,7 +455,7 @@ impl Field {
         // Where finer clay lies under the level, the level takes its values (they may change
         // nothing: bricks that hold no detail are dropped again).
         let walk = Walk { create: create || finer, refine: true };
-        self.edit_samples(level, lo, hi, walk, changes, |p, d, c| {
+        self.edit_samples(level, lo, hi, walk, Reach { bricks: changes, rows: whole_rows }, |p, d, c| {
             if finer {
                 (*d, *c) = truth[at(p, lo, dims)];
             }

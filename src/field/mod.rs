@@ -29,4 +29,4 @@ pub use brick::{
 pub use history::{HistoryConfig, HistoryError, HistoryStats, BRICK_BYTES};
 pub use levels::{COLOUR_DETAIL_TOLERANCE, DETAIL_TOLERANCE};
 pub use sample::FieldReader;
-pub use tree::{bricks_reading, DirtySet, Field, HistoryStep, Ranges};
+pub use tree::{bricks_reading, whole_rows, DirtySet, Field, HistoryStep, Ranges};

@@ -421,22 +421,25 @@ impl Field {
         reaches: impl Fn(IVec3, IVec3) -> bool,
         edit: impl FnMut(IVec3, &mut f32, &mut Colour),
     ) {
-        self.edit_where(lo, hi, create, |a, b, _| reaches(a, b), edit);
+        self.edit_where(lo, hi, create, |a, b, _| reaches(a, b), whole_rows, edit);
     }
 
     /// [`Field::edit_region`] for edits that also know which bricks they cannot change from
     /// the brick's lowest and highest density: `changes(a, b, range)` gets the brick's
     /// [`Field::density_range`] too (`None`: no brick), so that, say, adding matter skips a
-    /// brick that is already full without copying it.
+    /// brick that is already full without copying it; and `rows(y, z)` gives the span of `x`
+    /// on each row of the box that the edit can change (see [`whole_rows`]), so that, say, a
+    /// ball's edit visits only the samples within its reach.
     pub fn edit_where(
         &mut self,
         lo: IVec3,
         hi: IVec3,
         create: bool,
         changes: impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool,
+        rows: impl Fn(i32, i32) -> (i32, i32),
         edit: impl FnMut(IVec3, &mut f32, &mut Colour),
     ) {
-        self.edit_samples(0, lo, hi, Walk { create, refine: true }, changes, edit);
+        self.edit_samples(0, lo, hi, Walk { create, refine: true }, Reach { bricks: changes, rows }, edit);
     }
 
     /// The brick walk of [`Field::edit_where`] on `level`'s lattice, doing as `walk` says
@@ -447,33 +450,35 @@ impl Field {
         lo: IVec3,
         hi: IVec3,
         walk: Walk,
-        changes: impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool,
+        reach: Reach<impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool, impl Fn(i32, i32) -> (i32, i32)>,
         mut edit: impl FnMut(IVec3, &mut f32, &mut Colour),
     ) {
-        self.edit_bricks(level, lo, hi, walk, changes, |brick, base, a, b, mut fresh| {
+        let rows = RowSpans::new(lo, hi, reach.rows);
+        self.edit_bricks(level, lo, hi, walk, reach.bricks, |brick, base, a, b, mut fresh| {
             let mut changed = Changed::NONE;
             for z in a.z..=b.z {
                 for y in a.y..=b.y {
                     let mut row = Row::NONE;
-                    for x in a.x..=b.x {
+                    for x in rows.local(base, a, b, y, z) {
                         let local = IVec3::new(x, y, z);
                         let i = Brick::linear(local);
                         let (density, old) = (brick.density[i], brick.colour[i]);
                         let mut colour = old;
                         edit(base + local, &mut brick.density[i], &mut colour);
-                        // An empty sample's colour means nothing: it is not stored.
                         let d = brick.density[i];
+                        let mut change = d.to_bits() != density.to_bits();
+                        // An empty sample's colour means nothing: it is not stored.
                         if d > 0.0 {
+                            let recoloured = colours_differ(colour, old);
                             if fresh {
                                 brick.colour = BrickColours::Uniform(colour);
                                 fresh = false;
-                            } else {
+                            } else if recoloured {
                                 brick.colour.set(i, colour);
                             }
+                            change |= recoloured;
                         }
-                        if d.to_bits() != density.to_bits()
-                            || (d > 0.0 && colour_bits(colour) != colour_bits(old))
-                        {
+                        if change {
                             row.add(x);
                         }
                     }
@@ -486,14 +491,17 @@ impl Field {
 
     /// [`Field::edit_region`] for edits that only lower or reshape the matter where it is and
     /// leave its colour alone (carving): `edit(point, density)` sees no colour, so the walk
-    /// neither reads nor writes one, and no brick is created.
+    /// neither reads nor writes one, and no brick is created. `rows` as for
+    /// [`Field::edit_where`].
     pub fn edit_density(
         &mut self,
         lo: IVec3,
         hi: IVec3,
         reaches: impl Fn(IVec3, IVec3) -> bool,
+        rows: impl Fn(i32, i32) -> (i32, i32),
         mut edit: impl FnMut(IVec3, &mut f32),
     ) {
+        let rows = RowSpans::new(lo, hi, rows);
         self.edit_bricks(
             0,
             lo,
@@ -506,7 +514,7 @@ impl Field {
                     for y in a.y..=b.y {
                         let start = Brick::linear(IVec3::new(0, y, z));
                         let mut row = Row::NONE;
-                        for x in a.x..=b.x {
+                        for x in rows.local(base, a, b, y, z) {
                             let density = &mut brick.density[start + x as usize];
                             let old = density.to_bits();
                             edit(base + IVec3::new(x, y, z), density);
@@ -531,7 +539,14 @@ impl Field {
         hi: IVec3,
         edit: impl FnMut(IVec3, &mut f32, &mut Colour),
     ) {
-        self.edit_samples(level, lo, hi, Walk { create: false, refine: false }, |_, _, _| true, edit);
+        self.edit_samples(
+            level,
+            lo,
+            hi,
+            Walk { create: false, refine: false },
+            Reach { bricks: |_, _, _| true, rows: whole_rows },
+            edit,
+        );
     }
 
     /// The brick walk under every edit: for each brick of `level` over `lo ..= hi` that
@@ -676,6 +691,47 @@ impl Field {
     }
 }
 
+/// Where an edit can change the field (see [`Field::edit_where`]): which bricks, from their
+/// share of the edit's box and their density range, and which samples of each row.
+pub(super) struct Reach<B, R> {
+    pub(super) bricks: B,
+    pub(super) rows: R,
+}
+
+/// The span of `x` of every row: for edits that may change any sample of their box (see
+/// [`Field::edit_where`]).
+pub fn whole_rows(_y: i32, _z: i32) -> (i32, i32) {
+    (i32::MIN, i32::MAX)
+}
+
+/// An edit's span of `x` on each row `(y, z)` of its box, asked of its `rows` once per row
+/// of the box rather than once per row of each brick it crosses.
+struct RowSpans {
+    lo: IVec3,
+    height: i32,
+    spans: Vec<(i32, i32)>,
+}
+
+impl RowSpans {
+    fn new(lo: IVec3, hi: IVec3, rows: impl Fn(i32, i32) -> (i32, i32)) -> Self {
+        let length = |a: i32, b: i32| usize::try_from(b - a + 1).unwrap_or(0);
+        let mut spans = Vec::with_capacity(length(lo.y, hi.y) * length(lo.z, hi.z));
+        for z in lo.z..=hi.z {
+            spans.extend((lo.y..=hi.y).map(|y| rows(y, z)));
+        }
+        Self { lo, height: hi.y - lo.y + 1, spans }
+    }
+
+    /// The local `x` to visit on row `(y, z)` (local) of the brick at `base`, whose share of
+    /// the box is `a ..= b`.
+    #[inline]
+    fn local(&self, base: IVec3, a: IVec3, b: IVec3, y: i32, z: i32) -> std::ops::RangeInclusive<i32> {
+        let (first, last) =
+            self.spans[(base.y + y - self.lo.y + self.height * (base.z + z - self.lo.z)) as usize];
+        a.x.max(first.saturating_sub(base.x))..=b.x.min(last.saturating_sub(base.x))
+    }
+}
+
 /// What the brick walk does where a level holds no brick.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Walk {
@@ -733,10 +789,11 @@ impl Changed {
     }
 }
 
-/// A colour's bits, compared at once.
+/// Whether two colours differ in any bit (so a sign of zero counts, unlike `!=`).
 #[inline]
-fn colour_bits(colour: Colour) -> u128 {
-    bytemuck::cast(colour)
+fn colours_differ(a: Colour, b: Colour) -> bool {
+    // Without a branch per channel: the loops call this for every sample they edit.
+    a.iter().zip(&b).fold(0, |bits, (x, y)| bits | (x.to_bits() ^ y.to_bits())) != 0
 }
 
 /// The first and last changed sample of a row, walked in increasing `x`.
@@ -872,7 +929,7 @@ mod tests {
             .edit_region(IVec3::splat(-8), IVec3::splat(23), false, reaches, |p, d, _| *d = d.min(carve(p)));
         walked.end_stroke();
         f.begin_stroke();
-        f.edit_density(IVec3::splat(-8), IVec3::splat(23), reaches, |p, d| *d = d.min(carve(p)));
+        f.edit_density(IVec3::splat(-8), IVec3::splat(23), reaches, whole_rows, |p, d| *d = d.min(carve(p)));
         f.end_stroke();
         assert!(f.same_samples(&walked));
         assert_eq!((f.brick_count(), f.tile_count()), (walked.brick_count(), walked.tile_count()));
@@ -938,6 +995,7 @@ mod tests {
             IVec3::splat(-16),
             IVec3::splat(23),
             |_, _| true,
+            whole_rows,
             |p, d| {
                 if p == IVec3::splat(4) {
                     *d = 0.75;

@@ -34,8 +34,8 @@
 
 use super::action::Action;
 use super::shape::PlacedSolid;
-use crate::field::{Colour, Field};
-use crate::math::{IVec3, Vec3};
+use crate::field::{whole_rows, Colour, Field};
+use crate::math::{IVec3, Vec2, Vec3};
 
 /// Mixes the colour of `added` new matter into a sample that held `old_density` of matter.
 ///
@@ -81,6 +81,17 @@ pub fn stamp_sphere(
     let reach2 = reach * reach;
     let reaches =
         |a: IVec3, b: IVec3| centre.clamp(a.as_vec3(), b.as_vec3()).distance_squared(centre) <= reach2;
+    // The samples of row (y, z) within the reach, and one or two more each side for rounding:
+    // the others are left as they are by both actions, so they are not visited.
+    let rows = |y: i32, z: i32| {
+        let across = reach2 - Vec2::new(y as f32 - centre.y, z as f32 - centre.z).length_squared();
+        if across <= 0.0 {
+            return (1, 0);
+        }
+        let half = across.sqrt();
+        // Truncation, one more sample out either way, covers the floor and the ceiling.
+        ((centre.x - half) as i32 - 1, (centre.x + half) as i32 + 1)
+    };
     // The tool's density from the squared distance: a square root only on the ramp (outside
     // the reach it is 0, inside the core 1), the same values as `solid_density` of the distance.
     let core = radius - 0.5 * SOLID_BAND_VOXELS;
@@ -102,6 +113,7 @@ pub fn stamp_sphere(
             hi,
             true,
             |a, b, range| reaches(a, b) && range.is_none_or(|r| r.0 < 1.0),
+            rows,
             |p, d, c| {
                 let tool = tool_at(p);
                 if tool > *d {
@@ -110,7 +122,7 @@ pub fn stamp_sphere(
                 }
             },
         ),
-        Action::Remove => field.edit_density(lo, hi, reaches, |p, d| {
+        Action::Remove => field.edit_density(lo, hi, reaches, rows, |p, d| {
             *d = d.min(1.0 - tool_at(p));
         }),
         other => {
@@ -164,6 +176,7 @@ pub fn rasterize_solid(field: &mut Field, solid: &PlacedSolid, op: CsgOp, colour
             lo,
             hi,
             |_, _| true,
+            whole_rows,
             |p, d| {
                 let world = transform.index_to_world(p.as_vec3());
                 let s = solid_density(solid.signed_distance(world) * inv_h);
@@ -276,6 +289,58 @@ mod tests {
                 "moved by {} voxels, surface moved {moved}",
                 0.1 * k as f32
             );
+        }
+    }
+
+    /// The stamps of `stamps` (centre in voxels, radius in voxels, adding or not) on a field,
+    /// by the kernel or by a plain walk of every sample of each stamp's box.
+    fn stamped(stamps: &[(Vec3, f32, bool)], kernel: bool) -> Field {
+        let mut f = Field::new(0.001, 0.5);
+        let colour = [0.2, 0.5, 0.9, 1.0];
+        for &(centre, radius, add) in stamps {
+            let action = if add { Action::Add } else { Action::Remove };
+            if kernel {
+                stamp_sphere(&mut f, centre * 0.001, radius * 0.001, action, colour);
+                continue;
+            }
+            let tool = |p: IVec3| solid_density(p.as_vec3().distance(centre) - radius);
+            let reach = Vec3::splat(radius + 0.5 * SOLID_BAND_VOXELS);
+            let (lo, hi) = ((centre - reach).floor().as_ivec3(), (centre + reach).ceil().as_ivec3());
+            f.edit_box(lo, hi, add, |p, d, c| {
+                let t = tool(p);
+                if add && t > *d {
+                    mix_in(c, *d, t, colour);
+                    *d = t;
+                } else if !add {
+                    *d = d.min(1.0 - t);
+                }
+            });
+        }
+        f
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig {
+            cases: 48,
+            rng_seed: proptest::test_runner::RngSeed::Fixed(0x57a3),
+            ..Default::default()
+        })]
+
+        /// The kernel visits only the samples of each row within the tool's reach: what it
+        /// leaves is what visiting every sample of the box leaves, bit for bit, wherever the
+        /// centres fall (both signs of every coordinate, off the lattice).
+        #[test]
+        fn the_kernel_leaves_what_a_walk_of_every_sample_leaves(
+            stamps in proptest::collection::vec(
+                ((-30.0f32..30.0, -30.0f32..30.0, -30.0f32..30.0), 0.3f32..14.0, proptest::bool::weighted(0.6)),
+                1..5,
+            )
+        ) {
+            let stamps: Vec<(Vec3, f32, bool)> =
+                stamps.into_iter().map(|((x, y, z), r, add)| (Vec3::new(x, y, z), r, add)).collect();
+            let (kernel, walk) = (stamped(&stamps, true), stamped(&stamps, false));
+            proptest::prop_assert!(kernel.same_samples(&walk));
+            proptest::prop_assert_eq!(kernel.mass(), walk.mass());
         }
     }
 }
