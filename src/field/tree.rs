@@ -453,8 +453,9 @@ impl Field {
         reach: Reach<impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool, impl Fn(i32, i32) -> (i32, i32)>,
         mut edit: impl FnMut(IVec3, &mut f32, &mut Colour),
     ) {
-        let rows = RowSpans::new(lo, hi, reach.rows);
+        let mut rows = RowSpans::new(reach.rows);
         self.edit_bricks(level, lo, hi, walk, reach.bricks, |brick, base, a, b, mut fresh| {
+            rows.enter(base);
             let mut changed = Changed::NONE;
             for z in a.z..=b.z {
                 for y in a.y..=b.y {
@@ -501,7 +502,7 @@ impl Field {
         rows: impl Fn(i32, i32) -> (i32, i32),
         mut edit: impl FnMut(IVec3, &mut f32),
     ) {
-        let rows = RowSpans::new(lo, hi, rows);
+        let mut rows = RowSpans::new(rows);
         self.edit_bricks(
             0,
             lo,
@@ -509,6 +510,7 @@ impl Field {
             Walk { create: false, refine: true },
             |a, b, _| reaches(a, b),
             |brick, base, a, b, _| {
+                rows.enter(base);
                 let mut changed = Changed::NONE;
                 for z in a.z..=b.z {
                     for y in a.y..=b.y {
@@ -704,30 +706,36 @@ pub fn whole_rows(_y: i32, _z: i32) -> (i32, i32) {
     (i32::MIN, i32::MAX)
 }
 
-/// An edit's span of `x` on each row `(y, z)` of its box, asked of its `rows` once per row
-/// of the box rather than once per row of each brick it crosses.
-struct RowSpans {
-    lo: IVec3,
-    height: i32,
-    spans: Vec<(i32, i32)>,
+/// An edit's span of `x` on each row `(y, z)`, asked of its `rows` once for the bricks of one
+/// row of bricks (the walk takes them in turn, `x` fastest) and only for the rows it walks.
+struct RowSpans<R> {
+    rows: R,
+    /// The `y`, `z` of the lowest sample of the row of bricks whose spans are kept.
+    column: Option<(i32, i32)>,
+    /// Per row of those bricks (local `y` fastest); `None` until asked.
+    spans: [Option<(i32, i32)>; (BRICK_SIZE * BRICK_SIZE) as usize],
 }
 
-impl RowSpans {
-    fn new(lo: IVec3, hi: IVec3, rows: impl Fn(i32, i32) -> (i32, i32)) -> Self {
-        let length = |a: i32, b: i32| usize::try_from(b - a + 1).unwrap_or(0);
-        let mut spans = Vec::with_capacity(length(lo.y, hi.y) * length(lo.z, hi.z));
-        for z in lo.z..=hi.z {
-            spans.extend((lo.y..=hi.y).map(|y| rows(y, z)));
-        }
-        Self { lo, height: hi.y - lo.y + 1, spans }
+impl<R: Fn(i32, i32) -> (i32, i32)> RowSpans<R> {
+    fn new(rows: R) -> Self {
+        Self { rows, column: None, spans: [None; (BRICK_SIZE * BRICK_SIZE) as usize] }
     }
 
-    /// The local `x` to visit on row `(y, z)` (local) of the brick at `base`, whose share of
-    /// the box is `a ..= b`.
+    /// Readies the spans of the brick at `base` (those of its row of bricks are kept).
     #[inline]
-    fn local(&self, base: IVec3, a: IVec3, b: IVec3, y: i32, z: i32) -> std::ops::RangeInclusive<i32> {
-        let (first, last) =
-            self.spans[(base.y + y - self.lo.y + self.height * (base.z + z - self.lo.z)) as usize];
+    fn enter(&mut self, base: IVec3) {
+        if self.column != Some((base.y, base.z)) {
+            self.column = Some((base.y, base.z));
+            self.spans = [None; (BRICK_SIZE * BRICK_SIZE) as usize];
+        }
+    }
+
+    /// The local `x` to visit on row `(y, z)` (local) of the brick at `base` (entered last),
+    /// whose share of the box is `a ..= b`.
+    #[inline]
+    fn local(&mut self, base: IVec3, a: IVec3, b: IVec3, y: i32, z: i32) -> std::ops::RangeInclusive<i32> {
+        let row = (y + BRICK_SIZE * z) as usize;
+        let (first, last) = *self.spans[row].get_or_insert_with(|| (self.rows)(base.y + y, base.z + z));
         a.x.max(first.saturating_sub(base.x))..=b.x.min(last.saturating_sub(base.x))
     }
 }
