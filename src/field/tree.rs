@@ -427,9 +427,11 @@ impl Field {
     /// [`Field::edit_region`] for edits that also know which bricks they cannot change from
     /// the brick's lowest and highest density: `changes(a, b, range)` gets the brick's
     /// [`Field::density_range`] too (`None`: no brick), so that, say, adding matter skips a
-    /// brick that is already full without copying it; and `rows(y, z)` gives the span of `x`
-    /// on each row of the box that the edit can change (see [`whole_rows`]), so that, say, a
-    /// ball's edit visits only the samples within its reach.
+    /// brick that is already full without copying it; and `rows(y, z)` gives the span
+    /// `(first, last)` of `x`, inclusive, on each row of the box that the edit can change
+    /// (none where `first > last`; every sample with [`whole_rows`]), so that, say, a ball's
+    /// edit visits only the samples within its reach. `edit` is called on the samples both
+    /// allow, and only on those.
     pub fn edit_where(
         &mut self,
         lo: IVec3,
