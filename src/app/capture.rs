@@ -134,7 +134,7 @@ fn render_over(
     };
     let initial = mesh_all(playback.field());
     playback.field_mut().take_dirty();
-    let clay = initial.upserted.iter().fold(crate::math::Aabb::EMPTY, |b, (_, c)| b.union(&c.bounds()));
+    let clay = initial.upserted_bounds();
     // The views' copy of the scene, whose interaxial the parallax budget may lower.
     let mut viewed = scene.clone();
     if let Some((_, warning)) = super::comfort::apply_parallax_budget(&mut viewed, clay) {

@@ -1960,13 +1960,13 @@ mod tests {
     #[test]
     fn the_default_scene_fits_the_parallax_budget() {
         // The first thing a user sees warns of nothing: neither the headless render (judged
-        // on the mesh's bounds) nor the station (judged on the clay's bricks, a little larger).
+        // on the mesh's bounds at the end of the timeline) nor the station (on the surface it
+        // draws).
         let scene = Scene::default_scene();
         let mut playback = Playback::new(&scene);
         let end = scene.captures.last().map_or(0.0, |c| c.time_s);
         playback.advance_to(end, |_| {});
-        let mesh = crate::mesh::mesh_all(playback.field());
-        let clay = mesh.upserted.iter().fold(crate::math::Aabb::EMPTY, |b, (_, c)| b.union(&c.bounds()));
+        let clay = crate::mesh::mesh_all(playback.field()).upserted_bounds();
         assert!(!clay.is_empty());
         let verdict = super::super::comfort::judge_parallax_budget(&scene, clay);
         assert!(verdict.is_none(), "{:?}", verdict.map(|v| v.warning));
@@ -1974,8 +1974,7 @@ mod tests {
             Station::new(&scene, KeyBindings::shipped(), (320, 240), PathBuf::from("unused.argile"));
         station.step(SCRIPTED_STEP_S, |_| {});
         // The station judges the surface it draws: the initial clay's, before the timeline.
-        let initial = crate::mesh::mesh_all(Playback::new(&scene).field());
-        let drawn = initial.upserted.iter().fold(crate::math::Aabb::EMPTY, |b, (_, c)| b.union(&c.bounds()));
+        let drawn = crate::mesh::mesh_all(Playback::new(&scene).field()).upserted_bounds();
         assert_eq!(station.clay_bounds, drawn);
         assert!(!station.hud_lines().iter().any(|l| l.contains("over the parallax budget")));
         assert!(

@@ -52,6 +52,13 @@ impl ChunkMesh {
     }
 }
 
+impl MeshDiff {
+    /// The bounds of the upserted chunks (of the whole surface, for a full extraction).
+    pub fn upserted_bounds(&self) -> Aabb {
+        self.upserted.iter().fold(Aabb::EMPTY, |b, (_, c)| b.union(&c.bounds()))
+    }
+}
+
 /// What changed in the surface since the last diff: the renderer applies it to its chunk
 /// buffers. A key appears at most once, in one of the two lists.
 #[derive(Clone, Debug, Default)]
