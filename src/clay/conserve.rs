@@ -12,8 +12,6 @@
 //! tool pushes matter ahead of it and none goes through it (§3.2.2). A cell moves `6/5` of its
 //! excess, because a sixth of what it gives to full neighbours comes back (§3.2.3).
 
-use std::collections::VecDeque;
-
 use rayon::prelude::*;
 
 use crate::math::IVec3;
@@ -24,10 +22,69 @@ use super::grid::{Grid, ALL_DIRS, COVERED, DIRS_UNKNOWN, QUEUED, WALL};
 /// neighbours, a sixth comes back.
 pub(crate) const OVERSHOOT: f32 = 6.0 / 5.0;
 
+/// How many pops ahead the conservation loop fetches a queued cell's lines.
+const PREFETCH_AHEAD: usize = 12;
+
 /// The queue of cells that may hold an excess, kept between steps.
 #[derive(Debug, Default)]
 pub(crate) struct Conservation {
-    queue: VecDeque<u32>,
+    queue: Fifo,
+}
+
+/// A first-in-first-out ring of cell indices whose push can be conditional without a branch:
+/// whether a neighbour joins the queue depends on its density and is a coin toss for the
+/// branch predictor, so the index is always written at the tail and the length grows by the
+/// condition.
+#[derive(Debug, Default)]
+struct Fifo {
+    /// A power-of-two number of slots (or none).
+    ring: Vec<u32>,
+    head: usize,
+    len: usize,
+}
+
+impl Fifo {
+    fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Makes room for `extra` more cells, keeping their order.
+    #[inline]
+    fn reserve(&mut self, extra: usize) {
+        if self.len + extra <= self.ring.len() {
+            return;
+        }
+        let slots = (self.len + extra).next_power_of_two().max(1024);
+        let mut ring = Vec::with_capacity(slots);
+        ring.extend((0..self.len).map(|k| self.ring[(self.head + k) & (self.ring.len() - 1)]));
+        ring.resize(slots, 0);
+        (self.ring, self.head) = (ring, 0);
+    }
+
+    #[inline]
+    fn pop(&mut self) -> Option<u32> {
+        if self.len == 0 {
+            return None;
+        }
+        let c = self.ring[self.head];
+        self.head = (self.head + 1) & (self.ring.len() - 1);
+        self.len -= 1;
+        Some(c)
+    }
+
+    /// The cell `k` places behind the front.
+    #[inline]
+    fn get(&self, k: usize) -> Option<u32> {
+        (k < self.len).then(|| self.ring[(self.head + k) & (self.ring.len() - 1)])
+    }
+
+    /// Appends `c` if `keep`; needs a free slot (see [`Fifo::reserve`]).
+    #[inline]
+    fn push_if(&mut self, c: u32, keep: bool) {
+        let mask = self.ring.len() - 1;
+        self.ring[(self.head + self.len) & mask] = c;
+        self.len += usize::from(keep);
+    }
 }
 
 impl Conservation {
@@ -57,9 +114,10 @@ impl Conservation {
                 out
             })
             .collect();
+        self.queue.reserve(found.iter().map(Vec::len).sum());
         for i in found.into_iter().flatten() {
             grid.flags[i as usize] |= QUEUED;
-            self.queue.push_back(i);
+            self.queue.push_if(i, true);
         }
     }
 
@@ -83,8 +141,13 @@ impl Conservation {
         let capacity = |g: &Grid, i: usize| if g.flags[i] & COVERED != 0 { g.capacity[i] } else { 1.0 };
         let mut pops = 0;
         while pops < max_iterations {
-            let Some(c) = self.queue.pop_front() else { break };
+            let Some(c) = self.queue.pop() else { break };
             pops += 1;
+            // The queue's order is the paper's and fixed; its cells are scattered over the
+            // window, so the lines a pop reads are fetched a few pops ahead.
+            if let Some(ahead) = self.queue.get(PREFETCH_AHEAD) {
+                g.prefetch_around(ahead as usize);
+            }
             let c = c as usize;
             g.flags[c] &= !QUEUED;
             let (d, cap) = (g.density[c], capacity(g, c));
@@ -101,19 +164,15 @@ impl Conservation {
             } else {
                 g.dirs[c]
             };
+            // The neighbours that may take matter, gathered without a branch per direction.
             let mut targets = [0usize; 6];
             let mut n = 0;
             for dir in 0..6 {
-                if dirs & (1 << dir) == 0 {
-                    continue;
-                }
                 let j = g.neighbour(c, dir);
                 let fj = g.flags[j];
-                if fj & WALL != 0 || (fj & COVERED != 0 && g.capacity[j] < cap) {
-                    continue;
-                }
+                let blocked = fj & WALL != 0 || (fj & COVERED != 0 && g.capacity[j] < cap);
                 targets[n] = j;
-                n += 1;
+                n += usize::from(dirs & (1 << dir) != 0 && !blocked);
             }
             if n == 0 {
                 continue;
@@ -123,14 +182,53 @@ impl Conservation {
             let share = moved / n as f32;
             g.density[c] = if moved >= d { 0.0 } else { d - moved };
             g.mark_around(c);
+            self.queue.reserve(n);
             for &j in &targets[..n] {
                 g.density[j] += share;
-                if g.flags[j] & QUEUED == 0 && g.density[j] > capacity(g, j) + threshold {
-                    g.flags[j] |= QUEUED;
-                    self.queue.push_back(j as u32);
-                }
+                let waiting = g.flags[j] & QUEUED;
+                let join = (waiting == 0) & (g.density[j] > capacity(g, j) + threshold);
+                g.flags[j] |= QUEUED * u8::from(join);
+                self.queue.push_if(j as u32, join);
             }
         }
         pops
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Fifo;
+    use std::collections::VecDeque;
+
+    /// The ring keeps first-in-first-out order through wrap-arounds and growth while wrapped,
+    /// and a push whose condition is false leaves it as it was.
+    #[test]
+    fn the_ring_is_a_fifo_through_wraps_and_growth() {
+        let (mut ring, mut model) = (Fifo::default(), VecDeque::new());
+        let mut state = 0x2545_f491_u32;
+        for round in 0..20_000u32 {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            // Bursts of pushes then of pops, so the front moves round the ring and the ring
+            // grows while its cells wrap past its end.
+            let pushing = (round / 700) % 3 != 2;
+            if pushing || state % 4 == 0 {
+                ring.reserve(1);
+                let keep = state % 3 != 0;
+                ring.push_if(round, keep);
+                if keep {
+                    model.push_back(round);
+                }
+            } else {
+                assert_eq!(ring.pop(), model.pop_front());
+            }
+            assert_eq!(ring.len(), model.len());
+            assert_eq!(ring.get(5), model.get(5).copied());
+        }
+        while let Some(c) = model.pop_front() {
+            assert_eq!(ring.pop(), Some(c));
+        }
+        assert_eq!(ring.pop(), None);
     }
 }

@@ -26,7 +26,10 @@ use rayon::prelude::*;
 
 use crate::math::{IVec3, Pose, Vec3, VoxelTransform};
 
-use super::grid::{Grid, COVERED, FIXED, NO_OWNER, WALL};
+use super::grid::{prefetch_around, Grid, COVERED, FIXED, NO_OWNER, WALL};
+
+/// How many cells of a bucket ahead the distance fetches a cell's lines.
+const PREFETCH_AHEAD: usize = 8;
 
 /// One pseudo-distance over the grid, with the cells it reached (to reset them cheaply).
 #[derive(Debug, Default)]
@@ -83,7 +86,13 @@ impl Distance {
         let mut b = 0;
         while b < self.buckets.len() {
             let mut bucket = std::mem::take(&mut self.buckets[b]);
-            for &c in &bucket {
+            for (k, &c) in bucket.iter().enumerate() {
+                // The bucket's cells are scattered over the window: the lines a later one
+                // reads are fetched while this one is expanded.
+                if let Some(&ahead) = bucket.get(k + PREFETCH_AHEAD) {
+                    grid.prefetch_around(ahead as usize);
+                    prefetch_around(&self.dist, ahead as usize, &grid.offsets);
+                }
                 let c = c as usize;
                 let dc = self.dist[c];
                 if dc as usize != b {
@@ -106,12 +115,9 @@ impl Distance {
                         if rho < min_density {
                             continue;
                         }
-                        // A full cell costs exactly 1 (and 1 / 1 is 1: the same sums).
-                        if rho >= 1.0 {
-                            1.0
-                        } else {
-                            1.0 / rho
-                        }
+                        // A full cell costs exactly 1 (1 / 1 is 1: the same sums), without a
+                        // branch on whether the cell is full.
+                        1.0 / rho.min(1.0)
                     };
                     let nd = dc + cost;
                     if nd < self.dist[n] {
