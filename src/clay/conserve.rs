@@ -16,7 +16,9 @@ use rayon::prelude::*;
 
 use crate::math::IVec3;
 
-use super::grid::{Grid, ALL_DIRS, COVERED, DIRS_UNKNOWN, QUEUED, WALL};
+use super::grid::{
+    cell_coord, mark_rows_around, prefetch_around, Grid, ALL_DIRS, COVERED, DIRS_UNKNOWN, QUEUED, WALL,
+};
 
 /// The factor by which a cell overshoots its excess (§3.2.3): what it gives its six
 /// neighbours, a sixth comes back.
@@ -49,11 +51,16 @@ impl Fifo {
     }
 
     /// Makes room for `extra` more cells, keeping their order.
-    #[inline]
+    #[inline(always)]
     fn reserve(&mut self, extra: usize) {
-        if self.len + extra <= self.ring.len() {
-            return;
+        if self.len + extra > self.ring.len() {
+            self.grow(extra);
         }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn grow(&mut self, extra: usize) {
         let slots = (self.len + extra).next_power_of_two().max(1024);
         let mut ring = Vec::with_capacity(slots);
         ring.extend((0..self.len).map(|k| self.ring[(self.head + k) & (self.ring.len() - 1)]));
@@ -136,9 +143,15 @@ impl Conservation {
         max_iterations: usize,
         outward: impl Fn(u8, IVec3) -> u8,
     ) -> usize {
-        let g = grid;
+        // The grid's arrays as local slices: the compiler then keeps their addresses in
+        // registers instead of reloading them after every store of a density.
+        let (lo, dims, offsets) = (grid.lo, grid.dims, grid.offsets);
+        let Grid { density, capacity, dirs: allowed, owner, flags, rows, .. } = grid;
+        let (density, flags, allowed, rows) =
+            (&mut density[..], &mut flags[..], &mut allowed[..], &mut rows[..]);
+        let (capacity, owner) = (&capacity[..], &owner[..]);
         // Capacities are read only where a body covers the cell; elsewhere they are 1.
-        let capacity = |g: &Grid, i: usize| if g.flags[i] & COVERED != 0 { g.capacity[i] } else { 1.0 };
+        let capacity_of = |f: u8, i: usize| if f & COVERED != 0 { capacity[i] } else { 1.0 };
         let mut pops = 0;
         while pops < max_iterations {
             let Some(c) = self.queue.pop() else { break };
@@ -146,31 +159,33 @@ impl Conservation {
             // The queue's order is the paper's and fixed; its cells are scattered over the
             // window, so the lines a pop reads are fetched a few pops ahead.
             if let Some(ahead) = self.queue.get(PREFETCH_AHEAD) {
-                g.prefetch_around(ahead as usize);
+                prefetch_around(density, ahead as usize, &offsets);
+                prefetch_around(flags, ahead as usize, &offsets);
             }
             let c = c as usize;
-            g.flags[c] &= !QUEUED;
-            let (d, cap) = (g.density[c], capacity(g, c));
+            let fc = flags[c] & !QUEUED;
+            flags[c] = fc;
+            let (d, cap) = (density[c], capacity_of(fc, c));
             let excess = d - cap;
             if excess <= threshold {
                 continue;
             }
-            let dirs = if g.flags[c] & COVERED == 0 {
+            let dirs = if fc & COVERED == 0 {
                 ALL_DIRS
-            } else if g.dirs[c] == DIRS_UNKNOWN {
-                let dirs = outward(g.owner[c], g.lo + g.coord(c));
-                g.dirs[c] = dirs;
+            } else if allowed[c] == DIRS_UNKNOWN {
+                let dirs = outward(owner[c], lo + cell_coord(dims, c));
+                allowed[c] = dirs;
                 dirs
             } else {
-                g.dirs[c]
+                allowed[c]
             };
             // The neighbours that may take matter, gathered without a branch per direction.
             let mut targets = [0usize; 6];
             let mut n = 0;
-            for dir in 0..6 {
-                let j = g.neighbour(c, dir);
-                let fj = g.flags[j];
-                let blocked = fj & WALL != 0 || (fj & COVERED != 0 && g.capacity[j] < cap);
+            for (dir, &offset) in offsets.iter().enumerate() {
+                let j = c.wrapping_add_signed(offset);
+                let fj = flags[j];
+                let blocked = fj & WALL != 0 || (fj & COVERED != 0 && capacity[j] < cap);
                 targets[n] = j;
                 n += usize::from(dirs & (1 << dir) != 0 && !blocked);
             }
@@ -180,14 +195,15 @@ impl Conservation {
             let over = if n >= 2 { OVERSHOOT } else { 1.0 };
             let moved = (excess * over).min(d);
             let share = moved / n as f32;
-            g.density[c] = if moved >= d { 0.0 } else { d - moved };
-            g.mark_around(c);
+            density[c] = if moved >= d { 0.0 } else { d - moved };
+            mark_rows_around(rows, dims, c);
             self.queue.reserve(n);
             for &j in &targets[..n] {
-                g.density[j] += share;
-                let waiting = g.flags[j] & QUEUED;
-                let join = (waiting == 0) & (g.density[j] > capacity(g, j) + threshold);
-                g.flags[j] |= QUEUED * u8::from(join);
+                let dj = density[j] + share;
+                density[j] = dj;
+                let fj = flags[j];
+                let join = (fj & QUEUED == 0) & (dj > capacity_of(fj, j) + threshold);
+                flags[j] = fj | (QUEUED * u8::from(join));
                 self.queue.push_if(j as u32, join);
             }
         }

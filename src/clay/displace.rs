@@ -83,35 +83,41 @@ impl Distance {
                 self.buckets[0].push(s as u32);
             }
         }
+        // Local slices: the compiler keeps their addresses in registers instead of reloading
+        // them after every store of a distance.
+        let Self { dist, reached, buckets, to_others } = self;
+        let dist = &mut dist[..];
+        let (density, flags, offsets) = (&grid.density[..], &grid.flags[..], &grid.offsets);
         let mut b = 0;
-        while b < self.buckets.len() {
-            let mut bucket = std::mem::take(&mut self.buckets[b]);
+        while b < buckets.len() {
+            let mut bucket = std::mem::take(&mut buckets[b]);
             for (k, &c) in bucket.iter().enumerate() {
                 // The bucket's cells are scattered over the window: the lines a later one
                 // reads are fetched while this one is expanded.
                 if let Some(&ahead) = bucket.get(k + PREFETCH_AHEAD) {
-                    grid.prefetch_around(ahead as usize);
-                    prefetch_around(&self.dist, ahead as usize, &grid.offsets);
+                    prefetch_around(density, ahead as usize, offsets);
+                    prefetch_around(flags, ahead as usize, offsets);
+                    prefetch_around(dist, ahead as usize, offsets);
                 }
                 let c = c as usize;
-                let dc = self.dist[c];
+                let dc = dist[c];
                 if dc as usize != b {
                     continue; // improved since it was queued
                 }
-                if dc > 0.0 && grid.flags[c] & (COVERED | FIXED) != 0 && is_barrier(c) {
-                    self.to_others = self.to_others.min(dc);
+                if dc > 0.0 && flags[c] & (COVERED | FIXED) != 0 && is_barrier(c) {
+                    *to_others = to_others.min(dc);
                     continue;
                 }
-                for d in 0..6 {
-                    let n = grid.neighbour(c, d);
-                    let f = grid.flags[n];
+                for &offset in offsets {
+                    let n = c.wrapping_add_signed(offset);
+                    let f = flags[n];
                     if f & WALL != 0 {
                         continue;
                     }
                     let cost = if f & (COVERED | FIXED) != 0 && is_barrier(n) {
                         1.0
                     } else {
-                        let rho = grid.density[n];
+                        let rho = density[n];
                         if rho < min_density {
                             continue;
                         }
@@ -120,22 +126,23 @@ impl Distance {
                         1.0 / rho.min(1.0)
                     };
                     let nd = dc + cost;
-                    if nd < self.dist[n] {
-                        if self.dist[n] == f32::INFINITY {
-                            self.reached.push(n as u32);
+                    let old = dist[n];
+                    if nd < old {
+                        if old == f32::INFINITY {
+                            reached.push(n as u32);
                         }
-                        self.dist[n] = nd;
+                        dist[n] = nd;
                         let nb = nd as usize;
-                        if nb >= self.buckets.len() {
-                            self.buckets.resize_with(nb + 1, Vec::new);
+                        if nb >= buckets.len() {
+                            buckets.resize_with(nb + 1, Vec::new);
                         }
-                        self.buckets[nb].push(n as u32);
+                        buckets[nb].push(n as u32);
                     }
                 }
             }
             bucket.clear();
             // Give the (empty) allocation back for the next propagation.
-            self.buckets[b] = bucket;
+            buckets[b] = bucket;
             b += 1;
         }
     }

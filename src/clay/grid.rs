@@ -114,13 +114,7 @@ impl Grid {
     /// Marks the rows of interior cell `i` and of its six neighbours as holding matter.
     #[inline]
     pub fn mark_around(&mut self, i: usize) {
-        let r = i / self.dims.x as usize;
-        let ny = self.dims.y as usize;
-        self.rows[r - 1] = 1;
-        self.rows[r] = 1;
-        self.rows[r + 1] = 1;
-        self.rows[r - ny] = 1;
-        self.rows[r + ny] = 1;
+        mark_rows_around(&mut self.rows, self.dims, i);
     }
 
     /// Number of cells.
@@ -137,10 +131,7 @@ impl Grid {
     /// Cell coordinate of a linear index.
     #[inline]
     pub fn coord(&self, i: usize) -> IVec3 {
-        let i = i as i32;
-        let x = i % self.dims.x;
-        let yz = i / self.dims.x;
-        IVec3::new(x, yz % self.dims.y, yz / self.dims.y)
+        cell_coord(self.dims, i)
     }
 
     /// Linear index of neighbour `d` of interior cell `i`.
@@ -149,19 +140,31 @@ impl Grid {
         (i as isize + self.offsets[d]) as usize
     }
 
-    /// Asks the memory system for the cache lines a pop of cell `i` will read: its densities
-    /// and flags, and those of its neighbours along Y and Z (its X neighbours share its lines).
-    /// A hint only: it changes no result.
-    #[inline(always)]
-    pub fn prefetch_around(&self, i: usize) {
-        prefetch_around(&self.density, i, &self.offsets);
-        prefetch_around(&self.flags, i, &self.offsets);
-    }
-
     /// Total matter, summed in f64.
     pub fn mass(&self) -> f64 {
         self.density.iter().map(|&d| f64::from(d)).sum()
     }
+}
+
+/// [`Grid::mark_around`] on the grid's row marks `rows`, for a grid of `dims` cells.
+#[inline]
+pub(crate) fn mark_rows_around(rows: &mut [u8], dims: IVec3, i: usize) {
+    let r = i / dims.x as usize;
+    let ny = dims.y as usize;
+    rows[r - 1] = 1;
+    rows[r] = 1;
+    rows[r + 1] = 1;
+    rows[r - ny] = 1;
+    rows[r + ny] = 1;
+}
+
+/// [`Grid::coord`] for a grid of `dims` cells.
+#[inline]
+pub(crate) fn cell_coord(dims: IVec3, i: usize) -> IVec3 {
+    let i = i as i32;
+    let x = i % dims.x;
+    let yz = i / dims.x;
+    IVec3::new(x, yz % dims.y, yz / dims.y)
 }
 
 /// Hints that element `i` of `slice` and its neighbours along Y and Z (`offsets` as in
