@@ -16,16 +16,11 @@ use rayon::prelude::*;
 
 use crate::math::IVec3;
 
-use super::grid::{
-    cell_coord, mark_rows_around, prefetch_around, Grid, ALL_DIRS, COVERED, DIRS_UNKNOWN, QUEUED, WALL,
-};
+use super::grid::{cell_coord, mark_rows_around, Grid, ALL_DIRS, COVERED, DIRS_UNKNOWN, QUEUED, WALL};
 
 /// The factor by which a cell overshoots its excess (§3.2.3): what it gives its six
 /// neighbours, a sixth comes back.
 pub(crate) const OVERSHOOT: f32 = 6.0 / 5.0;
-
-/// How many pops ahead the conservation loop fetches a queued cell's lines.
-const PREFETCH_AHEAD: usize = 12;
 
 /// The queue of cells that may hold an excess, kept between steps.
 #[derive(Debug, Default)]
@@ -77,12 +72,6 @@ impl Fifo {
         self.head = (self.head + 1) & (self.ring.len() - 1);
         self.len -= 1;
         Some(c)
-    }
-
-    /// The cell `k` places behind the front.
-    #[inline]
-    fn get(&self, k: usize) -> Option<u32> {
-        (k < self.len).then(|| self.ring[(self.head + k) & (self.ring.len() - 1)])
     }
 
     /// Appends `c` if `keep`; needs a free slot (see [`Fifo::reserve`]).
@@ -156,12 +145,6 @@ impl Conservation {
         while pops < max_iterations {
             let Some(c) = self.queue.pop() else { break };
             pops += 1;
-            // The queue's order is the paper's and fixed; its cells are scattered over the
-            // window, so the lines a pop reads are fetched a few pops ahead.
-            if let Some(ahead) = self.queue.get(PREFETCH_AHEAD) {
-                prefetch_around(density, ahead as usize, &offsets);
-                prefetch_around(flags, ahead as usize, &offsets);
-            }
             let c = c as usize;
             let fc = flags[c] & !QUEUED;
             flags[c] = fc;
@@ -240,7 +223,6 @@ mod tests {
                 assert_eq!(ring.pop(), model.pop_front());
             }
             assert_eq!(ring.len(), model.len());
-            assert_eq!(ring.get(5), model.get(5).copied());
         }
         while let Some(c) = model.pop_front() {
             assert_eq!(ring.pop(), Some(c));

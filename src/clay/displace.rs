@@ -26,10 +26,7 @@ use rayon::prelude::*;
 
 use crate::math::{IVec3, Pose, Vec3, VoxelTransform};
 
-use super::grid::{prefetch_around, Grid, COVERED, FIXED, NO_OWNER, WALL};
-
-/// How many cells of a bucket ahead the distance fetches a cell's lines.
-const PREFETCH_AHEAD: usize = 8;
+use super::grid::{Grid, COVERED, FIXED, NO_OWNER, WALL};
 
 /// One pseudo-distance over the grid, with the cells it reached (to reset them cheaply).
 #[derive(Debug, Default)]
@@ -91,14 +88,7 @@ impl Distance {
         let mut b = 0;
         while b < buckets.len() {
             let mut bucket = std::mem::take(&mut buckets[b]);
-            for (k, &c) in bucket.iter().enumerate() {
-                // The bucket's cells are scattered over the window: the lines a later one
-                // reads are fetched while this one is expanded.
-                if let Some(&ahead) = bucket.get(k + PREFETCH_AHEAD) {
-                    prefetch_around(density, ahead as usize, offsets);
-                    prefetch_around(flags, ahead as usize, offsets);
-                    prefetch_around(dist, ahead as usize, offsets);
-                }
+            for &c in &bucket {
                 let c = c as usize;
                 let dc = dist[c];
                 if dc as usize != b {

@@ -167,30 +167,6 @@ pub(crate) fn cell_coord(dims: IVec3, i: usize) -> IVec3 {
     IVec3::new(x, yz % dims.y, yz / dims.y)
 }
 
-/// Hints that element `i` of `slice` and its neighbours along Y and Z (`offsets` as in
-/// [`Grid::offsets`]) will be read soon.
-#[inline(always)]
-pub(crate) fn prefetch_around<T>(slice: &[T], i: usize, offsets: &[isize; 6]) {
-    for d in [0, offsets[2], offsets[3], offsets[4], offsets[5]] {
-        prefetch(slice, i.wrapping_add_signed(d));
-    }
-}
-
-/// Hints that element `i` of `slice` will be read soon. Out-of-range indices are harmless:
-/// a prefetch never faults.
-#[inline(always)]
-pub(crate) fn prefetch<T>(slice: &[T], i: usize) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        // SAFETY: SSE is part of the x86_64 baseline, and a prefetch neither reads nor
-        // writes memory as far as the program can tell, whatever the address.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>(slice.as_ptr().wrapping_add(i).cast()) };
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (slice, i);
-}
-
 /// Writes what changed since the last write back into the field.
 ///
 /// `written` holds the densities the field was last given (or loaded from); bricks of the

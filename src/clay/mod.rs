@@ -78,10 +78,7 @@
 //!   displacement's per-cell steps are computed in parallel chunks gathered in order;
 //! - the conservation queue is a ring whose push is conditional without a branch (whether a
 //!   neighbour joins the queue was a coin toss for the branch predictor, and cost two
-//!   mispredictions a pop), and a full cell's distance cost is `1 / min(ρ, 1)`, not a branch;
-//! - the cells a pop or a distance step will read (the queue's and the bucket's next ones,
-//!   in their fixed order) are prefetched a few cells ahead: the order is the paper's, the
-//!   memory it touches is scattered over the window.
+//!   mispredictions a pop), and a full cell's distance cost is `1 / min(ρ, 1)`, not a branch.
 
 mod body;
 mod conserve;
