@@ -29,8 +29,9 @@ pub enum Workload {
     /// [`crate::tool::MAX_SIZE_SAMPLES`] voxels across its radius), and the 40 mm one on the
     /// finest level for comparison.
     StampAdaptive,
-    /// Full extraction of the surface of a solid sphere of radius 100 voxels and of the field
-    /// a stroke of radius-16 stamps leaves, on one thread and on all.
+    /// Full extraction of the surface of a solid sphere of radius 100 voxels, of the field a
+    /// stroke of radius-16 stamps leaves, and of the coarse clay a short stroke of a 40 mm
+    /// tool editing by its size leaves, on one thread and on all.
     MeshFull,
     /// The incremental re-mesh after one stamp of radius 4, 8, 16 and 32 voxels carving the
     /// surface of a sphere.
@@ -343,9 +344,25 @@ fn bench_mesh_full(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> 
         let centre = Vec3::new(i as f32 * 0.008, 0.0, 0.0);
         stamp_sphere(&mut stroke_field, centre, 0.016, Action::Add, [0.7, 0.4, 0.2, 1.0]);
     }
+    // Coarse clay: a short stroke of a 40 mm tool editing by its size (level 3, 8 mm voxels),
+    // meshed on the finest lattice from bricks the coarser levels give.
+    let mut coarse_field = Field::new(0.001, 0.5);
+    let coarse_tool = crate::tool::Tool {
+        level_samples: Some(crate::tool::MAX_SIZE_SAMPLES),
+        ..crate::tool::Tool::new(crate::tool::ToolShape::sphere(0.04), Action::Add, [0.7, 0.4, 0.2, 1.0])
+    };
+    for i in 0..size.stamps.min(10) {
+        let pose =
+            crate::math::Pose { position_m: Vec3::new(i as f32 * 0.02, 0.0, 0.0), ..Default::default() };
+        crate::tool::apply_tool(&mut coarse_field, &coarse_tool, pose, 0.0);
+    }
     let sphere = sphere_field(size.sphere_radius_voxels);
-    for (name, field) in [("sphere", &sphere), ("stamp-add-16", &stroke_field)] {
-        let samples = field.brick_count() * crate::field::BRICK_VOLUME;
+    for (name, field) in
+        [("sphere", &sphere), ("stamp-add-16", &stroke_field), ("stroke-40mm-by-size", &coarse_field)]
+    {
+        // Stored samples of every level (the coarse stroke stores none on the finest).
+        let bricks: usize = (0..crate::field::LEVELS).map(|l| field.level_brick_count(l)).sum();
+        let samples = bricks * crate::field::BRICK_VOLUME;
         for threads in [1, rayon::current_num_threads()] {
             let (ms, triangles) = on_threads(threads, || {
                 let _ = mesh_all(field);
@@ -877,7 +894,7 @@ mod tests {
         let mut lines = Vec::new();
         run(&[Workload::MeshFull, Workload::RemeshStamp], BenchSize::QUICK, |v| lines.push(v)).unwrap();
         let full: Vec<_> = lines.iter().filter(|l| l["workload"] == "mesh-full").collect();
-        assert_eq!(full.len(), 4, "two fields, one thread and all");
+        assert_eq!(full.len(), 6, "three fields, one thread and all");
         assert!(full
             .iter()
             .all(|l| l["triangles"].as_u64().unwrap() > 1000 && l["median_ms"].as_f64().unwrap() > 0.0));

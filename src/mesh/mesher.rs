@@ -4,6 +4,8 @@ use rayon::prelude::*;
 
 use std::sync::Mutex;
 
+use rustc_hash::FxHashMap;
+
 use super::cases::flat_cases;
 use super::march::{march_brick, Block, MarchScratch, Neighbourhood, BLOCK, BLOCK_VOLUME};
 use super::types::{ChunkMesh, MeshDiff};
@@ -22,27 +24,86 @@ pub fn gather_block<'f>(
     key: BrickKey,
     block: &'f mut Block,
 ) -> (Neighbourhood<'f>, &'f Block) {
+    gather(field, key, block, None)
+}
+
+/// [`gather_block`], reading the bricks the coarser levels give from `made` (made once for a
+/// whole mesh call) when given, else making them into the block's spare bricks.
+fn gather<'f>(
+    field: &'f Field,
+    key: BrickKey,
+    block: &'f mut Block,
+    made: Option<&'f CoarseBricks>,
+) -> (Neighbourhood<'f>, &'f Block) {
     let mut around = Neighbourhood::new(field, key);
-    let mut made = [false; 27];
+    let mut spare = [false; 27];
     if field.has_levels_above(0) {
-        if block.refined.is_empty() {
-            block.refined.resize_with(27, Brick::default);
-        }
-        for (i, (brick, spare)) in around.bricks.iter().zip(block.refined.iter_mut()).enumerate() {
-            if brick.is_none() {
-                made[i] = field.read_brick(neighbour(key, i), spare).is_some();
+        match made {
+            Some(made) => {
+                for (i, brick) in around.bricks.iter_mut().enumerate() {
+                    if brick.is_none() {
+                        *brick = made.bricks.get(&neighbour(key, i));
+                    }
+                }
+            }
+            None => {
+                if block.refined.is_empty() {
+                    block.refined.resize_with(27, Brick::default);
+                }
+                for (i, (brick, refined)) in around.bricks.iter().zip(block.refined.iter_mut()).enumerate() {
+                    if brick.is_none() {
+                        spare[i] = field.read_brick(neighbour(key, i), refined).is_some();
+                    }
+                }
             }
         }
     }
     let refined = &block.refined;
-    let stored = around.bricks;
+    let found = around.bricks;
     let reading: [Option<&Brick>; 27] =
-        std::array::from_fn(|i| if made[i] { Some(&refined[i]) } else { stored[i] });
+        std::array::from_fn(|i| if spare[i] { Some(&refined[i]) } else { found[i] });
     copy_block(&reading, &mut block.density);
     block.origin = key * BRICK_SIZE - IVec3::ONE;
     let block: &'f Block = block;
-    around.bricks = std::array::from_fn(|i| if made[i] { Some(&block.refined[i]) } else { stored[i] });
+    around.bricks = std::array::from_fn(|i| if spare[i] { Some(&block.refined[i]) } else { found[i] });
     (around, block)
+}
+
+/// The finest-level bricks that the coarser levels give around a set of bricks to mesh, each
+/// made once. Without it each is made again for every neighbour that reads it: up to 27
+/// times, and making one interpolates 512 samples through every coarser level.
+#[derive(Debug, Default)]
+struct CoarseBricks {
+    /// The bricks holding matter; a key absent here (and not stored) is empty.
+    bricks: FxHashMap<BrickKey, Brick>,
+    /// Scratch: the keys to make.
+    wanted: Vec<BrickKey>,
+}
+
+impl CoarseBricks {
+    /// Makes the bricks that the neighbourhoods of `keys` read from the coarser levels (in
+    /// parallel), dropping those of the last call.
+    fn make(&mut self, field: &Field, keys: &[BrickKey]) {
+        self.bricks.clear();
+        self.wanted.clear();
+        if !field.has_levels_above(0) {
+            return;
+        }
+        for &key in keys {
+            self.wanted.extend((0..27).map(|i| neighbour(key, i)).filter(|&k| field.brick(k).is_none()));
+        }
+        self.wanted.sort_unstable_by_key(|k| k.to_array());
+        self.wanted.dedup();
+        let made: Vec<(BrickKey, Brick)> = self
+            .wanted
+            .par_iter()
+            .filter_map(|&k| {
+                let mut brick = Brick::default();
+                field.read_brick(k, &mut brick).is_some().then_some((k, brick))
+            })
+            .collect();
+        self.bricks.extend(made);
+    }
 }
 
 /// The key of neighbour `i` (as [`Neighbourhood::bricks`] orders them) of brick `key`.
@@ -90,7 +151,19 @@ pub fn mesh_brick(
     scratch: &mut MarchScratch,
     out: &mut ChunkMesh,
 ) {
-    let (around, block) = gather_block(field, key, block);
+    mesh_brick_with(field, key, block, None, scratch, out);
+}
+
+/// [`mesh_brick`] reading the bricks the coarser levels give from `made` when given.
+fn mesh_brick_with(
+    field: &Field,
+    key: BrickKey,
+    block: &mut Block,
+    made: Option<&CoarseBricks>,
+    scratch: &mut MarchScratch,
+    out: &mut ChunkMesh,
+) {
+    let (around, block) = gather(field, key, block, made);
     march_brick(block, &around, field.iso(), field.transform(), scratch, out);
 }
 
@@ -240,6 +313,7 @@ pub struct Mesher {
     /// The slot each chunk of `diff.upserted` came from.
     upserted_slots: Vec<usize>,
     grid: ClassGrid,
+    coarse: CoarseBricks,
     diff: MeshDiff,
 }
 
@@ -360,7 +434,8 @@ impl Mesher {
         if self.workers.len() < threads {
             self.workers.resize_with(threads, Mutex::default);
         }
-        let workers = &self.workers;
+        self.coarse.make(field, &self.keys);
+        let (workers, coarse) = (&self.workers, &self.coarse);
         self.keys.par_iter().zip(self.slots[..n].par_iter_mut()).for_each(|(&key, slot)| {
             let index = rayon::current_thread_index().unwrap_or(0) % workers.len();
             let mut worker = workers[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
@@ -368,12 +443,12 @@ impl Mesher {
             if slot.vertices.capacity() == 0 {
                 // A new slot: marched into the worker's chunk, which never grows, and given
                 // just what it needs, rather than grown by doublings.
-                mesh_brick(field, key, block, scratch, mesh);
+                mesh_brick_with(field, key, block, Some(coarse), scratch, mesh);
                 slot.vertices.extend_from_slice(&mesh.vertices);
                 slot.indices.extend_from_slice(&mesh.indices);
             } else {
                 // A slot that held a chunk before keeps its vectors and takes this one in place.
-                mesh_brick(field, key, block, scratch, slot);
+                mesh_brick_with(field, key, block, Some(coarse), scratch, slot);
             }
         });
         for (i, (&key, slot)) in self.keys.iter().zip(&mut self.slots).enumerate() {
@@ -470,6 +545,52 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// A ball of level `level` (voxels `2^level` times the finest), centred on level point
+    /// `centre`.
+    fn add_coarse_ball(f: &mut Field, level: usize, centre: IVec3, radius: i32) {
+        let r = IVec3::splat(radius + 2);
+        let grey: Colour = [0.4, 0.5, 0.6, 1.0];
+        f.edit_level(
+            level,
+            centre - r,
+            centre + r,
+            true,
+            |_, _, _| true,
+            |p, d, c| {
+                *d = (0.5 - ((p - centre).as_vec3().length() - radius as f32) / 2.0).clamp(0.0, 1.0);
+                *c = grey;
+            },
+        );
+    }
+
+    #[test]
+    fn coarse_bricks_made_once_per_call_mesh_as_made_for_each_brick() {
+        // Coarse clay of two levels, and fine clay overlapping one of them: the mesher makes
+        // the finest bricks the coarse levels give once for the call; meshing each brick alone
+        // makes them again for every neighbour. Both must give the same chunks, bit for bit.
+        let mut f = Field::new(0.001, 0.5);
+        add_coarse_ball(&mut f, 2, IVec3::ZERO, 7);
+        add_coarse_ball(&mut f, 1, IVec3::new(20, 3, -2), 6);
+        add_ball(&mut f, IVec3::new(36, 6, -4), 9);
+        assert!(f.has_levels_above(0));
+        let keys = meshable_bricks(&f);
+        let mut reference = MeshDiff::default();
+        for &key in &keys {
+            let mut mesh = ChunkMesh::default();
+            mesh_brick(&f, key, &mut Block::default(), &mut MarchScratch::default(), &mut mesh);
+            if !mesh.is_empty() {
+                reference.upserted.push((key, mesh));
+            }
+        }
+        assert!(reference.upserted.len() > 30, "{} chunks", reference.upserted.len());
+        let mut mesher = Mesher::default();
+        assert_eq!(mesher.mesh_all(&f).upserted, reference.upserted, "whole field");
+        // And a part of it after the whole, with the bricks of the last call dropped.
+        let some: Vec<BrickKey> = keys.iter().copied().step_by(3).collect();
+        let want: Vec<_> = reference.upserted.iter().filter(|(k, _)| some.contains(k)).cloned().collect();
+        assert_eq!(mesher.remesh(&f, some.iter().copied()).upserted, want, "a third of the keys");
     }
 
     #[test]
