@@ -87,22 +87,23 @@ impl CoarseBricks {
     /// parallel), dropping those of the last call.
     fn make(&mut self, field: &Field, keys: &[BrickKey]) {
         self.bricks.clear();
-        self.wanted.clear();
         if !field.has_levels_above(0) {
             return;
         }
-        self.listed.clear();
         for &key in keys {
             self.wanted.extend((0..27).map(|i| neighbour(key, i)));
         }
+        self.listed.clear();
         self.listed.extend(self.wanted.drain().filter(|&k| field.brick(k).is_none()));
+        // One scratch brick per task, given away only when it was made: most neighbours
+        // around the surface are empty.
         let made: Vec<(BrickKey, Brick)> = self
             .listed
             .par_iter()
-            .filter_map(|&k| {
-                let mut brick = Brick::default();
-                field.read_brick(k, &mut brick).is_some().then_some((k, brick))
+            .map_init(Brick::default, |scratch, &k| {
+                field.read_brick(k, scratch).is_some().then(|| (k, std::mem::take(scratch)))
             })
+            .flatten()
             .collect();
         self.bricks.extend(made);
     }
