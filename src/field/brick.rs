@@ -191,6 +191,22 @@ impl Brick {
         (local.x + BRICK_SIZE * (local.y + BRICK_SIZE * local.z)) as usize
     }
 
+    /// The lowest and highest density of the samples of local points `lo ..= hi`, clamped to
+    /// the brick (the whole brick's range is kept by the field).
+    pub fn density_range_in(&self, lo: IVec3, hi: IVec3) -> (f32, f32) {
+        let (lo, hi) = (lo.max(IVec3::ZERO), hi.min(IVec3::splat(BRICK_SIZE - 1)));
+        let mut range = (f32::INFINITY, f32::NEG_INFINITY);
+        for z in lo.z..=hi.z {
+            for y in lo.y..=hi.y {
+                let row = Self::linear(IVec3::new(lo.x, y, z))..=Self::linear(IVec3::new(hi.x, y, z));
+                for &d in &self.density[row] {
+                    range = (range.0.min(d), range.1.max(d));
+                }
+            }
+        }
+        range
+    }
+
     /// Whether every sample is empty (density 0): such a brick need not be stored.
     pub fn is_empty(&self) -> bool {
         self.density.iter().all(|&d| d == 0.0)

@@ -40,10 +40,12 @@
 //! Where the finest level holds no brick but coarser levels hold clay (a tool that edited by
 //! its size), the finest brick is made by interpolating the coarser levels and meshed like a
 //! stored one: the surface is continuous across levels by construction, at the cost of the
-//! finest level's triangles. A mesher call makes each such brick once, in parallel, before
-//! marching, for all the bricks whose blocks read it (each was otherwise made again for every
-//! neighbour, up to 27 times). Those bricks are allocated per call: the no-allocation steady
-//! state holds for clay of the finest level.
+//! finest level's triangles. Such a brick is told empty or full, like a stored one, from the
+//! range of the coarse samples its interpolation reads (not the coarse brick's whole range,
+//! which crosses the surface over hundreds of finest bricks that do not). A mesher call makes
+//! each brick it reads once, in parallel, before marching, for all the bricks whose blocks
+//! read it (each was otherwise made again for every neighbour, up to 27 times). Those bricks
+//! are allocated per call: the no-allocation steady state holds for clay of the finest level.
 //!
 //! The kernel classifies the brick's 9³ cell corners once, as one bit per corner in rows along
 //! x, so that a cell's case is a few shifts and rows of cells the surface does not cross are
