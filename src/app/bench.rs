@@ -26,8 +26,9 @@ pub enum Workload {
     StampCarve,
     /// The same straight stroke into empty space with a 4 mm and a 40 mm sphere tool on a
     /// 1 mm finest level, each editing the level its size chooses (at most
-    /// [`crate::tool::MAX_SIZE_SAMPLES`] voxels across its radius), and the 40 mm one on the
-    /// finest level for comparison.
+    /// [`crate::tool::MAX_SIZE_SAMPLES`] voxels across its radius), field alone and with the
+    /// incremental re-mesh after each stamp, and the 40 mm one on the finest level for
+    /// comparison.
     StampAdaptive,
     /// Full extraction of the surface of a solid sphere of radius 100 voxels, of the field a
     /// stroke of radius-16 stamps leaves, and of the coarse clay a short stroke of a 40 mm
@@ -267,36 +268,57 @@ fn bench_stamp_carve(size: BenchSize, emit: &mut impl FnMut(Value)) {
 /// Strokes of `size.stamps` sphere stamps along +X, spacing half the radius, into an empty
 /// field of 1 mm voxels, with tools of radius 4 mm and 40 mm editing by their size, and the
 /// 40 mm one on the finest level: µs per stamp (median, min, max of the repetitions), samples
-/// visited and computed, bricks walked, the level written, field memory; and the ratio of the
-/// 40 mm stroke's time to the 4 mm one's.
+/// visited and computed, bricks walked, the level written, field memory; the ratio of the
+/// 40 mm stroke's time to the 4 mm one's; and for the tools editing by their size, the median
+/// µs per stamp with the incremental re-mesh after each stamp and the triangles it upserted.
 fn bench_stamp_adaptive(size: BenchSize, emit: &mut impl FnMut(Value)) {
     use crate::math::Pose;
     use crate::tool::{apply_tool, StampCounters, Tool, ToolShape, MAX_SIZE_SAMPLES};
-    let run = |radius_m: f32, by_size: bool| -> (f64, StampCounters, Field) {
+    // (µs per stamp, counters, triangles re-meshed, the field left).
+    let run = |radius_m: f32, by_size: bool, remesh: bool| -> (f64, StampCounters, usize, Field) {
         let mut field = Field::new(0.001, 0.5);
         let tool = Tool {
             level_samples: by_size.then_some(MAX_SIZE_SAMPLES),
             ..Tool::new(ToolShape::sphere(radius_m), Action::Add, [0.7, 0.4, 0.2, 1.0])
         };
         let mut total = StampCounters::default();
+        let mut mesher = Mesher::default();
+        let mut triangles = 0;
         let begin = Instant::now();
         for i in 0..size.stamps {
             let pose =
                 Pose { position_m: Vec3::new(i as f32 * 0.5 * radius_m, 0.0, 0.0), ..Default::default() };
             total += apply_tool(&mut field, &tool, pose, 0.0);
+            if remesh {
+                triangles += mesher.remesh_dirty(&mut field).upserted_triangles();
+            }
         }
-        (begin.elapsed().as_secs_f64() * 1e6 / size.stamps as f64, total, field)
+        (begin.elapsed().as_secs_f64() * 1e6 / size.stamps as f64, total, triangles, field)
     };
     let mut medians = Vec::new();
     for (radius_m, by_size) in [(0.004f32, true), (0.04, true), (0.04, false)] {
         let mut times = Vec::new();
         let mut last = None;
         for _ in 0..size.repetitions {
-            let (us, counters, field) = run(radius_m, by_size);
+            let (us, counters, _, field) = run(radius_m, by_size, false);
             times.push(us);
             last = Some((counters, field.memory_bytes()));
         }
         let (c, bytes) = last.expect("at least one repetition");
+        // With the incremental re-mesh after each stamp, as the station does (not for the
+        // 40 mm tool on the finest level: seconds per stroke).
+        let mut remeshed = 0;
+        let with_mesh: Vec<f64> = if by_size {
+            (0..size.repetitions)
+                .map(|_| {
+                    let (us, _, triangles, _) = run(radius_m, by_size, true);
+                    remeshed = triangles;
+                    us
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         let (lo, hi) = times.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &t| (lo.min(t), hi.max(t)));
         let med = median(times);
         medians.push(med);
@@ -316,6 +338,8 @@ fn bench_stamp_adaptive(size: BenchSize, emit: &mut impl FnMut(Value)) {
             "bricks_per_stamp": c.bricks as f64 / n,
             "field_bytes": bytes,
             "ratio_to_4mm": med / medians[0],
+            "with_remesh_us_per_stamp_median": (!with_mesh.is_empty()).then(|| median(with_mesh)),
+            "remeshed_triangles_per_stroke": remeshed,
         }));
     }
 }
@@ -940,6 +964,12 @@ mod tests {
                 l["us_per_stamp_median"].as_f64().unwrap() > 0.0 && l["field_bytes"].as_u64().unwrap() > 0
             );
         }
+        // The tools editing by their size are also timed with the re-mesh after each stamp.
+        for l in &lines[..2] {
+            assert!(l["with_remesh_us_per_stamp_median"].as_f64().unwrap() > 0.0, "{l}");
+            assert!(l["remeshed_triangles_per_stroke"].as_u64().unwrap() > 0, "{l}");
+        }
+        assert!(lines[2]["with_remesh_us_per_stamp_median"].is_null());
         // The finest-level 40 mm stroke computes far more samples than the one its size levels.
         let computed = |i: usize| lines[i]["computed_per_stamp"].as_f64().unwrap();
         assert!(computed(2) > 100.0 * computed(1), "{} against {}", computed(2), computed(1));

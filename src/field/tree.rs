@@ -82,10 +82,12 @@ pub struct Field {
     /// The shared constant tiles, by the bits of their density and colour.
     tiles: HashMap<TileValue, Arc<Brick>>,
     dirty: DirtySet,
-    /// Bricks of the coarser levels whose points changed since the dirty set was last read:
-    /// the finest bricks they reach are marked when it is read, so that a coarse stamp costs
-    /// one mark per coarse brick, not one per finest brick under it.
-    coarse_dirty: HashSet<LevelKey>,
+    /// Bricks of the coarser levels whose points changed since the dirty set was last read,
+    /// with the box of their points that did (level lattice): the finest bricks these points
+    /// reach are marked when it is read, so that a coarse stamp costs one mark per coarse
+    /// brick, not one per finest brick under it, and no finest brick its change does not
+    /// reach is re-meshed.
+    coarse_dirty: HashMap<LevelKey, (IVec3, IVec3)>,
     pub(super) history: History,
 }
 
@@ -114,7 +116,7 @@ impl Field {
             levels: vec![Level::default(); LEVELS],
             tiles: HashMap::default(),
             dirty: DirtySet::default(),
-            coarse_dirty: HashSet::default(),
+            coarse_dirty: HashMap::default(),
             history: History::new(HistoryConfig::default()),
         }
     }
@@ -650,17 +652,26 @@ impl Field {
         if level == 0 {
             self.mark_dirty(lo, hi);
         } else {
-            self.coarse_dirty.extend(keys_over(lo, hi).map(|k| LevelKey::new(level, k)));
+            for key in keys_over(lo, hi) {
+                let base = key * BRICK_SIZE;
+                let (a, b) = (lo.max(base), hi.min(base + IVec3::splat(BRICK_SIZE - 1)));
+                self.coarse_dirty
+                    .entry(LevelKey::new(level, key))
+                    .and_modify(|(lo, hi)| (*lo, *hi) = (lo.min(a), hi.max(b)))
+                    .or_insert((a, b));
+            }
         }
     }
 
-    /// Marks the finest bricks the coarse bricks changed since the last read reach.
+    /// Marks the finest bricks that the coarse points changed since the last read reach.
     fn settle_dirty(&mut self) {
-        for key in std::mem::take(&mut self.coarse_dirty) {
+        let mut coarse = std::mem::take(&mut self.coarse_dirty);
+        for (key, (lo, hi)) in coarse.drain() {
             let scale = 1 << key.level;
-            let (lo, hi) = (key.key * BRICK_SIZE, key.key * BRICK_SIZE + IVec3::splat(BRICK_SIZE - 1));
             self.mark_dirty((lo - IVec3::ONE) * scale + IVec3::ONE, (hi + IVec3::ONE) * scale - IVec3::ONE);
         }
+        // The map keeps its memory for the next marks.
+        self.coarse_dirty = coarse;
     }
 
     /// Marks dirty every brick whose mesh reads a lattice point of `lo ..= hi`.
