@@ -21,7 +21,9 @@
 //! two cubes sharing a face draw the same segments in opposite directions: the surface is closed
 //! and consistently oriented. Segments chain into loops (each crossed edge ends one segment and
 //! starts another), and each loop is a polygon, counter-clockwise seen from the empty side, fanned
-//! into triangles.
+//! into triangles from a vertex that lays no triangle flat in a face of the cube (a loop can
+//! cross an ambiguous face twice, and the cube beyond, crossing it twice too, would lay the same
+//! triangle the other way round: two triangles on one welded edge).
 
 use std::sync::OnceLock;
 
@@ -108,11 +110,32 @@ fn build_case(mask: usize) -> CaseTriangles {
             e = usize::from(next[e]);
         }
         debug_assert_eq!(e, first, "segments close into loops");
-        for i in 1..ring.len() - 1 {
-            triangles.push([ring[0], ring[i], ring[i + 1]]);
-        }
+        // Fanned from a vertex that puts no triangle flat in a face of the cube: a loop that
+        // crosses an ambiguous face twice would otherwise lay a triangle in it, and the cube
+        // beyond, crossing it twice too, the same triangle facing the other way.
+        let n = ring.len();
+        let ring = &ring;
+        let fan = |apex: usize| {
+            (1..n - 1).map(move |i| [ring[apex], ring[(apex + i) % n], ring[(apex + i + 1) % n]])
+        };
+        let apex = (0..n).find(|&a| fan(a).all(|t| !in_one_face(t))).unwrap_or(0);
+        triangles.extend(fan(apex));
     }
     triangles
+}
+
+/// The faces of the cube holding edge `e`, as `2·axis + side` (its lower corner's bit on the
+/// two axes across it).
+fn faces_of_edge(e: u8) -> [usize; 2] {
+    let (lower, axis) = EDGES[usize::from(e)];
+    let across = [(axis + 1) % 3, (axis + 2) % 3].map(usize::from);
+    across.map(|b| 2 * b + (usize::from(lower) >> b & 1))
+}
+
+/// Whether the three edges of a triangle lie on one face of the cube (the triangle in it).
+fn in_one_face(t: [u8; 3]) -> bool {
+    let [a, b, c] = t.map(faces_of_edge);
+    a.iter().any(|f| b.contains(f) && c.contains(f))
 }
 
 /// The case table: triangles for each of the 256 corner masks (bit `c` set = corner `c` dense).
@@ -215,6 +238,19 @@ mod tests {
             };
             assert_eq!(edges(mask), edges(255 - mask), "mask {mask}");
         }
+    }
+
+    #[test]
+    fn no_triangle_lies_in_a_face_of_the_cube() {
+        // The cube across that face would draw the same triangle the other way round.
+        for mask in 0..256usize {
+            for &t in &case_table()[mask] {
+                assert!(!in_one_face(t), "mask {mask}: triangle {t:?} lies in a face");
+            }
+        }
+        // The test sees such a triangle: edges 0, 4 and 1 (x at y = 0, y at x = 0, x at y = 1)
+        // all lie in the face z = 0.
+        assert!(in_one_face([0, 4, 1]) && !in_one_face([0, 4, 8]));
     }
 
     #[test]
