@@ -88,6 +88,9 @@ fn at(p: IVec3, lo: IVec3, dims: IVec3) -> usize {
 /// empty or not: a refined brick of one-coloured clay stays one colour, rounding included.
 /// Otherwise the colour is carried premultiplied by density alongside the plain one.
 fn upsample(coarse: &[Sample], c_lo: IVec3, c_hi: IVec3, lo: IVec3, hi: IVec3, out: &mut [Sample]) {
+    if out.is_empty() {
+        return;
+    }
     let c_dims = (c_hi - c_lo + IVec3::ONE).to_array().map(|d| d as usize);
     // Per axis, each fine coordinate's lower coarse point (from `c_lo`) and whether it lies
     // between two coarse points.
@@ -834,6 +837,10 @@ mod tests {
             }
         }
         assert!(checked > 20_000, "{checked} samples checked");
+        // An empty box reads nothing.
+        let mut out = vec![(1.0, DEFAULT_COLOUR)];
+        f.level_block(0, IVec3::splat(3), IVec3::splat(2), false, &mut out);
+        assert!(out.is_empty());
     }
 
     #[test]
