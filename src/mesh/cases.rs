@@ -110,9 +110,7 @@ fn build_case(mask: usize) -> CaseTriangles {
             e = usize::from(next[e]);
         }
         debug_assert_eq!(e, first, "segments close into loops");
-        // Fanned from a vertex that puts no triangle flat in a face of the cube: a loop that
-        // crosses an ambiguous face twice would otherwise lay a triangle in it, and the cube
-        // beyond, crossing it twice too, the same triangle facing the other way.
+        // Fanned from a vertex that lays no triangle in a face (see the module docs).
         let n = ring.len();
         let ring = &ring;
         let fan = |apex: usize| {
