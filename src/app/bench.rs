@@ -272,29 +272,7 @@ fn bench_stamp_carve(size: BenchSize, emit: &mut impl FnMut(Value)) {
 /// 40 mm stroke's time to the 4 mm one's; and for the tools editing by their size, the median
 /// µs per stamp with the incremental re-mesh after each stamp and the triangles it upserted.
 fn bench_stamp_adaptive(size: BenchSize, emit: &mut impl FnMut(Value)) {
-    use crate::math::Pose;
-    use crate::tool::{apply_tool, StampCounters, Tool, ToolShape, MAX_SIZE_SAMPLES};
-    // (µs per stamp, counters, triangles re-meshed, the field left).
-    let run = |radius_m: f32, by_size: bool, remesh: bool| -> (f64, StampCounters, usize, Field) {
-        let mut field = Field::new(0.001, 0.5);
-        let tool = Tool {
-            level_samples: by_size.then_some(MAX_SIZE_SAMPLES),
-            ..Tool::new(ToolShape::sphere(radius_m), Action::Add, [0.7, 0.4, 0.2, 1.0])
-        };
-        let mut total = StampCounters::default();
-        let mut mesher = Mesher::default();
-        let mut triangles = 0;
-        let begin = Instant::now();
-        for i in 0..size.stamps {
-            let pose =
-                Pose { position_m: Vec3::new(i as f32 * 0.5 * radius_m, 0.0, 0.0), ..Default::default() };
-            total += apply_tool(&mut field, &tool, pose, 0.0);
-            if remesh {
-                triangles += mesher.remesh_dirty(&mut field).upserted_triangles();
-            }
-        }
-        (begin.elapsed().as_secs_f64() * 1e6 / size.stamps as f64, total, triangles, field)
-    };
+    let run = |radius_m, by_size, remesh| tool_stroke(size.stamps, radius_m, by_size, remesh);
     let mut medians = Vec::new();
     for (radius_m, by_size) in [(0.004f32, true), (0.04, true), (0.04, false)] {
         let mut times = Vec::new();
@@ -344,6 +322,37 @@ fn bench_stamp_adaptive(size: BenchSize, emit: &mut impl FnMut(Value)) {
     }
 }
 
+/// A stroke of `stamps` adding sphere-tool stamps of radius `radius_m` along +X, spacing half
+/// the radius, into an empty field of 1 mm voxels, the tool editing by its size or on the
+/// finest level, with or without the incremental re-mesh after each stamp: (µs per stamp,
+/// the stamps' counters, triangles re-meshed, the field left).
+fn tool_stroke(
+    stamps: usize,
+    radius_m: f32,
+    by_size: bool,
+    remesh: bool,
+) -> (f64, crate::tool::StampCounters, usize, Field) {
+    use crate::math::Pose;
+    use crate::tool::{apply_tool, StampCounters, Tool, ToolShape, MAX_SIZE_SAMPLES};
+    let mut field = Field::new(0.001, 0.5);
+    let tool = Tool {
+        level_samples: by_size.then_some(MAX_SIZE_SAMPLES),
+        ..Tool::new(ToolShape::sphere(radius_m), Action::Add, [0.7, 0.4, 0.2, 1.0])
+    };
+    let mut total = StampCounters::default();
+    let mut mesher = Mesher::default();
+    let mut triangles = 0;
+    let begin = Instant::now();
+    for i in 0..stamps {
+        let pose = Pose { position_m: Vec3::new(i as f32 * 0.5 * radius_m, 0.0, 0.0), ..Default::default() };
+        total += apply_tool(&mut field, &tool, pose, 0.0);
+        if remesh {
+            triangles += mesher.remesh_dirty(&mut field).upserted_triangles();
+        }
+    }
+    (begin.elapsed().as_secs_f64() * 1e6 / stamps as f64, total, triangles, field)
+}
+
 /// A field holding a solid sphere of `radius` voxels (1 mm voxels), centred off the lattice.
 pub(super) fn sphere_field(radius: f32) -> Field {
     let mut field = Field::new(0.001, 0.5);
@@ -370,16 +379,7 @@ fn bench_mesh_full(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> 
     }
     // Coarse clay: a short stroke of a 40 mm tool editing by its size (level 3, 8 mm voxels),
     // meshed on the finest lattice from bricks the coarser levels give.
-    let mut coarse_field = Field::new(0.001, 0.5);
-    let coarse_tool = crate::tool::Tool {
-        level_samples: Some(crate::tool::MAX_SIZE_SAMPLES),
-        ..crate::tool::Tool::new(crate::tool::ToolShape::sphere(0.04), Action::Add, [0.7, 0.4, 0.2, 1.0])
-    };
-    for i in 0..size.stamps.min(10) {
-        let pose =
-            crate::math::Pose { position_m: Vec3::new(i as f32 * 0.02, 0.0, 0.0), ..Default::default() };
-        crate::tool::apply_tool(&mut coarse_field, &coarse_tool, pose, 0.0);
-    }
+    let (_, _, _, coarse_field) = tool_stroke(size.stamps.min(10), 0.04, true, false);
     let sphere = sphere_field(size.sphere_radius_voxels);
     for (name, field) in
         [("sphere", &sphere), ("stamp-add-16", &stroke_field), ("stroke-40mm-by-size", &coarse_field)]

@@ -674,20 +674,16 @@ mod tests {
     use super::super::brick::BRICK_VOLUME;
     use super::*;
 
+    /// A field holding only level `level`'s points `lo ..= hi` on each axis, set by `edit`.
+    fn level_clay(level: usize, lo: i32, hi: i32, edit: impl FnMut(IVec3, &mut f32, &mut Colour)) -> Field {
+        let mut f = Field::new(0.001, 0.5);
+        f.edit_level(level, IVec3::splat(lo), IVec3::splat(hi), true, |_, _, _| true, edit);
+        f
+    }
+
     /// A field whose level 2 holds a ramp along x over a slab, and nothing finer.
     fn coarse_ramp() -> Field {
-        let mut f = Field::new(0.001, 0.5);
-        f.edit_level(
-            2,
-            IVec3::new(-8, -8, -8),
-            IVec3::new(8, 8, 8),
-            true,
-            |_, _, _| true,
-            |q, d, _| {
-                *d = ((q.x + 8) as f32 / 16.0).clamp(0.0, 1.0);
-            },
-        );
-        f
+        level_clay(2, -8, 8, |q, d, _| *d = ((q.x + 8) as f32 / 16.0).clamp(0.0, 1.0))
     }
 
     #[test]
@@ -781,20 +777,11 @@ mod tests {
 
     /// A field whose level 2 holds scattered densities in two colours: no two neighbours alike.
     fn coarse_noise() -> Field {
-        let mut f = Field::new(0.001, 0.5);
-        f.edit_level(
-            2,
-            IVec3::splat(-6),
-            IVec3::splat(9),
-            true,
-            |_, _, _| true,
-            |q, d, c| {
-                let h = ((q.x * 73_856_093) ^ (q.y * 19_349_663) ^ (q.z * 83_492_791)) as u32;
-                *d = if h % 5 == 0 { 0.0 } else { (h % 1000) as f32 / 999.0 };
-                *c = if h & 1 == 0 { [0.9, 0.1, 0.2, 1.0] } else { [0.1, 0.3, 0.8, 0.5] };
-            },
-        );
-        f
+        level_clay(2, -6, 9, |q, d, c| {
+            let h = ((q.x * 73_856_093) ^ (q.y * 19_349_663) ^ (q.z * 83_492_791)) as u32;
+            *d = if h % 5 == 0 { 0.0 } else { (h % 1000) as f32 / 999.0 };
+            *c = if h & 1 == 0 { [0.9, 0.1, 0.2, 1.0] } else { [0.1, 0.3, 0.8, 0.5] };
+        })
     }
 
     #[test]
@@ -846,18 +833,10 @@ mod tests {
     #[test]
     fn one_coloured_clay_refines_to_its_colour_exactly() {
         let teal: Colour = [0.1, 0.7, 0.63, 0.9];
-        let mut f = Field::new(0.001, 0.5);
-        f.edit_level(
-            3,
-            IVec3::splat(-4),
-            IVec3::splat(4),
-            true,
-            |_, _, _| true,
-            |q, d, c| {
-                *d = (1.3 - q.as_vec3().length() / 3.0).clamp(0.0, 1.0);
-                *c = teal;
-            },
-        );
+        let f = level_clay(3, -4, 4, |q, d, c| {
+            *d = (1.3 - q.as_vec3().length() / 3.0).clamp(0.0, 1.0);
+            *c = teal;
+        });
         let mut scratch = Brick::default();
         let mut bricks = 0;
         for key in f.covered_keys() {
@@ -871,17 +850,8 @@ mod tests {
 
     #[test]
     fn ranges_of_coarse_clay_are_those_of_the_samples_read() {
-        let mut f = Field::new(0.001, 0.5);
-        f.edit_level(
-            3,
-            IVec3::splat(-6),
-            IVec3::splat(6),
-            true,
-            |_, _, _| true,
-            |q, d, _| {
-                *d = (0.5 + (4.5 - q.as_vec3().length()) / 2.0).clamp(0.0, 1.0);
-            },
-        );
+        let f =
+            level_clay(3, -6, 6, |q, d, _| *d = (0.5 + (4.5 - q.as_vec3().length()) / 2.0).clamp(0.0, 1.0));
         // The finest bricks at the centre read only full coarse samples, those far out only
         // empty ones, though every level-3 brick around them crosses the surface.
         assert_eq!(f.read_range(IVec3::ZERO), Some((1.0, 1.0)));
