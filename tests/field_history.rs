@@ -166,8 +166,8 @@ fn carve_bytes() -> usize {
 #[test]
 fn without_a_spill_folder_the_oldest_steps_are_dropped() {
     let one = carve_bytes();
-    // Each saved brick holds at least its densities (4 bytes a sample).
-    assert!(one > 4 * 4 * BRICK_VOLUME, "a carving stroke saves several bricks: {one} bytes");
+    // Each saved brick holds at least its densities (2 bytes a sample).
+    assert!(one > 4 * 2 * BRICK_VOLUME, "a carving stroke saves several bricks: {one} bytes");
     let mut f = base_field();
     f.set_history_config(HistoryConfig {
         memory_budget_bytes: 2 * one + one / 2,

@@ -73,13 +73,13 @@ fn largest_step(f: &Field) -> f32 {
             for y in 0..BRICK_SIZE {
                 for x in 0..BRICK_SIZE {
                     let p = IVec3::new(x, y, z);
-                    let d = own.density[Brick::linear(p)];
+                    let d = own.density(Brick::linear(p));
                     for (axis, next) in [IVec3::X, IVec3::Y, IVec3::Z].into_iter().zip(up) {
                         let q = p + axis;
                         let n = if q.cmplt(IVec3::splat(BRICK_SIZE)).all() {
-                            own.density[Brick::linear(q)]
+                            own.density(Brick::linear(q))
                         } else {
-                            next.density[Brick::linear(q.rem_euclid(IVec3::splat(BRICK_SIZE)))]
+                            next.density(Brick::linear(q.rem_euclid(IVec3::splat(BRICK_SIZE))))
                         };
                         step = step.max((n - d).abs());
                     }

@@ -131,8 +131,8 @@ fn same_matter(a: &Field, b: &Field) -> bool {
         && a.brick_keys().all(|k| {
             let (x, y) = (a.brick(k).unwrap(), b.brick(k).unwrap());
             (0..argile::field::BRICK_VOLUME).all(|i| {
-                x.density[i].to_bits() == y.density[i].to_bits()
-                    && (x.density[i] == 0.0 || x.colour[i].map(f32::to_bits) == y.colour[i].map(f32::to_bits))
+                x.density[i] == y.density[i]
+                    && (x.density[i] == 0 || x.colour[i].map(f32::to_bits) == y.colour[i].map(f32::to_bits))
             })
         })
 }

@@ -204,11 +204,42 @@ fn stroke(n: usize, r: f32, remesh: bool) -> (f64, usize, Field) {
     (us, triangles, field)
 }
 
+/// OpenVDB's narrow-band half width, in voxels (its `LEVEL_SET_HALF_WIDTH`).
+const OPENVDB_HALF_WIDTH: f32 = 3.0;
+
+/// Bytes OpenVDB takes per active voxel of a narrow-band level set, as measured for the field
+/// issue's peer figures (its `memUsage` of the same strokes).
+const OPENVDB_BYTES_PER_ACTIVE_VOXEL: f64 = 13.0;
+
+/// Lattice points within `half_width` voxels of the surface of the union of `n` balls of
+/// radius `r` voxels centred at `(k · r/2, 0, 0)`, `k < n`: the active voxels of the stroke
+/// of [`stroke`] held as an OpenVDB narrow-band level set.
+fn narrow_band_voxels(n: usize, r: f32, half_width: f32) -> usize {
+    let (step, last) = (0.5 * r, n.saturating_sub(1) as f32);
+    let reach = r + half_width;
+    let (x0, x1) = ((-reach).floor() as i32, (last * step + reach).ceil() as i32);
+    let across = reach.ceil() as i32;
+    let mut count = 0;
+    for x in x0..=x1 {
+        // The balls are alike, so a point's nearest surface is its nearest centre's, and on a
+        // line of centres that is the nearest along x.
+        let dx = x as f32 - (x as f32 / step).round().clamp(0.0, last) * step;
+        for y in -across..=across {
+            for z in -across..=across {
+                let distance = (dx * dx + (y * y + z * z) as f32).sqrt() - r;
+                count += usize::from(distance.abs() < half_width);
+            }
+        }
+    }
+    count
+}
+
 fn bench_stamp(size: BenchSize, emit: &mut impl FnMut(Value)) {
     for r in [4.0f32, 8.0, 16.0, 32.0] {
         let field_only: Vec<f64> = (0..size.repetitions).map(|_| stroke(size.stamps, r, false).0).collect();
         let mut remeshed_tris = 0;
         let mut memory = (0, 0);
+        let openvdb_voxels = narrow_band_voxels(size.stamps, r, OPENVDB_HALF_WIDTH);
         let with_mesh: Vec<f64> = (0..size.repetitions)
             .map(|_| {
                 let (t, tris, field) = stroke(size.stamps, r, true);
@@ -230,6 +261,9 @@ fn bench_stamp(size: BenchSize, emit: &mut impl FnMut(Value)) {
             "field_bytes": memory.0,
             "band_samples": memory.1,
             "bytes_per_band_sample": memory.0 as f64 / memory.1.max(1) as f64,
+            "openvdb_active_voxels": openvdb_voxels,
+            "bytes_per_openvdb_active_voxel": memory.0 as f64 / openvdb_voxels.max(1) as f64,
+            "memory_to_openvdb": memory.0 as f64 / (OPENVDB_BYTES_PER_ACTIVE_VOXEL * openvdb_voxels.max(1) as f64),
         }));
     }
 }
@@ -976,6 +1010,21 @@ mod tests {
     }
 
     #[test]
+    fn the_narrow_band_of_a_ball_is_its_shell() {
+        // The lattice points within 3 voxels of a sphere of radius r: about its shell's volume.
+        let shell = |r: f64| 4.0 / 3.0 * std::f64::consts::PI * ((r + 3.0).powi(3) - (r - 3.0).powi(3));
+        let got = narrow_band_voxels(1, 20.0, 3.0) as f64;
+        assert!((got / shell(20.0) - 1.0).abs() < 0.01, "{got} against {}", shell(20.0));
+        // A line of balls: about a capsule's, its side 2π r L times the band's width and its
+        // two half-ball ends one ball's shell.
+        let (n, r) = (100, 8.0);
+        let length = (n - 1) as f64 * r / 2.0;
+        let capsule = 2.0 * std::f64::consts::PI * r * length * 6.0 + shell(r);
+        let got = narrow_band_voxels(n, r as f32, 3.0) as f64;
+        assert!((got / capsule - 1.0).abs() < 0.03, "{got} against {capsule}");
+    }
+
+    #[test]
     fn stamp_workload_reports_every_radius() {
         let mut lines = Vec::new();
         run(&[Workload::Stamp, Workload::StampCarve], BenchSize::QUICK, |v| lines.push(v)).unwrap();
@@ -984,8 +1033,10 @@ mod tests {
             assert!(l["field_us_per_stamp_median"].as_f64().unwrap() > 0.0);
             assert!(l["remeshed_triangles_per_stroke"].as_u64().unwrap() > 0);
             let per_sample = l["bytes_per_band_sample"].as_f64().unwrap();
-            // A band sample is a stored sample, and every stored sample's density takes 4 bytes.
-            assert!(per_sample > 4.0, "every stored sample costs 4 bytes: {per_sample}");
+            // A band sample is a stored sample, and every stored sample's density takes 2 bytes.
+            assert!(per_sample > 2.0, "every stored sample costs 2 bytes: {per_sample}");
+            let to_openvdb = l["memory_to_openvdb"].as_f64().unwrap();
+            assert!(to_openvdb > 0.0 && to_openvdb.is_finite(), "{l}");
         }
         for l in &lines[4..] {
             assert_eq!(l["workload"], "stamp-carve");

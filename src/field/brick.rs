@@ -12,8 +12,8 @@
 
 use crate::math::IVec3;
 
-/// Samples per brick edge. 8 keeps a brick (density + colour) at 10 KiB, small enough that a
-/// stroke touches few samples it does not change, large enough that the per-brick overhead
+/// Samples per brick edge. 8 keeps a brick at 1 KiB of densities (9 KiB with a colour per
+/// sample), small enough that a stroke touches few samples it does not change, large enough that the per-brick overhead
 /// (hash lookup, apron gather) stays a small part of meshing.
 pub const BRICK_SIZE: i32 = 8;
 
@@ -68,6 +68,41 @@ impl std::fmt::Display for LevelKey {
 /// A linear RGBA colour.
 pub type Colour = [f32; 4];
 
+/// A stored density: `d · DENSITY_ONE`, rounded to the nearest integer.
+///
+/// Densities live in [0, 1], so a fixed-point fraction holds them in half the bytes of an
+/// `f32`. The scale is a power of two so that decoding is exact (a multiplication by
+/// 2⁻¹⁵), 0 and 1 are exact (empty and full samples, constant tiles), and so are the
+/// dyadic fractions ½, ¼, … . A step of 2⁻¹⁵ ≈ 3·10⁻⁵ is far below what moves a surface
+/// visibly (a tool's falloff changes a sample by about 0.25 per voxel it moves, so a step moves
+/// the surface by about a ten-thousandth of a voxel).
+pub type Quantum = u16;
+
+/// The stored value of density 1.
+pub const DENSITY_ONE: Quantum = 1 << 15;
+
+/// The largest change of a density that storing it can make: half a step.
+pub const DENSITY_TOLERANCE: f32 = 0.5 / DENSITY_ONE as f32;
+
+/// Stores density `d`, clamped to [0, 1] (NaN stores as 0), rounded to the nearest step.
+#[inline]
+pub fn quantize(d: f32) -> Quantum {
+    // In [0.5, DENSITY_ONE + 0.5] after the clamp, so truncating rounds to nearest, ties up.
+    (d.clamp(0.0, 1.0) * f32::from(DENSITY_ONE) + 0.5) as Quantum
+}
+
+/// Whether storing density `new` where `old` was changes the stored value.
+#[inline]
+pub fn stores_differently(old: f32, new: f32) -> bool {
+    quantize(old) != quantize(new)
+}
+
+/// The density a stored value holds (exact).
+#[inline]
+pub fn dequantize(q: Quantum) -> f32 {
+    f32::from(q) * (1.0 / DENSITY_ONE as f32)
+}
+
 /// The colour of samples nothing has painted: neutral clay grey.
 pub const DEFAULT_COLOUR: Colour = [0.6, 0.6, 0.6, 1.0];
 
@@ -75,7 +110,7 @@ pub const DEFAULT_COLOUR: Colour = [0.6, 0.6, 0.6, 1.0];
 ///
 /// Memory is what bounds a sculpt's size, so a brick stores what it must and no more:
 ///
-/// - **Densities** are always per sample (`f32`, 2 KiB a brick).
+/// - **Densities** are always per sample, as [`Quantum`]s (1 KiB a brick).
 /// - **Colours** ([`BrickColours`]) are one colour for the whole brick while every sample that
 ///   holds matter has the same colour (unpainted clay: almost every brick), and per sample
 ///   (8 KiB more) only once paint or matter of another colour arrives. The colour of an empty
@@ -86,8 +121,9 @@ pub const DEFAULT_COLOUR: Colour = [0.6, 0.6, 0.6, 1.0];
 ///   holds it (see `Field`), so a solid interior costs a map entry per brick, not its samples.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Brick {
-    /// Density per sample, linear index `x + S·(y + S·z)`.
-    pub density: Box<[f32; BRICK_VOLUME]>,
+    /// Stored density per sample ([`quantize`]), linear index `x + S·(y + S·z)`; read and
+    /// write them through [`Brick::density`] and [`Brick::set_density`].
+    pub density: Box<[Quantum; BRICK_VOLUME]>,
     /// Colour per sample, same indexing.
     pub colour: BrickColours,
 }
@@ -179,7 +215,7 @@ impl std::ops::IndexMut<usize> for BrickColours {
 
 impl Default for Brick {
     fn default() -> Self {
-        Self { density: Box::new([0.0; BRICK_VOLUME]), colour: BrickColours::Uniform(DEFAULT_COLOUR) }
+        Self { density: Box::new([0; BRICK_VOLUME]), colour: BrickColours::Uniform(DEFAULT_COLOUR) }
     }
 }
 
@@ -191,11 +227,28 @@ impl Brick {
         (local.x + BRICK_SIZE * (local.y + BRICK_SIZE * local.z)) as usize
     }
 
+    /// Sample `i`'s density.
+    #[inline]
+    pub fn density(&self, i: usize) -> f32 {
+        dequantize(self.density[i])
+    }
+
+    /// Stores `d` as sample `i`'s density (see [`quantize`]).
+    #[inline]
+    pub fn set_density(&mut self, i: usize, d: f32) {
+        self.density[i] = quantize(d);
+    }
+
+    /// Every sample's density, in linear order.
+    pub fn densities(&self) -> impl Iterator<Item = f32> + '_ {
+        self.density.iter().map(|&q| dequantize(q))
+    }
+
     /// The lowest and highest density of the samples of local points `lo ..= hi`, clamped to
     /// the brick (the whole brick's range is kept by the field).
     pub fn density_range_in(&self, lo: IVec3, hi: IVec3) -> (f32, f32) {
         let (lo, hi) = (lo.max(IVec3::ZERO), hi.min(IVec3::splat(BRICK_SIZE - 1)));
-        let mut range = (f32::INFINITY, f32::NEG_INFINITY);
+        let mut range = (Quantum::MAX, Quantum::MIN);
         for z in lo.z..=hi.z {
             for y in lo.y..=hi.y {
                 let row = Self::linear(IVec3::new(lo.x, y, z))..=Self::linear(IVec3::new(hi.x, y, z));
@@ -204,17 +257,21 @@ impl Brick {
                 }
             }
         }
-        range
+        match range.0 <= range.1 {
+            true => (dequantize(range.0), dequantize(range.1)),
+            false => (f32::INFINITY, f32::NEG_INFINITY),
+        }
     }
 
     /// Whether every sample is empty (density 0): such a brick need not be stored.
     pub fn is_empty(&self) -> bool {
-        self.density.iter().all(|&d| d == 0.0)
+        self.density.iter().all(|&d| d == 0)
     }
 
     /// Total matter in the brick, in sample units.
     pub fn mass(&self) -> f64 {
-        self.density.iter().map(|&d| f64::from(d)).sum()
+        let sum: u64 = self.density.iter().map(|&d| u64::from(d)).sum();
+        sum as f64 / f64::from(DENSITY_ONE)
     }
 
     /// Folds per-sample colours back to one when every sample holding matter has the same
@@ -222,7 +279,7 @@ impl Brick {
     /// with no matter keeps its colours.
     pub fn compact(&mut self) {
         let BrickColours::PerSample(colours) = &self.colour else { return };
-        let mut held = self.density.iter().zip(colours.iter()).filter(|(&d, _)| d > 0.0).map(|(_, c)| c);
+        let mut held = self.density.iter().zip(colours.iter()).filter(|(&d, _)| d > 0).map(|(_, c)| c);
         let Some(&first) = held.next() else { return };
         if held.all(|c| *c == first) {
             self.colour = BrickColours::Uniform(first);
@@ -234,12 +291,12 @@ impl Brick {
     pub fn uniform_value(&self) -> Option<(f32, Colour)> {
         let BrickColours::Uniform(colour) = self.colour else { return None };
         let first = self.density[0];
-        self.density.iter().all(|d| d.to_bits() == first.to_bits()).then_some((first, colour))
+        self.density.iter().all(|&d| d == first).then_some((dequantize(first), colour))
     }
 
     /// Heap bytes the brick's samples take.
     pub fn heap_bytes(&self) -> usize {
-        std::mem::size_of::<[f32; BRICK_VOLUME]>()
+        std::mem::size_of::<[Quantum; BRICK_VOLUME]>()
             + match self.colour {
                 BrickColours::Uniform(_) => 0,
                 BrickColours::PerSample(_) => std::mem::size_of::<[Colour; BRICK_VOLUME]>(),
@@ -290,7 +347,7 @@ mod tests {
         assert_eq!(b.colour[3], [1.0, 0.0, 0.0, 1.0]);
         assert_eq!(b.colour[4], DEFAULT_COLOUR);
         assert_eq!(b.colour.iter().count(), BRICK_VOLUME);
-        assert_eq!(b.heap_bytes(), BRICK_VOLUME * 20);
+        assert_eq!(b.heap_bytes(), BRICK_VOLUME * 18);
         // Stored either way, the same colours are equal.
         let expanded = BrickColours::PerSample(Box::new([DEFAULT_COLOUR; BRICK_VOLUME]));
         assert_eq!(expanded, BrickColours::Uniform(DEFAULT_COLOUR));
@@ -303,13 +360,13 @@ mod tests {
     fn compaction_ignores_the_colour_of_empty_samples() {
         let red = [1.0, 0.0, 0.0, 1.0];
         let mut b = Brick::default();
-        b.density[3] = 0.5;
+        b.set_density(3, 0.5);
         b.colour[3] = red;
         b.compact();
         assert_eq!(b.colour, BrickColours::Uniform(red));
-        assert_eq!(b.heap_bytes(), BRICK_VOLUME * 4);
+        assert_eq!(b.heap_bytes(), BRICK_VOLUME * 2);
         // Two colours of matter stay per sample.
-        b.density[4] = 1.0;
+        b.set_density(4, 1.0);
         b.colour[4] = DEFAULT_COLOUR;
         b.compact();
         assert!(!b.colour.is_uniform());
@@ -320,9 +377,36 @@ mod tests {
     fn a_brick_of_one_value_is_a_tile() {
         let mut b = Brick::default();
         assert_eq!(b.uniform_value(), Some((0.0, DEFAULT_COLOUR)));
-        b.density.fill(1.0);
+        b.density.fill(DENSITY_ONE);
         assert_eq!(b.uniform_value(), Some((1.0, DEFAULT_COLOUR)));
-        b.density[9] = 0.99;
+        b.set_density(9, 0.99);
         assert_eq!(b.uniform_value(), None);
+    }
+
+    #[test]
+    fn stored_densities_round_to_the_nearest_step() {
+        // Every stored value reads back and stores again as itself.
+        for q in 0..=DENSITY_ONE {
+            assert_eq!(quantize(dequantize(q)), q);
+        }
+        // Empty, full and the dyadic fractions are exact.
+        for d in [0.0, 1.0, 0.5, 0.25, 0.75, 0.125] {
+            assert_eq!(dequantize(quantize(d)), d);
+        }
+        // Anything else moves by half a step at most, and out-of-range values clamp.
+        for i in 0..=10_000 {
+            let d = i as f32 / 10_000.0;
+            assert!((dequantize(quantize(d)) - d).abs() <= DENSITY_TOLERANCE, "{d}");
+        }
+        assert_eq!(quantize(-0.3), 0);
+        assert_eq!(quantize(1.7), DENSITY_ONE);
+        assert_eq!(quantize(f32::NAN), 0);
+        // Storing keeps the order of densities (a removing edit never adds).
+        let mut last = 0;
+        for i in 0..=100_000 {
+            let q = quantize(i as f32 / 100_000.0);
+            assert!(q >= last);
+            last = q;
+        }
     }
 }

@@ -378,7 +378,7 @@ fn encode_step(step: &Step) -> Vec<u8> {
             None => out.push(key.level << 1),
             Some(b) => {
                 out.push(1 | key.level << 1);
-                for d in b.density.iter() {
+                for d in b.densities() {
                     out.extend_from_slice(&d.to_le_bytes());
                 }
                 for c in b.colour.iter().flatten() {
@@ -458,7 +458,7 @@ fn decode_step(bytes: &[u8]) -> Result<Step, String> {
                 let c = take(BRICK_VOLUME * 16)?;
                 let mut b = Brick::default();
                 for i in 0..BRICK_VOLUME {
-                    b.density[i] = f32_at(d, i);
+                    b.set_density(i, f32_at(d, i));
                 }
                 b.colour = BrickColours::from_samples(|i| std::array::from_fn(|j| f32_at(c, 4 * i + j)));
                 Some(Arc::new(b))
@@ -479,7 +479,7 @@ mod tests {
 
     fn sample_step() -> Step {
         let mut b = Brick::default();
-        b.density[3] = 0.25;
+        b.set_density(3, 0.25);
         b.colour[7] = [0.1, 0.2, 0.3, 1.0];
         Step {
             bricks: vec![

@@ -36,7 +36,8 @@
 //!   change; new matter takes the interpolated colour of the coarse matter that brought it.
 
 use super::brick::{
-    keys_over, Brick, BrickColours, BrickKey, Colour, LevelKey, BRICK_SIZE, DEFAULT_COLOUR, LEVELS,
+    dequantize, keys_over, quantize, Brick, BrickColours, BrickKey, Colour, LevelKey, BRICK_SIZE,
+    DEFAULT_COLOUR, LEVELS,
 };
 use super::tree::{whole_rows, Field, Ranges, Reach, Walk};
 use crate::math::IVec3;
@@ -136,7 +137,10 @@ fn fill_missing(
             for &(x0, x_odd) in &maps[0] {
                 if out[i].0 < 0.0 {
                     out[i] = if x_odd || y_odd || z_odd {
-                        between(i)
+                        // Stored as the finer level would store it, so that a brick the
+                        // coarser levels give reads the same stored or not.
+                        let (d, c) = between(i);
+                        (dequantize(quantize(d)), c)
                     } else {
                         coarse[x0 + c_dims[0] * (y0 + c_dims[1] * z0)]
                     };
@@ -202,7 +206,7 @@ impl Field {
                         for x in a.x..=b.x {
                             let p = IVec3::new(x, y, z);
                             let i = Brick::linear(p - base);
-                            out[at(p, lo, dims)] = (brick.density[i], brick.colour[i]);
+                            out[at(p, lo, dims)] = (brick.density(i), brick.colour[i]);
                         }
                     }
                 }
@@ -281,7 +285,7 @@ impl Field {
         }
         let mut brick = Brick::default();
         for (d, s) in brick.density.iter_mut().zip(&samples) {
-            *d = s.0;
+            *d = quantize(s.0);
         }
         brick.colour = BrickColours::from_samples(|i| samples[i].1);
         brick.compact();
@@ -316,7 +320,7 @@ impl Field {
             let (key, local) = super::brick::split_index(p);
             bricks.get(&key).map(|b| {
                 let i = Brick::linear(local);
-                (b.density[i], b.colour[i])
+                (b.density(i), b.colour[i])
             })
         })
     }
@@ -338,7 +342,7 @@ impl Field {
         match self.levels[0].bricks.get(&key) {
             Some(b) => {
                 let i = Brick::linear(local);
-                (b.density[i], b.colour[i])
+                (b.density(i), b.colour[i])
             }
             None if self.has_levels_above(0) => {
                 let mut out = Vec::with_capacity(1);
@@ -653,7 +657,7 @@ impl Field {
             let base = key * BRICK_SIZE;
             self.level_block(level, base, base + IVec3::splat(BRICK_SIZE - 1), false, &mut samples);
             let plain = samples.iter().enumerate().all(|(i, &(d, c))| {
-                let (bd, bc) = (brick.density[i], brick.colour[i]);
+                let (bd, bc) = (brick.density(i), brick.colour[i]);
                 (bd - d).abs() <= DETAIL_TOLERANCE
                     && (bd == 0.0 && d == 0.0
                         || (0..4).all(|k| (bc[k] - c[k]).abs() <= COLOUR_DETAIL_TOLERANCE))
@@ -671,7 +675,7 @@ impl Field {
 
 #[cfg(test)]
 mod tests {
-    use super::super::brick::BRICK_VOLUME;
+    use super::super::brick::{BRICK_VOLUME, DENSITY_TOLERANCE};
     use super::*;
 
     /// A field holding only level `level`'s points `lo ..= hi` on each axis, set by `edit`.
@@ -771,7 +775,7 @@ mod tests {
     fn stored(f: &Field, level: usize, q: IVec3) -> Sample {
         let (key, local) = super::super::brick::split_index(q);
         f.level_brick(LevelKey::new(level, key)).map_or((0.0, DEFAULT_COLOUR), |b| {
-            (b.density[Brick::linear(local)], b.colour[Brick::linear(local)])
+            (b.density(Brick::linear(local)), b.colour[Brick::linear(local)])
         })
     }
 
@@ -807,12 +811,16 @@ mod tests {
                     }
                 }
                 let colour = if d > 0.0 { weighted.map(|c| c / d) } else { plain };
-                let (got_d, got_c) = (brick.density[i], brick.colour[i]);
-                assert!((got_d - d).abs() <= 1e-6, "{p}: density {got_d}, trilinear {d}");
+                let (got_d, got_c) = (brick.density(i), brick.colour[i]);
+                // Stored to the nearest step of a density on level 1, then on the finest.
+                let tolerance = 2.0 * DENSITY_TOLERANCE + 1e-6;
+                assert!((got_d - d).abs() <= tolerance, "{p}: density {got_d}, trilinear {d}");
                 if d > 1e-3 {
+                    // Colours are weighed by level 1's densities, each off by a step at most.
+                    let tolerance = 1e-5 + 2.0 * DENSITY_TOLERANCE / d;
                     for k in 0..4 {
                         assert!(
-                            (got_c[k] - colour[k]).abs() <= 1e-5,
+                            (got_c[k] - colour[k]).abs() <= tolerance,
                             "{p}: colour {got_c:?}, trilinear {colour:?}"
                         );
                     }
@@ -874,7 +882,7 @@ mod tests {
             let (lo, hi) = f.read_range(k).expect("covered");
             let brick = f.read_brick(k, &mut scratch);
             if let Some(b) = brick {
-                for &d in b.density.iter() {
+                for d in b.densities() {
                     assert!(d >= lo && d <= hi, "{k}: {d} outside {lo}..{hi}");
                 }
             }

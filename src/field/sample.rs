@@ -63,7 +63,7 @@ impl<'f> FieldReader<'f> {
     #[inline]
     pub fn density(&mut self, p: IVec3) -> f32 {
         let (key, local) = split_index(p);
-        self.brick(key).map_or(0.0, |b| b.density[Brick::linear(local)])
+        self.brick(key).map_or(0.0, |b| b.density(Brick::linear(local)))
     }
 
     /// Colour at a lattice point.

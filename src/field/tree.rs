@@ -4,9 +4,12 @@ use std::sync::Arc;
 
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 
-use super::brick::{keys_over, Brick, BrickColours, BrickKey, Colour, LevelKey, BRICK_SIZE, LEVELS};
+use super::brick::{
+    dequantize, keys_over, quantize, Brick, BrickColours, BrickKey, Colour, LevelKey, Quantum, BRICK_SIZE,
+    DENSITY_ONE, LEVELS,
+};
 use super::history::{History, HistoryConfig, HistoryError, HistoryStats, Step};
-use crate::math::{IVec3, Vec4, VoxelTransform};
+use crate::math::{IVec3, VoxelTransform};
 
 /// Bricks whose mesh may have changed since the mesher last drained the set.
 ///
@@ -213,6 +216,16 @@ impl Field {
         self.iso
     }
 
+    /// The density the mesher extracts the surface at: the iso-level moved up to halfway
+    /// between two stored densities (within 2⁻¹⁶ of it). No sample holds it, so which side of
+    /// the surface a sample lies on never rests on a tie: a sample stored at the iso-level
+    /// itself is outside. Such samples are common (a box whose faces lie on the lattice has
+    /// its whole outer layer at the iso-level), and a tie broken either way by rounding would
+    /// let the smallest change of one sample move the surface by a voxel.
+    pub fn surface_level(&self) -> f32 {
+        (f32::from(quantize(self.iso).min(DENSITY_ONE - 1)) + 0.5) / f32::from(DENSITY_ONE)
+    }
+
     /// Number of stored bricks of the finest level.
     pub fn brick_count(&self) -> usize {
         self.levels[0].bricks.len()
@@ -390,7 +403,7 @@ impl Field {
         self.levels
             .iter()
             .flat_map(|l| l.bricks.values())
-            .map(|b| b.density.iter().filter(|&&d| d > 0.0 && d < 1.0).count())
+            .map(|b| b.density.iter().filter(|&&d| d > 0 && d < DENSITY_ONE).count())
             .sum()
     }
 
@@ -467,13 +480,14 @@ impl Field {
                     for x in rows.local(base, a, b, y, z) {
                         let local = IVec3::new(x, y, z);
                         let i = Brick::linear(local);
-                        let (density, old) = (brick.density[i], brick.colour[i]);
-                        let mut colour = old;
-                        edit(base + local, &mut brick.density[i], &mut colour);
-                        let d = brick.density[i];
-                        let mut change = d.to_bits() != density.to_bits();
+                        let (stored, old) = (brick.density[i], brick.colour[i]);
+                        let (mut density, mut colour) = (dequantize(stored), old);
+                        edit(base + local, &mut density, &mut colour);
+                        let d = quantize(density);
+                        brick.density[i] = d;
+                        let mut change = d != stored;
                         // An empty sample's colour means nothing: it is not stored.
-                        if d > 0.0 {
+                        if d > 0 {
                             let recoloured = colours_differ(colour, old);
                             if fresh {
                                 brick.colour = BrickColours::Uniform(colour);
@@ -521,10 +535,12 @@ impl Field {
                         let start = Brick::linear(IVec3::new(0, y, z));
                         let mut row = Row::NONE;
                         for x in rows.local(base, a, b, y, z) {
-                            let density = &mut brick.density[start + x as usize];
-                            let old = density.to_bits();
-                            edit(base + IVec3::new(x, y, z), density);
-                            if density.to_bits() != old {
+                            let stored = &mut brick.density[start + x as usize];
+                            let mut density = dequantize(*stored);
+                            edit(base + IVec3::new(x, y, z), &mut density);
+                            let d = quantize(density);
+                            if d != *stored {
+                                *stored = d;
                                 row.add(x);
                             }
                         }
@@ -768,7 +784,7 @@ fn same_level(mine: &Level, theirs: &Level) -> bool {
     mine.bricks.len() == theirs.bricks.len()
         && mine.bricks.iter().all(|(k, b)| {
             theirs.bricks.get(k).is_some_and(|o| {
-                b.density.iter().zip(o.density.iter()).all(|(x, y)| x.to_bits() == y.to_bits())
+                b.density == o.density
                     && b.colour
                         .iter()
                         .flatten()
@@ -837,30 +853,24 @@ impl Row {
 /// Lowest and highest density of a brick's samples, and of those on each lower face.
 fn brick_ranges(brick: &Brick) -> Ranges {
     const S: usize = BRICK_SIZE as usize;
-    // A row is two groups of four samples, compared four at a time.
-    const _: () = assert!(S == 8);
-    let widen = |(lo, hi): (f32, f32), (a, b): (f32, f32)| (lo.min(a), hi.max(b));
-    let none = (f32::INFINITY, f32::NEG_INFINITY);
-    let (mut lo, mut hi) = (Vec4::INFINITY, Vec4::NEG_INFINITY);
-    let mut faces = [none; 3];
+    let none = (Quantum::MAX, Quantum::MIN);
+    let widen = |(lo, hi): (Quantum, Quantum), (a, b): (Quantum, Quantum)| (lo.min(a), hi.max(b));
+    let (mut all, mut faces) = (none, [none; 3]);
     // Row by row (one y, z): x = 0 is each row's first sample, y = 0 every S-th row, z = 0
     // the first S rows.
     for (r, row) in brick.density.chunks_exact(S).enumerate() {
-        let (a, b) = (Vec4::from_slice(&row[..4]), Vec4::from_slice(&row[4..]));
-        let (row_lo, row_hi) = (a.min(b), a.max(b));
-        (lo, hi) = (lo.min(row_lo), hi.max(row_hi));
+        let range = row.iter().fold(none, |range, &d| widen(range, (d, d)));
+        all = widen(all, range);
         faces[0] = widen(faces[0], (row[0], row[0]));
-        if r % S == 0 || r < S {
-            let range = (row_lo.min_element(), row_hi.max_element());
-            if r % S == 0 {
-                faces[1] = widen(faces[1], range);
-            }
-            if r < S {
-                faces[2] = widen(faces[2], range);
-            }
+        if r % S == 0 {
+            faces[1] = widen(faces[1], range);
+        }
+        if r < S {
+            faces[2] = widen(faces[2], range);
         }
     }
-    Ranges { all: (lo.min_element(), hi.max_element()), low_faces: faces }
+    let read = |(lo, hi): (Quantum, Quantum)| (dequantize(lo), dequantize(hi));
+    Ranges { all: read(all), low_faces: faces.map(read) }
 }
 
 #[cfg(test)]
@@ -931,7 +941,7 @@ mod tests {
         assert_eq!((f.colour(IVec3::ZERO), f.colour(IVec3::ONE)), (DEFAULT_COLOUR, red));
         assert_eq!(f.tile_count(), 7);
         let painted = f.brick(IVec3::ZERO).unwrap();
-        assert_eq!(painted.heap_bytes(), BRICK_VOLUME * 20, "two colours of matter: per-sample colours");
+        assert_eq!(painted.heap_bytes(), BRICK_VOLUME * 18, "two colours of matter: per-sample colours");
     }
 
     #[test]
@@ -976,7 +986,7 @@ mod tests {
         // Painting empty samples blue keeps nothing: they hold no matter to colour.
         f.edit_box(IVec3::ZERO, IVec3::splat(4), false, |_, _, c| *c = [0.0, 0.0, 1.0, 1.0]);
         assert!(f.brick(IVec3::ZERO).unwrap().colour.is_uniform());
-        assert_eq!(f.brick(IVec3::ZERO).unwrap().heap_bytes(), BRICK_VOLUME * 4);
+        assert_eq!(f.brick(IVec3::ZERO).unwrap().heap_bytes(), BRICK_VOLUME * 2);
         assert_eq!(f.colour(IVec3::splat(6)), red);
     }
 
@@ -1041,13 +1051,24 @@ mod tests {
     }
 
     #[test]
+    fn the_surface_level_lies_between_two_stored_densities_next_to_the_iso_level() {
+        for iso in [0.5, 0.3, 0.01, 0.99999] {
+            let level = Field::new(0.001, iso).surface_level();
+            assert!((level - iso).abs() <= 2.0 * crate::field::DENSITY_TOLERANCE, "{iso}: {level}");
+            assert!((0..=DENSITY_ONE).all(|q| dequantize(q) != level), "{iso}: a stored value");
+        }
+        // A sample stored at the iso-level is outside.
+        assert!(dequantize(quantize(0.5)) < Field::new(0.001, 0.5).surface_level());
+    }
+
+    #[test]
     fn brick_ranges_hold_the_whole_brick_and_each_lower_face() {
         let mut brick = Brick::default();
-        for (i, d) in brick.density.iter_mut().enumerate() {
-            *d = ((i * 7919) % 1000) as f32 / 1000.0;
+        for i in 0..BRICK_VOLUME {
+            brick.set_density(i, ((i * 7919) % 1000) as f32 / 1000.0);
         }
         let mut want = [(f32::INFINITY, f32::NEG_INFINITY); 4];
-        for (i, &d) in brick.density.iter().enumerate() {
+        for (i, d) in brick.densities().enumerate() {
             let local = IVec3::new(i as i32 % 8, i as i32 / 8 % 8, i as i32 / 64);
             for (r, on) in want.iter_mut().zip([true, local.x == 0, local.y == 0, local.z == 0]) {
                 if on {
@@ -1059,8 +1080,8 @@ mod tests {
         assert_eq!(got.all, want[0]);
         assert_eq!(got.low_faces, [want[1], want[2], want[3]]);
         // A ramp along x: its lower x face is one value, the others span the ramp.
-        for (i, d) in brick.density.iter_mut().enumerate() {
-            *d = (i % 8) as f32 / 7.0;
+        for i in 0..BRICK_VOLUME {
+            brick.set_density(i, (i % 8) as f32 / 7.0);
         }
         let ramp = brick_ranges(&brick);
         assert_eq!((ramp.all, ramp.low_faces), ((0.0, 1.0), [(0.0, 0.0), (0.0, 1.0), (0.0, 1.0)]));

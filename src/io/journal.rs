@@ -156,12 +156,13 @@ impl Iterator for Reader<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::field::BRICK_VOLUME;
     use crate::math::IVec3;
 
     fn brick(seed: f32) -> Arc<Brick> {
         let mut b = Brick::default();
-        for (i, d) in b.density.iter_mut().enumerate() {
-            *d = ((i as f32 * 0.37 + seed).sin() * 0.5 + 0.5).clamp(0.0, 1.0);
+        for i in 0..BRICK_VOLUME {
+            b.set_density(i, (i as f32 * 0.37 + seed).sin() * 0.5 + 0.5);
         }
         b.colour[5] = [seed, 0.5, 0.25, 1.0];
         Arc::new(b)

@@ -685,7 +685,7 @@ pub(crate) fn put_brick(out: &mut Vec<u8>, key: BrickKey, brick: &Brick) {
     for c in key.to_array() {
         out.extend_from_slice(&c.to_le_bytes());
     }
-    for d in brick.density.iter() {
+    for d in brick.densities() {
         out.extend_from_slice(&d.to_le_bytes());
     }
     for c in brick.colour.iter().flatten() {
@@ -723,7 +723,7 @@ pub(crate) fn read_brick(record: &[u8]) -> Result<(BrickKey, Brick), String> {
         if !(0.0..=1.0).contains(&d) {
             return Err(format!("brick {key} holds density {d}, outside [0, 1]"));
         }
-        brick.density[i] = d;
+        brick.set_density(i, d);
     }
     let colour = |i: usize| -> Colour { std::array::from_fn(|j| f(12 + 4 * BRICK_VOLUME + 16 * i + 4 * j)) };
     if (0..BRICK_VOLUME).any(|i| colour(i).iter().any(|v| !v.is_finite())) {
@@ -1241,7 +1241,7 @@ mod tests {
         for far in [MAX_BRICK_COORD + 1, i32::MAX, i32::MIN] {
             let mut f = Field::new(0.001, 0.5);
             let mut brick = Brick::default();
-            brick.density[0] = 1.0;
+            brick.set_density(0, 1.0);
             f.insert_brick(IVec3::new(1, 0, 0), brick.clone());
             // Version 3 (no index): the key's range is checked before its block is.
             let mut bytes = encode_with(&f, None, EncodeOptions { version: 3, history: false }, &mut |_| {});
@@ -1260,7 +1260,7 @@ mod tests {
         }
         let mut f = Field::new(0.001, 0.5);
         let mut brick = Brick::default();
-        brick.density[0] = 1.0;
+        brick.set_density(0, 1.0);
         f.insert_brick(IVec3::new(-MAX_BRICK_COORD, MAX_BRICK_COORD, 0), brick);
         let back = decode(&encode(&f, None, &mut |_| {}), "edge.argile", &mut |_| {}).unwrap();
         assert!(back.field.same_samples(&f), "the range's edge loads");

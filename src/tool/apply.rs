@@ -14,7 +14,7 @@ use super::shapes::ToolFrame;
 use super::shapes::ToolShape;
 use super::stamp::{mix_in, solid_density, SOLID_BAND_VOXELS};
 use super::stroke::Tool;
-use crate::field::{Colour, Field, BRICK_SIZE, LEVELS};
+use crate::field::{stores_differently, Colour, Field, BRICK_SIZE, LEVELS};
 use crate::math::{IVec3, Pose, Vec3};
 
 /// Work done by one stamp (or a sum of stamps), as in Ferley et al.'s performance table.
@@ -342,7 +342,7 @@ impl Kernel<'_> {
         if !d.is_finite() {
             *d = old_d;
         }
-        if *d != old_d || *c != old_c {
+        if stores_differently(old_d, *d) || *c != old_c {
             walk.counters.dirtied += 1;
         }
     }
@@ -406,7 +406,7 @@ fn sphere_fast_path(
             } else {
                 *d = d.min(1.0 - tool);
             }
-            if *d != old {
+            if stores_differently(old, *d) {
                 counters.dirtied += 1;
             }
         };

@@ -206,7 +206,9 @@ mod tests {
             s.advance(&mut f, at(0.0), dt);
         }
         assert_eq!(s.stamp_count(), 120);
-        assert!((f.density(crate::math::IVec3::ZERO) - 0.5).abs() < 1e-4);
+        // Each tick's density is stored to the nearest step: the error adds up over the ticks.
+        let tolerance = 120.0 * crate::field::DENSITY_TOLERANCE;
+        assert!((f.density(crate::math::IVec3::ZERO) - 0.5).abs() < tolerance);
         let c = s.total_counters();
         assert!(c.visited >= c.computed && c.computed >= c.dirtied && c.dirtied > 0 && c.bricks > 0);
     }
