@@ -91,10 +91,16 @@ pub fn quantize(d: f32) -> Quantum {
     (d.clamp(0.0, 1.0) * f32::from(DENSITY_ONE) + 0.5) as Quantum
 }
 
-/// Whether storing density `new` where `old` was changes the stored value.
+/// Whether storing density `new` where the stored density `old` (a value [`dequantize`]
+/// gives) was changes the stored value: `quantize(new) != quantize(old)`, without rounding.
 #[inline]
 pub fn stores_differently(old: f32, new: f32) -> bool {
-    quantize(old) != quantize(new)
+    let one = f32::from(DENSITY_ONE);
+    // Both products are exact (a power-of-two scale) and so is their difference where it
+    // matters (within a step of each other); `new` rounds to `old` within half a step below
+    // and just under half a step above.
+    let steps = new.clamp(0.0, 1.0) * one - old * one;
+    !(-0.5..0.5).contains(&steps)
 }
 
 /// The density a stored value holds (exact).
@@ -401,6 +407,14 @@ mod tests {
         assert_eq!(quantize(-0.3), 0);
         assert_eq!(quantize(1.7), DENSITY_ONE);
         assert_eq!(quantize(f32::NAN), 0);
+        // Whether a new density stores differently, as quantizing both says.
+        for q in [0, 1, 7, 16_384, DENSITY_ONE - 1, DENSITY_ONE] {
+            let old = dequantize(q);
+            for k in -40..=40 {
+                let new = old + k as f32 * 0.25 * DENSITY_TOLERANCE;
+                assert_eq!(stores_differently(old, new), quantize(new) != q, "{old} → {new}");
+            }
+        }
         // Storing keeps the order of densities (a removing edit never adds).
         let mut last = 0;
         for i in 0..=100_000 {

@@ -248,6 +248,13 @@ pub fn apply_tool(field: &mut Field, tool: &Tool, pose: Pose, dt_s: f32) -> Stam
     counters
 }
 
+/// The key of the brick holding lattice point `p` (a shift: the walk asks it of every sample).
+#[inline(always)]
+fn brick_of(p: IVec3) -> IVec3 {
+    const _: () = assert!(BRICK_SIZE == 8);
+    p >> 3
+}
+
 /// What one stamp does at a sample, on any level's lattice.
 struct Kernel<'a> {
     action: Action,
@@ -270,7 +277,7 @@ impl Kernel<'_> {
     #[inline]
     fn apply(&self, fp: &Footprint, p: IVec3, d: &mut f32, c: &mut Colour, walk: &mut Walked<'_>) {
         walk.counters.visited += 1;
-        let brick = p.div_euclid(IVec3::splat(BRICK_SIZE));
+        let brick = brick_of(p);
         if walk.last_brick != Some(brick) {
             walk.last_brick = Some(brick);
             walk.counters.bricks += 1;
@@ -391,7 +398,7 @@ fn sphere_fast_path(
         let kernel = |p: IVec3, d: &mut f32, c: &mut Colour| {
             counters.visited += 1;
             counters.computed += 1;
-            let brick = p.div_euclid(IVec3::splat(BRICK_SIZE));
+            let brick = brick_of(p);
             if last_brick != Some(brick) {
                 last_brick = Some(brick);
                 counters.bricks += 1;
