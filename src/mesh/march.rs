@@ -2,7 +2,7 @@
 
 use super::cases::{flat_cases, CORNER_OFFSETS, EDGES};
 use super::types::{ChunkMesh, Vertex};
-use crate::field::{split_index, Brick, BrickKey, Colour, Field, BRICK_SIZE, DEFAULT_COLOUR};
+use crate::field::{split_index, Brick, BrickKey, Colour, Field, Quantum, BRICK_SIZE, DEFAULT_COLOUR};
 use crate::math::{IVec3, Vec3, Vec4, VoxelTransform};
 
 /// Samples per axis of a gathered block: the brick plus one sample below (for gradients) and
@@ -24,6 +24,8 @@ const _: () = assert!(CORNERS_PER_AXIS == 9);
 pub struct Block {
     /// Densities, `x + BLOCK·(y + BLOCK·z)`.
     pub density: Vec<f32>,
+    /// The same densities as stored, gathered before they are decoded all at once.
+    pub stored: Vec<Quantum>,
     /// Lattice point of block point (0, 0, 0).
     pub origin: IVec3,
     /// Spare bricks for neighbours the coarser levels give (see `gather_block`); made on
@@ -33,7 +35,12 @@ pub struct Block {
 
 impl Default for Block {
     fn default() -> Self {
-        Self { density: vec![0.0; BLOCK_VOLUME], origin: IVec3::ZERO, refined: Vec::new() }
+        Self {
+            density: vec![0.0; BLOCK_VOLUME],
+            stored: vec![0; BLOCK_VOLUME],
+            origin: IVec3::ZERO,
+            refined: Vec::new(),
+        }
     }
 }
 

@@ -62,7 +62,7 @@ fn gather<'f>(
     let found = around.bricks;
     let reading: [Option<&Brick>; 27] =
         std::array::from_fn(|i| if spare[i] { Some(&refined[i]) } else { found[i] });
-    copy_block(&reading, &mut block.density);
+    copy_block(&reading, &mut block.stored, &mut block.density);
     block.origin = key * BRICK_SIZE - IVec3::ONE;
     let block: &'f Block = block;
     around.bricks = std::array::from_fn(|i| if spare[i] { Some(&block.refined[i]) } else { found[i] });
@@ -119,20 +119,16 @@ fn neighbour(key: BrickKey, i: usize) -> BrickKey {
 /// [`Neighbourhood::bricks`]; absent ones are empty). On each axis, block coordinate 0 is the
 /// lower neighbour's last sample, `1 ..= S` the centre brick's and `S + 1`, `S + 2` the upper
 /// neighbour's first two; so each block row (one `y`, `z`) is three pieces of fixed length,
-/// copied without a call, from three bricks looked up once for all the rows they serve.
-fn copy_block(around: &[Option<&Brick>; 27], density: &mut [f32]) {
+/// copied without a call, from three bricks looked up once for all the rows they serve, into
+/// `stored`; then the whole block is decoded into `density` in one loop.
+fn copy_block(around: &[Option<&Brick>; 27], stored: &mut [Quantum], density: &mut [f32]) {
     const S: usize = BRICK_SIZE as usize;
     /// Per piece of an axis: the neighbour along it, its block coordinates, the local
     /// coordinate of the first of them.
     const PIECES: [(usize, (usize, usize), usize); 3] =
         [(0, (0, 1), S - 1), (1, (1, S + 1), 0), (2, (S + 1, BLOCK), 0)];
     static EMPTY: [Quantum; BRICK_VOLUME] = [0; BRICK_VOLUME];
-    let copy = |dst: &mut [f32], src: &[Quantum]| {
-        for (d, &q) in dst.iter_mut().zip(src) {
-            *d = dequantize(q);
-        }
-    };
-    let density: &mut [f32; BLOCK_VOLUME] = density.try_into().expect("a block holds BLOCK_VOLUME samples");
+    let block: &mut [Quantum; BLOCK_VOLUME] = stored.try_into().expect("a block holds BLOCK_VOLUME samples");
     for (bz, (z0, z1), lz0) in PIECES {
         for (by, (y0, y1), ly0) in PIECES {
             let brick = |bx: usize| around[bx + 3 * (by + 3 * bz)].map_or(&EMPTY, |b| &*b.density);
@@ -140,14 +136,17 @@ fn copy_block(around: &[Option<&Brick>; 27], density: &mut [f32]) {
             for (z, lz) in (z0..z1).zip(lz0..) {
                 for (y, ly) in (y0..y1).zip(ly0..) {
                     let from = S * (ly + S * lz);
-                    let dst: &mut [f32; BLOCK] =
-                        (&mut density[BLOCK * (y + BLOCK * z)..][..BLOCK]).try_into().expect("a block row");
-                    dst[0] = dequantize(lower[from + S - 1]);
-                    copy(&mut dst[1..=S], &centre[from..from + S]);
-                    copy(&mut dst[S + 1..], &upper[from..from + 2]);
+                    let dst: &mut [Quantum; BLOCK] =
+                        (&mut block[BLOCK * (y + BLOCK * z)..][..BLOCK]).try_into().expect("a block row");
+                    dst[0] = lower[from + S - 1];
+                    dst[1..=S].copy_from_slice(&centre[from..from + S]);
+                    dst[S + 1..].copy_from_slice(&upper[from..from + 2]);
                 }
             }
         }
+    }
+    for (d, &q) in density.iter_mut().zip(block.iter()) {
+        *d = dequantize(q);
     }
 }
 
