@@ -13,9 +13,13 @@
 use crate::math::IVec3;
 
 /// Samples per brick edge. 8 keeps a brick at 1 KiB of densities (9 KiB with a colour per
-/// sample), small enough that a stroke touches few samples it does not change, large enough that the per-brick overhead
-/// (hash lookup, apron gather) stays a small part of meshing.
+/// sample), small enough that a stroke touches few samples it does not change, large enough
+/// that the per-brick overhead (hash lookup, apron gather) stays a small part of meshing.
 pub const BRICK_SIZE: i32 = 8;
+
+/// `log2(BRICK_SIZE)`: a lattice point's brick is a shift of it.
+const BRICK_SHIFT: i32 = BRICK_SIZE.trailing_zeros() as i32;
+const _: () = assert!(1 << BRICK_SHIFT == BRICK_SIZE, "a brick's size is a power of two");
 
 /// Samples in one brick.
 pub const BRICK_VOLUME: usize = (BRICK_SIZE * BRICK_SIZE * BRICK_SIZE) as usize;
@@ -263,9 +267,10 @@ impl Brick {
                 }
             }
         }
-        match range.0 <= range.1 {
-            true => (dequantize(range.0), dequantize(range.1)),
-            false => (f32::INFINITY, f32::NEG_INFINITY),
+        if range.0 <= range.1 {
+            (dequantize(range.0), dequantize(range.1))
+        } else {
+            (f32::INFINITY, f32::NEG_INFINITY)
         }
     }
 
@@ -325,6 +330,13 @@ pub fn split_index(p: IVec3) -> (BrickKey, IVec3) {
     (p.div_euclid(s), p.rem_euclid(s))
 }
 
+/// The brick holding lattice point `p` (`split_index(p).0` as a shift, for loops that ask it
+/// of every sample).
+#[inline(always)]
+pub fn brick_key(p: IVec3) -> BrickKey {
+    p >> BRICK_SHIFT
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -333,6 +345,9 @@ mod tests {
     fn split_index_handles_negative_points() {
         assert_eq!(split_index(IVec3::new(-1, 0, 8)), (IVec3::new(-1, 0, 1), IVec3::new(7, 0, 0)));
         assert_eq!(split_index(IVec3::new(-8, -9, 7)), (IVec3::new(-1, -2, 0), IVec3::new(0, 7, 7)));
+        for p in [IVec3::new(-1, 0, 8), IVec3::new(-8, -9, 7), IVec3::new(-17, 16, 15)] {
+            assert_eq!(brick_key(p), split_index(p).0);
+        }
     }
 
     #[test]

@@ -14,7 +14,7 @@ use super::shapes::ToolFrame;
 use super::shapes::ToolShape;
 use super::stamp::{mix_in, solid_density, SOLID_BAND_VOXELS};
 use super::stroke::Tool;
-use crate::field::{stores_differently, Colour, Field, BRICK_SIZE, LEVELS};
+use crate::field::{brick_key, stores_differently, Colour, Field, LEVELS};
 use crate::math::{IVec3, Pose, Vec3};
 
 /// Work done by one stamp (or a sum of stamps), as in Ferley et al.'s performance table.
@@ -248,13 +248,6 @@ pub fn apply_tool(field: &mut Field, tool: &Tool, pose: Pose, dt_s: f32) -> Stam
     counters
 }
 
-/// The key of the brick holding lattice point `p` (a shift: the walk asks it of every sample).
-#[inline(always)]
-fn brick_of(p: IVec3) -> IVec3 {
-    const _: () = assert!(BRICK_SIZE == 8);
-    p >> 3
-}
-
 /// What one stamp does at a sample, on any level's lattice.
 struct Kernel<'a> {
     action: Action,
@@ -277,7 +270,7 @@ impl Kernel<'_> {
     #[inline]
     fn apply(&self, fp: &Footprint, p: IVec3, d: &mut f32, c: &mut Colour, walk: &mut Walked<'_>) {
         walk.counters.visited += 1;
-        let brick = brick_of(p);
+        let brick = brick_key(p);
         if walk.last_brick != Some(brick) {
             walk.last_brick = Some(brick);
             walk.counters.bricks += 1;
@@ -398,7 +391,7 @@ fn sphere_fast_path(
         let kernel = |p: IVec3, d: &mut f32, c: &mut Colour| {
             counters.visited += 1;
             counters.computed += 1;
-            let brick = brick_of(p);
+            let brick = brick_key(p);
             if last_brick != Some(brick) {
                 last_brick = Some(brick);
                 counters.bricks += 1;
