@@ -6,7 +6,7 @@ use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 
 use super::brick::{
     dequantize, keys_over, quantize, Brick, BrickColours, BrickKey, Colour, LevelKey, Quantum, BRICK_SIZE,
-    DENSITY_ONE, LEVELS,
+    BRICK_VOLUME, DENSITY_ONE, LEVELS,
 };
 use super::history::{History, HistoryConfig, HistoryError, HistoryStats, Step};
 use crate::math::{IVec3, VoxelTransform};
@@ -629,9 +629,15 @@ impl Field {
             // An empty brick says nothing unless coarser clay would show through it (then the
             // coarsening below drops it if that clay is empty there too).
             let keep_empty = above && self.reads_above(level, key);
+            let prior = self.levels[level].ranges.get(&key).map(|r| r.all);
             // Copies the brick if the history, the journal or a tile shares it.
             let brick = Arc::make_mut(self.levels[level].bricks.entry(key).or_default());
             let changed = samples(brick, base, a, b, fresh);
+            // A stored brick the edit left as it was keeps its compaction and its ranges; one
+            // of one density may be a tile's copy, and is shared again below.
+            if !fresh && changed.bounds().is_none() && prior.is_some_and(|(lo, hi)| lo != hi) {
+                continue;
+            }
             brick.compact();
             let ranges = brick_ranges(brick);
             let range = ranges.all;
@@ -760,12 +766,13 @@ impl<R: Fn(i32, i32) -> (i32, i32)> RowSpans<R> {
     }
 
     /// The local `x` to visit on row `(y, z)` (local) of the brick at `base` (entered last),
-    /// whose share of the box is `a ..= b`.
+    /// whose share of the box is `a ..= b`. (Half open: an inclusive range costs a flag and
+    /// its test per step, and the walks step it once per sample.)
     #[inline]
-    fn local(&mut self, base: IVec3, a: IVec3, b: IVec3, y: i32, z: i32) -> std::ops::RangeInclusive<i32> {
+    fn local(&mut self, base: IVec3, a: IVec3, b: IVec3, y: i32, z: i32) -> std::ops::Range<i32> {
         let row = (y + BRICK_SIZE * z) as usize;
         let (first, last) = *self.spans[row].get_or_insert_with(|| (self.rows)(base.y + y, base.z + z));
-        a.x.max(first.saturating_sub(base.x))..=b.x.min(last.saturating_sub(base.x))
+        a.x.max(first.saturating_sub(base.x))..b.x.min(last.saturating_sub(base.x)) + 1
     }
 }
 
@@ -851,32 +858,53 @@ impl Row {
 }
 
 /// Lowest and highest density of a brick's samples, and of those on each lower face.
+///
+/// The samples are folded lane by lane, four rows (one `y`, `z` each, all `x`) at a time:
+/// lane `x + S·j` of a fold holds the range of the folded rows' samples at that `x` in their
+/// `j`-th row of four. Chunk `k` holds rows `(y, z) = (4·(k % 2) + j, k / 2)`, so the lanes
+/// with `x = 0` of the fold over all chunks give the lower x face, the lanes of `j = 0` of the
+/// fold over the even chunks the lower y face (rows `y = 0`), and the fold over the first two
+/// chunks the lower z face. Element-wise folds of fixed-size chunks vectorise (a few vector
+/// instructions per chunk); a fold along each row was a compare per sample, and the walk
+/// takes the ranges of every brick it edits.
 fn brick_ranges(brick: &Brick) -> Ranges {
     const S: usize = BRICK_SIZE as usize;
-    let none = (Quantum::MAX, Quantum::MIN);
-    let widen = |(lo, hi): (Quantum, Quantum), (a, b): (Quantum, Quantum)| (lo.min(a), hi.max(b));
-    let (mut all, mut faces) = (none, [none; 3]);
-    // Row by row (one y, z): x = 0 is each row's first sample, y = 0 every S-th row, z = 0
-    // the first S rows.
-    for (r, row) in brick.density.chunks_exact(S).enumerate() {
-        let range = row.iter().fold(none, |range, &d| widen(range, (d, d)));
-        all = widen(all, range);
-        faces[0] = widen(faces[0], (row[0], row[0]));
-        if r % S == 0 {
-            faces[1] = widen(faces[1], range);
+    const W: usize = 4 * S;
+    /// Lanes as `i16` offset by `i16::MIN`, which keeps the order of the stored values: the
+    /// baseline x86-64 instruction set compares 16-bit lanes signed only.
+    type Lanes = [i16; W];
+    #[inline(always)]
+    fn fold<'a>(chunks: impl Iterator<Item = &'a [Quantum; W]>) -> (Lanes, Lanes) {
+        let (mut lo, mut hi) = ([i16::MAX; W], [i16::MIN; W]);
+        for chunk in chunks {
+            for i in 0..W {
+                let v = chunk[i] as i16 ^ i16::MIN;
+                lo[i] = lo[i].min(v);
+                hi[i] = hi[i].max(v);
+            }
         }
-        if r < S {
-            faces[2] = widen(faces[2], range);
-        }
+        (lo, hi)
     }
-    let read = |(lo, hi): (Quantum, Quantum)| (dequantize(lo), dequantize(hi));
-    Ranges { all: read(all), low_faces: faces.map(read) }
+    /// The range over some lanes of a fold.
+    #[inline(always)]
+    fn across((lo, hi): &(Lanes, Lanes), lanes: impl Iterator<Item = usize>) -> (f32, f32) {
+        let (lo, hi) = lanes.fold((i16::MAX, i16::MIN), |(l, h), i| (l.min(lo[i]), h.max(hi[i])));
+        (dequantize((lo ^ i16::MIN) as Quantum), dequantize((hi ^ i16::MIN) as Quantum))
+    }
+    let chunks: &[[Quantum; W]; BRICK_VOLUME / W] = bytemuck::cast_ref(&*brick.density);
+    let all = fold(chunks.iter());
+    let even = fold(chunks.iter().step_by(2));
+    let first = fold(chunks[..2].iter());
+    Ranges {
+        all: across(&all, 0..W),
+        low_faces: [across(&all, (0..W).step_by(S)), across(&even, 0..S), across(&first, 0..W)],
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::field::{BRICK_VOLUME, DEFAULT_COLOUR};
+    use crate::field::DEFAULT_COLOUR;
 
     #[test]
     fn absent_points_are_empty() {

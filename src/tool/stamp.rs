@@ -51,6 +51,10 @@ pub(super) fn mix_in(colour: &mut Colour, old_density: f32, new_density: f32, to
         *colour = tool;
         return;
     }
+    if *colour == tool {
+        // Matter of the tool's colour keeps it (the mix below would too, dividing).
+        return;
+    }
     let t = (new_density - old_density) / new_density;
     for (c, k) in colour.iter_mut().zip(tool) {
         *c += (k - *c) * t;
