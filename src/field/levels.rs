@@ -36,8 +36,8 @@
 //!   change; new matter takes the interpolated colour of the coarse matter that brought it.
 
 use super::brick::{
-    dequantize, keys_over, quantize, Brick, BrickColours, BrickKey, Colour, LevelKey, BRICK_SIZE,
-    DEFAULT_COLOUR, LEVELS,
+    dequantize, keys_over, quantize, Brick, BrickColours, BrickKey, Colour, LevelKey, Quantum, BRICK_SIZE,
+    BRICK_VOLUME, DEFAULT_COLOUR, LEVELS,
 };
 use super::tree::{whole_rows, Field, Ranges, Reach, Walk};
 use crate::math::IVec3;
@@ -187,6 +187,47 @@ fn separable<T: Copy>(
     fine
 }
 
+/// Coarse points per axis under a brick: a brick's `S` points lie on or between `S/2 + 1`
+/// points of the next coarser level (its lowest point is even).
+const COARSE_AXIS: usize = BRICK_SIZE as usize / 2 + 1;
+const COARSE_VOLUME: usize = COARSE_AXIS * COARSE_AXIS * COARSE_AXIS;
+
+/// Refines the stored densities of the next coarser level's points under a brick (x fastest)
+/// into the brick's stored densities, as [`upsample`] and the quantizing of
+/// [`fill_missing`] do in floats: a point on a coarse point takes its value; one between
+/// takes the mean of the `2^k` coarse points around it (`k`: the axes on which it lies
+/// midway), rounded half up to a stored value. The means of stored values are exact in
+/// floats, so the integers here give the same values bit for bit.
+fn refine_brick_quanta(coarse: &[Quantum; COARSE_VOLUME], fine: &mut [Quantum; BRICK_VOLUME]) {
+    const S: usize = BRICK_SIZE as usize;
+    const C: usize = COARSE_AXIS;
+    // Each axis in turn, keeping sums: twice the values along x, four times along y, eight
+    // times along z.
+    let mut along_x = [0u32; S * C * C];
+    for (row, dst) in coarse.chunks_exact(C).zip(along_x.chunks_exact_mut(S)) {
+        for (x, d) in dst.iter_mut().enumerate() {
+            let c = x / 2;
+            *d = u32::from(row[c]) + u32::from(row[c + (x & 1)]);
+        }
+    }
+    let mut along_y = [0u32; S * S * C];
+    for (plane, dst) in along_x.chunks_exact(S * C).zip(along_y.chunks_exact_mut(S * S)) {
+        for (y, dst) in dst.chunks_exact_mut(S).enumerate() {
+            let (a, b) = (&plane[(y / 2) * S..][..S], &plane[(y / 2 + (y & 1)) * S..][..S]);
+            for ((d, &a), &b) in dst.iter_mut().zip(a).zip(b) {
+                *d = a + b;
+            }
+        }
+    }
+    for (z, dst) in fine.chunks_exact_mut(S * S).enumerate() {
+        let (a, b) = (&along_y[(z / 2) * S * S..][..S * S], &along_y[(z / 2 + (z & 1)) * S * S..][..S * S]);
+        for ((d, &a), &b) in dst.iter_mut().zip(a).zip(b) {
+            // Eight times the mean: round half up.
+            *d = ((a + b + 4) >> 3) as Quantum;
+        }
+    }
+}
+
 impl Field {
     /// The values of level `level`'s points `lo ..= hi` into `out` (x fastest): the level's
     /// own samples where it holds a brick (unless `own` is false) and the coarser levels'
@@ -276,20 +317,39 @@ impl Field {
     }
 
     /// Brick `key` of `level` as the coarser levels give it, if it holds matter.
+    ///
+    /// Where the coarse samples it reads hold matter of one colour (clay of one colour: most
+    /// coarse clay), the densities are refined in integers from the coarse level's stored
+    /// values ([`refine_brick_quanta`]), the same values as [`Field::level_block`]'s
+    /// interpolation gives, without its samples of five floats each.
     pub(super) fn interpolated_brick(&self, level: usize, key: BrickKey) -> Option<Brick> {
-        let base = key * BRICK_SIZE;
-        let mut samples = Vec::new();
-        self.level_block(level, base, base + IVec3::splat(BRICK_SIZE - 1), false, &mut samples);
-        if samples.iter().all(|s| s.0 == 0.0) {
+        if !self.has_levels_above(level) {
             return None;
         }
+        let base = key * BRICK_SIZE;
+        let top = base + IVec3::splat(BRICK_SIZE - 1);
+        // The next coarser level's points the brick's points lie on or between.
+        let (c_lo, c_hi) = (base.div_euclid(IVec3::splat(2)), (top + IVec3::ONE).div_euclid(IVec3::splat(2)));
+        let mut coarse = Vec::new();
+        self.level_block(level + 1, c_lo, c_hi, true, &mut coarse);
+        let mut matter = coarse.iter().filter(|s| s.0 > 0.0).map(|s| s.1);
+        let first = matter.next()?;
         let mut brick = Brick::default();
-        for (d, s) in brick.density.iter_mut().zip(&samples) {
-            *d = quantize(s.0);
+        if matter.all(|c| c == first) {
+            let quanta: [Quantum; COARSE_VOLUME] = std::array::from_fn(|i| quantize(coarse[i].0));
+            refine_brick_quanta(&quanta, &mut brick.density);
+            brick.colour = BrickColours::Uniform(first);
+        } else {
+            let mut samples = Vec::with_capacity(BRICK_VOLUME);
+            samples.resize(BRICK_VOLUME, MISSING);
+            upsample(&coarse, c_lo, c_hi, base, top, &mut samples);
+            for (d, s) in brick.density.iter_mut().zip(&samples) {
+                *d = quantize(s.0);
+            }
+            brick.colour = BrickColours::from_samples(|i| samples[i].1);
+            brick.compact();
         }
-        brick.colour = BrickColours::from_samples(|i| samples[i].1);
-        brick.compact();
-        Some(brick)
+        brick.density.iter().any(|&q| q > 0).then_some(brick)
     }
 
     /// Whether a coarser level holds a brick that level `level`'s brick `key` reads.
@@ -675,8 +735,43 @@ impl Field {
 
 #[cfg(test)]
 mod tests {
-    use super::super::brick::{BRICK_VOLUME, DENSITY_TOLERANCE};
+    use super::super::brick::{DENSITY_ONE, DENSITY_TOLERANCE};
     use super::*;
+
+    #[test]
+    fn refining_in_integers_gives_the_float_interpolations_stored_values() {
+        // Coarse values of every kind: empty, full, odd quanta (whose means round), and
+        // neighbours far apart; bricks at negative and positive keys.
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        let colour = [0.3, 0.6, 0.9, 1.0];
+        for key in [IVec3::ZERO, IVec3::new(-1, 2, -3), IVec3::new(5, -4, 1)] {
+            for _ in 0..50 {
+                let quanta: [Quantum; COARSE_VOLUME] = std::array::from_fn(|_| match next() % 4 {
+                    0 => 0,
+                    1 => DENSITY_ONE,
+                    _ => (next() % (u64::from(DENSITY_ONE) + 1)) as Quantum,
+                });
+                let base = key * BRICK_SIZE;
+                let top = base + IVec3::splat(BRICK_SIZE - 1);
+                let (c_lo, c_hi) =
+                    (base.div_euclid(IVec3::splat(2)), (top + IVec3::ONE).div_euclid(IVec3::splat(2)));
+                let coarse: Vec<Sample> = quanta.iter().map(|&q| (dequantize(q), colour)).collect();
+                let mut floats = vec![MISSING; BRICK_VOLUME];
+                upsample(&coarse, c_lo, c_hi, base, top, &mut floats);
+                let mut integers = [0; BRICK_VOLUME];
+                refine_brick_quanta(&quanta, &mut integers);
+                for (i, (q, s)) in integers.iter().zip(&floats).enumerate() {
+                    assert_eq!(*q, quantize(s.0), "sample {i} of brick {key}");
+                }
+            }
+        }
+    }
 
     /// A field holding only level `level`'s points `lo ..= hi` on each axis, set by `edit`.
     fn level_clay(level: usize, lo: i32, hi: i32, edit: impl FnMut(IVec3, &mut f32, &mut Colour)) -> Field {
