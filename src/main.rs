@@ -81,6 +81,11 @@ enum Command {
         /// folder of the save file).
         #[arg(long)]
         open_dir: Option<PathBuf>,
+        /// The hand's tool edits the finest resolution level whatever its size. By default a
+        /// tool spanning more than 16 voxels edits the coarser level its size chooses, unless
+        /// its scene tool sets `level_samples`.
+        #[arg(long)]
+        edit_finest: bool,
     },
     /// Plays a scene's timeline offscreen and writes every capture as NAME-left.png and
     /// NAME-right.png.
@@ -275,6 +280,7 @@ fn main() -> ExitCode {
             left_handed,
             input,
             open_dir,
+            edit_finest,
         }) => station(
             scene,
             xr.then_some(left_handed),
@@ -294,6 +300,7 @@ fn main() -> ExitCode {
                 input,
                 open: None,
                 open_dir,
+                edit_finest,
             },
         ),
         Some(Command::Render { scene, out, display_mode, size, validation, autosave }) => {
@@ -396,6 +403,7 @@ fn station(scene_path: Option<PathBuf>, xr: Option<bool>, options: app::StationO
             autosave: Some(AutosaveConfig::default()),
             scene_toml: scene_text.clone(),
             left_handed,
+            edit_finest: options.edit_finest,
         };
         // The headset sculpts an opened file's clay; it is saved to the file it came from
         // unless --save-to says otherwise.

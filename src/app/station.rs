@@ -50,7 +50,9 @@ use crate::scene::{line_column, FileError, Scene};
 use crate::stereo::comfort::AutoConvergence;
 use crate::stereo::display::{choose_mode, DisplayMode, Parity};
 use crate::stereo::{HeadTrackedRig, Placement};
-use crate::tool::{Action, Ellipsoid, Falloff, Solid, Stroke, Tool, ToolShape};
+use crate::tool::{
+    edit_level_for, Action, Ellipsoid, Falloff, Solid, Stroke, Tool, ToolShape, HAND_SIZE_SAMPLES,
+};
 
 /// The time step of a scripted run, seconds.
 pub const SCRIPTED_STEP_S: f32 = 1.0 / 60.0;
@@ -99,6 +101,10 @@ pub struct StationOptions {
     pub open: Option<PathBuf>,
     /// The folder the open key looks for sculpts in (the save file's folder when absent).
     pub open_dir: Option<PathBuf>,
+    /// The desk tool edits the finest level whatever its size (by default one spanning more
+    /// than [`HAND_SIZE_SAMPLES`] voxels edits the level its size chooses, unless its scene
+    /// tool says which).
+    pub edit_finest: bool,
 }
 
 /// How a station run ended.
@@ -414,6 +420,9 @@ pub struct Station<'s> {
     modifiers: Modifiers,
     held: HashSet<KeyCode>,
     desk_tool: Tool,
+    /// The most voxels across the desk tool's size on the level it edits, where its scene
+    /// tool sets none (`None`: the finest level whatever its size).
+    hand_samples: Option<f32>,
     /// Index of the scene tool the desk tool started from (`next-tool`).
     tool_index: usize,
     action_index: usize,
@@ -518,6 +527,7 @@ impl<'s> Station<'s> {
             modifiers: Modifiers::default(),
             held: HashSet::new(),
             desk_tool,
+            hand_samples: Some(HAND_SIZE_SAMPLES),
             tool_index: 0,
             action_index,
             stroke: None,
@@ -554,6 +564,18 @@ impl<'s> Station<'s> {
         station.set_calibration(station.calibration);
         station.resize(window_px);
         station
+    }
+
+    /// Lets the desk tool edit by its size with at most `samples` voxels across it where its
+    /// scene tool does not say which level it edits (`None`: always the finest level). The
+    /// default is [`HAND_SIZE_SAMPLES`].
+    pub fn set_hand_samples(&mut self, samples: Option<f32>) {
+        self.hand_samples = samples;
+    }
+
+    /// The desk tool as it acts on the clay (see [`Station::set_hand_samples`]).
+    fn acting_tool(&self) -> Tool {
+        self.desk_tool.clone().by_size_unless_set(self.hand_samples)
     }
 
     /// Uses `calibration` for the display, the screen and the viewer: its display mode unless
@@ -875,13 +897,19 @@ impl<'s> Station<'s> {
             MouseMode::Scene => "turns",
             MouseMode::Cursor => "places tool",
         };
+        // The voxels of the level the tool edits (its size chooses it).
+        let acting = self.acting_tool();
+        let field = self.playback.field();
+        let level = acting.level_samples.map_or(0, |n| edit_level_for(field, acting.size_m(), n));
+        let voxel_mm = (field.level_transform(level).voxel_size_m * 10_000.0).round() / 10.0;
         let mut lines = vec![
             format!(
-                "tool {}: {} {} mm, {}",
+                "tool {}: {} {} mm, {}, {} mm voxels",
                 self.tool_index + 1,
                 shape_name(&self.desk_tool.shape),
                 (self.desk_tool.size_m() * 1000.0).round(),
-                self.desk_tool.action.name()
+                self.desk_tool.action.name(),
+                voxel_mm
             ),
             format!(
                 "{}: convergence {:.2} m, eyes {:.0} mm",
@@ -1235,11 +1263,12 @@ impl<'s> Station<'s> {
         let t = self.playback.time_s() + dt_s;
         self.playback.advance_to(t, |_| {});
         let applying = self.holding(StationAction::Apply) || self.device_apply;
+        let acting = self.acting_tool();
         let field = self.playback.field_mut();
         if applying {
             if self.stroke.is_none() {
                 field.begin_stroke();
-                let mut s = Stroke::new(self.desk_tool.clone());
+                let mut s = Stroke::new(acting);
                 s.advance(field, pose, 0.0);
                 self.stroke = Some(s);
             }
@@ -1393,6 +1422,7 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
                 station.set_autosave_restart(config.clone(), options.scene_toml.clone());
             }
             station.set_scene_toml(options.scene_toml.clone());
+            station.set_hand_samples((!options.edit_finest).then_some(HAND_SIZE_SAMPLES));
             station.set_fallback_dir(super::state_dir().map(|d| d.join("saved")));
             if let Some(dir) = &options.open_dir {
                 station.set_open_dir(dir.clone());
@@ -2016,6 +2046,52 @@ mod tests {
             "{:?}",
             station.hud_lines()
         );
+    }
+
+    #[test]
+    fn a_large_desk_tool_edits_the_level_its_size_chooses_unless_told_otherwise() {
+        // A 40 mm ball, and the same ball that says which level it edits (8 voxels across), on
+        // 1 mm voxels.
+        let text = "[field]\nvoxel_size_m = 0.001\n[[tool]]\nname = \"large\"\nshape = \"sphere\"\nradius_m = 0.04\naction = \"add\"\n\
+                    [[tool]]\nname = \"sized\"\nshape = \"sphere\"\nradius_m = 0.04\naction = \"add\"\n\
+                    level_samples = 8\n";
+        let scene = Scene::parse(text, "large tools", None).unwrap();
+        // Strokes with the desk tool at `hand` and scene tool `tool`: the levels holding clay
+        // after a short stroke, and what the display said of the tool before it.
+        let stroke = |hand: Option<f32>, tool: usize| {
+            let mut station = small_station(&scene);
+            station.set_hand_samples(hand);
+            for _ in 0..tool {
+                station.key(KeyCode::KeyT, true);
+                station.key(KeyCode::KeyT, false);
+            }
+            let shown = station.hud_lines()[0].clone();
+            station.key(KeyCode::Space, true);
+            for _ in 0..3 {
+                station.step(SCRIPTED_STEP_S, |_| {});
+            }
+            station.key(KeyCode::Space, false);
+            station.step(SCRIPTED_STEP_S, |_| {});
+            let field = station.playback.field();
+            assert!(field.mass() > 0.0, "the stroke added clay");
+            let levels: Vec<usize> =
+                (0..crate::field::LEVELS).filter(|&l| field.level_brick_count(l) > 0).collect();
+            (levels, shown)
+        };
+        // 40 voxels across: by default at most 16 across, level 2 (4 mm voxels).
+        let (levels, shown) = stroke(Some(HAND_SIZE_SAMPLES), 0);
+        assert_eq!(levels, [2], "{shown}");
+        assert!(shown.contains("sphere 40 mm, add, 4 mm voxels"), "{shown}");
+        // --edit-finest: the finest level.
+        let (levels, shown) = stroke(None, 0);
+        assert_eq!(levels, [0], "{shown}");
+        assert!(shown.contains("1 mm voxels"), "{shown}");
+        // A scene tool that says which level it edits keeps it either way (8 across: level 3).
+        for hand in [Some(HAND_SIZE_SAMPLES), None] {
+            let (levels, shown) = stroke(hand, 1);
+            assert_eq!(levels, [3], "{shown}");
+            assert!(shown.contains("8 mm voxels"), "{shown}");
+        }
     }
 
     /// The ball scene with a ball of clay (5 cm radius) 12 cm right of the desk tool's start.

@@ -33,7 +33,7 @@ use crate::math::{Pose, Vec3};
 use crate::mesh::{MeshDiff, Mesher};
 use crate::render::{Frame, ToolGlyph};
 use crate::scene::{Hand, HandState as PlaybackHand, Scene};
-use crate::tool::{Action, Stroke, Tool, ToolShape};
+use crate::tool::{Action, Stroke, Tool, ToolShape, HAND_SIZE_SAMPLES};
 use crate::xr::{
     one_hand_grab, recentred, two_hand_grab, FrameInput, FrameOutput, HandState, Haptic, Placement, Turn,
     XrError, XrOptions, XrStation,
@@ -71,6 +71,10 @@ pub struct XrRunOptions {
     pub scene_toml: Option<String>,
     /// The dominant hand is the left one.
     pub left_handed: bool,
+    /// The tool edits the finest level whatever its size (by default one spanning more than
+    /// [`HAND_SIZE_SAMPLES`] voxels edits the level its size chooses, unless its scene tool
+    /// says which).
+    pub edit_finest: bool,
 }
 
 /// What a headset run did.
@@ -106,6 +110,9 @@ pub struct XrSculptor<'s> {
     /// Index of the dominant hand in `[left, right]`.
     dominant: usize,
     tool: Tool,
+    /// The most voxels across the tool's size on the level it edits, where its scene tool
+    /// sets none (`None`: the finest level whatever its size).
+    hand_samples: Option<f32>,
     /// The scene tool the dominant hand's tool came from (a push tool pushes the virtual clay
     /// through the playback).
     tool_index: Option<usize>,
@@ -147,6 +154,7 @@ impl<'s> XrSculptor<'s> {
             placement: recentred(scene.rig.target_m, None),
             dominant: if left_handed { 0 } else { 1 },
             tool,
+            hand_samples: Some(HAND_SIZE_SAMPLES),
             tool_index,
             support,
             action_index,
@@ -167,6 +175,13 @@ impl<'s> XrSculptor<'s> {
     /// The text of the scene, stored with the clay when saving.
     pub fn set_scene_toml(&mut self, text: Option<String>) {
         self.scene_toml = text;
+    }
+
+    /// Lets the tool edit by its size with at most `samples` voxels across it where its scene
+    /// tool does not say which level it edits (`None`: always the finest level). The default
+    /// is [`HAND_SIZE_SAMPLES`].
+    pub fn set_hand_samples(&mut self, samples: Option<f32>) {
+        self.hand_samples = samples;
     }
 
     /// The clay.
@@ -199,7 +214,7 @@ impl<'s> XrSculptor<'s> {
     /// The dominant hand's tool as it acts in the scene: its room size kept whatever the
     /// sculpture's scale, soft actions at the rate the trigger's pressure sets.
     fn acting_tool(&self, pressure: f32) -> Tool {
-        let mut tool = self.tool.clone();
+        let mut tool = self.tool.clone().by_size_unless_set(self.hand_samples);
         tool.scale /= self.placement.scale;
         tool.action = match tool.action {
             Action::Build { rate_per_s } => Action::Build { rate_per_s: rate_per_s * pressure },
@@ -444,6 +459,7 @@ pub fn run_xr(
     };
     let mut sculptor = XrSculptor::new(scene, playback, save_to, options.left_handed);
     sculptor.set_scene_toml(options.scene_toml.clone());
+    sculptor.set_hand_samples((!options.edit_finest).then_some(HAND_SIZE_SAMPLES));
     let mut report = XrReport {
         runtime: station.runtime().to_owned(),
         frames: 0,
@@ -621,6 +637,26 @@ mod tests {
             None,
         )
         .unwrap()
+    }
+
+    #[test]
+    fn the_hand_tool_edits_by_its_size_unless_its_scene_tool_or_the_options_say_otherwise() {
+        let scene = ball();
+        let mut s = sculptor(&scene, false);
+        assert_eq!(s.acting_tool(1.0).level_samples, Some(HAND_SIZE_SAMPLES));
+        s.set_hand_samples(None);
+        assert_eq!(s.acting_tool(1.0).level_samples, None, "--edit-finest");
+        let sized = Scene::parse(
+            "[[tool]]\nname = \"gouge\"\nradius_m = 0.012\naction = \"remove\"\nlevel_samples = 8\n",
+            "sized",
+            None,
+        )
+        .unwrap();
+        for hand in [Some(HAND_SIZE_SAMPLES), None] {
+            let mut s = sculptor(&sized, false);
+            s.set_hand_samples(hand);
+            assert_eq!(s.acting_tool(1.0).level_samples, Some(8.0), "the scene tool's own");
+        }
     }
 
     fn sculptor(scene: &Scene, left_handed: bool) -> XrSculptor<'_> {

@@ -47,6 +47,14 @@ impl AddAssign for StampCounters {
 /// a stamp then stays about that of a tool this many samples across, whatever its size.
 pub const MAX_SIZE_SAMPLES: f32 = 8.0;
 
+/// The bound on a hand tool's samples across its size (see [`Tool::level_samples`]) where its
+/// scene tool sets none: in the station and the headset, a tool spanning up to 16 voxels of
+/// the finest level edits it, a larger one the level its size chooses. Of the bounds 8, 16
+/// and 32 this one gives the cheapest stamp with its re-mesh for tools of 20 and 40 mm on
+/// 1 mm voxels (BENCHMARKS.md, "hand tools by their size"), and keeps the finest level for
+/// the tools that shape detail.
+pub const HAND_SIZE_SAMPLES: f32 = 16.0;
+
 /// The level a tool of size `size_m` (metres) edits when it may span at most `samples`
 /// voxels of it: the finest such level, or the coarsest.
 pub fn edit_level_for(field: &Field, size_m: f32, samples: f32) -> usize {

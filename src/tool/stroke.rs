@@ -44,6 +44,13 @@ impl Tool {
         Self { shape, scale: Vec3::ONE, action, colour, spacing: 0.25, level_samples: None }
     }
 
+    /// The tool editing by its size with at most `samples` voxels across it (`None`: the
+    /// finest level), unless it says which level it edits already.
+    pub fn by_size_unless_set(mut self, samples: Option<f32>) -> Self {
+        self.level_samples = self.level_samples.or(samples);
+        self
+    }
+
     /// The tool's size for stamp spacing: its smallest half extent after scaling, metres (a
     /// sphere's radius).
     pub fn size_m(&self) -> f32 {
