@@ -1004,9 +1004,10 @@ mod tests {
             assert!(l["remeshed_triangles_per_stroke"].as_u64().unwrap() > 0, "{l}");
         }
         assert!(lines[2]["with_remesh_us_per_stamp_median"].is_null());
-        // The finest-level 40 mm stroke computes far more samples than the one its size levels.
+        // The finest-level 40 mm stroke computes far more samples than the one its size levels
+        // (it computes only those within the ball's reach, that one its whole box).
         let computed = |i: usize| lines[i]["computed_per_stamp"].as_f64().unwrap();
-        assert!(computed(2) > 100.0 * computed(1), "{} against {}", computed(2), computed(1));
+        assert!(computed(2) > 50.0 * computed(1), "{} against {}", computed(2), computed(1));
     }
 
     #[test]

@@ -315,6 +315,12 @@ impl Brick {
     }
 }
 
+/// Number of lattice points of the box `lo ..= hi` (none where it is empty).
+pub fn lattice_points(lo: IVec3, hi: IVec3) -> usize {
+    let d = (hi - lo + IVec3::ONE).max(IVec3::ZERO);
+    d.x as usize * d.y as usize * d.z as usize
+}
+
 /// The keys of the bricks holding a point of `lo ..= hi`, x fastest.
 pub fn keys_over(lo: IVec3, hi: IVec3) -> impl Iterator<Item = BrickKey> {
     let s = IVec3::splat(BRICK_SIZE);

@@ -36,8 +36,8 @@
 //!   change; new matter takes the interpolated colour of the coarse matter that brought it.
 
 use super::brick::{
-    dequantize, keys_over, quantize, Brick, BrickColours, BrickKey, Colour, LevelKey, Quantum, BRICK_SIZE,
-    BRICK_VOLUME, DEFAULT_COLOUR, LEVELS,
+    dequantize, keys_over, lattice_points, quantize, Brick, BrickColours, BrickKey, Colour, LevelKey,
+    Quantum, BRICK_SIZE, BRICK_VOLUME, DEFAULT_COLOUR, LEVELS,
 };
 use super::tree::{whole_rows, Field, Ranges, Reach, Walk};
 use crate::math::IVec3;
@@ -62,12 +62,6 @@ pub const DETAIL_TOLERANCE: f32 = 0.0;
 /// Largest difference in each colour channel for a brick to count as holding no detail: far
 /// below a display's step (1/255), above the rounding of colours interpolated in another order.
 pub const COLOUR_DETAIL_TOLERANCE: f32 = 1e-5;
-
-/// Number of points of `lo ..= hi`.
-fn count(lo: IVec3, hi: IVec3) -> usize {
-    let d = (hi - lo + IVec3::ONE).max(IVec3::ZERO);
-    (d.x * d.y * d.z) as usize
-}
 
 /// Index of `p` in a block `lo ..= lo + dims − 1`, x fastest.
 #[inline]
@@ -235,7 +229,7 @@ impl Field {
     pub(super) fn level_block(&self, level: usize, lo: IVec3, hi: IVec3, own: bool, out: &mut Vec<Sample>) {
         let dims = hi - lo + IVec3::ONE;
         out.clear();
-        out.resize(count(lo, hi), MISSING);
+        out.resize(lattice_points(lo, hi), MISSING);
         let mut missing = true;
         if own && !self.levels[level].bricks.is_empty() {
             for key in keys_over(lo, hi) {
@@ -574,7 +568,8 @@ impl Field {
         let dims = hi - lo + IVec3::ONE;
         // Per point of the box: the change of density and colour, and the new matter.
         // (`None`: the edit did not reach the point.)
-        let mut change: Vec<Option<Change>> = if finer { vec![None; count(lo, hi)] } else { Vec::new() };
+        let mut change: Vec<Option<Change>> =
+            if finer { vec![None; lattice_points(lo, hi)] } else { Vec::new() };
         // The finest value present at each point, read before the walk writes.
         let mut truth = Vec::new();
         if finer {

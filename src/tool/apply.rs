@@ -12,9 +12,9 @@ use super::action::Action;
 use super::shape::Solid;
 use super::shapes::ToolFrame;
 use super::shapes::ToolShape;
-use super::stamp::{mix_in, solid_density, SOLID_BAND_VOXELS};
+use super::stamp::{mix_in, Ball, SOLID_BAND_VOXELS};
 use super::stroke::Tool;
-use crate::field::{brick_key, stores_differently, Colour, Field, LEVELS};
+use crate::field::{brick_key, lattice_points, stores_differently, Colour, Field, LEVELS};
 use crate::math::{IVec3, Pose, Vec3};
 
 /// Work done by one stamp (or a sum of stamps), as in Ferley et al.'s performance table.
@@ -375,7 +375,8 @@ fn upwind_gradient(own: f32, n: [f32; 6], outwards: bool) -> f32 {
 
 /// The sphere's add/remove kernel: the arithmetic of [`stamp_sphere`] (distances in lattice
 /// units from the centre, no frame to map through), so both give bit-identical clay, plus the
-/// counters.
+/// counters. On the finest level it walks what [`stamp_sphere`] walks: the bricks and the
+/// parts of rows within the ball's reach (the rest of its box it leaves as it is).
 fn sphere_fast_path(
     field: &mut Field,
     level: usize,
@@ -384,46 +385,42 @@ fn sphere_fast_path(
     pose: Pose,
 ) -> StampCounters {
     let mut counters = StampCounters { level: level as u32, ..Default::default() };
-    let (add, colour) = (tool.action == Action::Add, tool.colour);
+    let add = tool.action == Action::Add;
     // The sphere in `level`'s voxels (its band's), applied on the lattice of level `on`, whose
     // point p sits at p / scale of them.
     let stamp = |field: &mut Field, on: usize, counters: &mut StampCounters| {
         let transform = field.level_transform(level);
-        let centre = transform.world_to_index(pose.position_m);
-        let radius = transform.metres_to_voxels(radius_m);
-        let reach = radius + 0.5 * SOLID_BAND_VOXELS;
+        let ball = Ball::new(transform.world_to_index(pose.position_m), transform.metres_to_voxels(radius_m));
         let scale = (1u32 << (level - on)) as f32;
-        let lo = ((centre - Vec3::splat(reach)) * scale).ceil().as_ivec3();
-        let hi = ((centre + Vec3::splat(reach)) * scale).floor().as_ivec3();
-        let mut last_brick = None;
-        let kernel = |p: IVec3, d: &mut f32, c: &mut Colour| {
-            counters.visited += 1;
-            counters.computed += 1;
-            let brick = brick_key(p);
-            if last_brick != Some(brick) {
-                last_brick = Some(brick);
-                counters.bricks += 1;
-            }
-            let point = if on == level { p.as_vec3() } else { p.as_vec3() / scale };
-            let tool = solid_density(point.distance(centre) - radius);
-            let old = *d;
-            if add {
-                let new = d.max(tool);
-                mix_in(c, *d, new, colour);
-                *d = new;
-            } else {
-                *d = d.min(1.0 - tool);
-            }
-            if stores_differently(old, *d) {
-                counters.dirtied += 1;
-            }
+        let (lo, hi) = ball.bounds(scale);
+        counters.visited += lattice_points(lo, hi) as u64;
+        let mut kernel = SphereKernel {
+            ball,
+            inv_scale: 1.0 / scale,
+            add,
+            colour: tool.colour,
+            counters,
+            last_brick: None,
         };
+        // One closure per walk, each inlined into its walk.
         if level == 0 {
-            field.edit_level(level, lo, hi, add, |_, _, _| true, kernel);
+            // What `edit_level` does on the finest level, within the ball's reach; a full
+            // brick stays full when adding.
+            let changes = move |a, b, range: Option<(f32, f32)>| {
+                ball.reaches(a, b) && !(add && range.is_some_and(|r| r.0 >= 1.0))
+            };
+            field.edit_where(
+                lo,
+                hi,
+                add,
+                changes,
+                move |y, z| ball.row(y, z),
+                |p, d, c| kernel.apply(p, d, c),
+            );
         } else if on == level {
-            field.edit_level_alone(level, lo, hi, add, |_, _, _| true, kernel);
+            field.edit_level_alone(level, lo, hi, add, |_, _, _| true, |p, d, c| kernel.apply(p, d, c));
         } else {
-            field.edit_stored(on, lo, hi, kernel);
+            field.edit_stored(on, lo, hi, |p, d, c| kernel.apply(p, d, c));
         }
     };
     stamp(field, level, &mut counters);
@@ -434,4 +431,39 @@ fn sphere_fast_path(
         }
     }
     counters
+}
+
+/// The sphere's kernel at one point of a lattice `1 / inv_scale` times finer than its ball's,
+/// and its counters.
+struct SphereKernel<'c> {
+    ball: Ball,
+    inv_scale: f32,
+    add: bool,
+    colour: Colour,
+    counters: &'c mut StampCounters,
+    last_brick: Option<IVec3>,
+}
+
+impl SphereKernel<'_> {
+    #[inline(always)]
+    fn apply(&mut self, p: IVec3, d: &mut f32, c: &mut Colour) {
+        self.counters.computed += 1;
+        let brick = brick_key(p);
+        if self.last_brick != Some(brick) {
+            self.last_brick = Some(brick);
+            self.counters.bricks += 1;
+        }
+        let tool = self.ball.density_at(p.as_vec3() * self.inv_scale);
+        let old = *d;
+        if self.add {
+            let new = d.max(tool);
+            mix_in(c, *d, new, self.colour);
+            *d = new;
+        } else {
+            *d = d.min(1.0 - tool);
+        }
+        if stores_differently(old, *d) {
+            self.counters.dirtied += 1;
+        }
+    }
 }

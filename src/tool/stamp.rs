@@ -75,49 +75,17 @@ pub fn stamp_sphere(
     colour: Colour,
 ) -> (IVec3, IVec3) {
     let transform = *field.transform();
-    let centre = transform.world_to_index(centre_m);
-    let radius = transform.metres_to_voxels(radius_m);
-    let reach = radius + 0.5 * SOLID_BAND_VOXELS;
-    let lo = (centre - Vec3::splat(reach)).ceil().as_ivec3();
-    let hi = (centre + Vec3::splat(reach)).floor().as_ivec3();
-    // A brick's share of the box matters only if its nearest point is within the tool's reach
-    // (the corners of the box lie outside the sphere).
-    let reach2 = reach * reach;
-    let reaches =
-        |a: IVec3, b: IVec3| centre.clamp(a.as_vec3(), b.as_vec3()).distance_squared(centre) <= reach2;
-    // The samples of row (y, z) within the reach, and one or two more each side for rounding:
-    // the others are left as they are by both actions, so they are not visited.
-    let rows = |y: i32, z: i32| {
-        let across = reach2 - Vec2::new(y as f32 - centre.y, z as f32 - centre.z).length_squared();
-        if across <= 0.0 {
-            return (1, 0);
-        }
-        let half = across.sqrt();
-        // Truncation, one more sample out either way, covers the floor and the ceiling.
-        ((centre.x - half) as i32 - 1, (centre.x + half) as i32 + 1)
-    };
-    // The tool's density from the squared distance: a square root only on the ramp (outside
-    // the reach it is 0, inside the core 1), the same values as `solid_density` of the distance.
-    let core = radius - 0.5 * SOLID_BAND_VOXELS;
-    let core2 = if core > 0.0 { core * core } else { -1.0 };
-    let tool_at = move |p: IVec3| -> f32 {
-        let d2 = p.as_vec3().distance_squared(centre);
-        if d2 >= reach2 {
-            0.0
-        } else if d2 <= core2 {
-            1.0
-        } else {
-            solid_density(d2.sqrt() - radius)
-        }
-    };
+    let ball = Ball::new(transform.world_to_index(centre_m), transform.metres_to_voxels(radius_m));
+    let (lo, hi) = ball.bounds(1.0);
+    let tool_at = move |p: IVec3| ball.density_at(p.as_vec3());
     match action {
         // A full brick stays full, colour and all: adding to it changes nothing.
         Action::Add => field.edit_where(
             lo,
             hi,
             true,
-            |a, b, range| reaches(a, b) && range.is_none_or(|r| r.0 < 1.0),
-            rows,
+            move |a, b, range| ball.reaches(a, b) && range.is_none_or(|r| r.0 < 1.0),
+            move |y, z| ball.row(y, z),
             |p, d, c| {
                 let tool = tool_at(p);
                 if tool > *d {
@@ -126,9 +94,15 @@ pub fn stamp_sphere(
                 }
             },
         ),
-        Action::Remove => field.edit_density(lo, hi, reaches, rows, |p, d| {
-            *d = d.min(1.0 - tool_at(p));
-        }),
+        Action::Remove => field.edit_density(
+            lo,
+            hi,
+            move |a, b| ball.reaches(a, b),
+            move |y, z| ball.row(y, z),
+            |p, d| {
+                *d = d.min(1.0 - tool_at(p));
+            },
+        ),
         other => {
             let tool = super::Tool::new(super::ToolShape::sphere(radius_m), other, colour);
             let pose = crate::math::Pose { position_m: centre_m, ..Default::default() };
@@ -136,6 +110,77 @@ pub fn stamp_sphere(
         }
     }
     (lo, hi)
+}
+
+/// The band-limited sphere tool in lattice units: its density, and the lattice points it
+/// reaches (those within `reach` of `centre`: its radius and half its band). Walks over its box
+/// skip the bricks and the parts of rows out of its reach, which adding (`max`) and removing
+/// (`min` with the complement) leave as they are.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Ball {
+    centre: Vec3,
+    radius: f32,
+    reach: f32,
+    /// The squared reach, and the squared radius of the core where the density is 1 (−1
+    /// where there is none).
+    reach2: f32,
+    core2: f32,
+}
+
+impl Ball {
+    pub(super) fn new(centre: Vec3, radius: f32) -> Self {
+        let reach = radius + 0.5 * SOLID_BAND_VOXELS;
+        let core = radius - 0.5 * SOLID_BAND_VOXELS;
+        Self {
+            centre,
+            radius,
+            reach,
+            reach2: reach * reach,
+            core2: if core > 0.0 { core * core } else { -1.0 },
+        }
+    }
+
+    /// The box of the points within reach on a lattice `scale` times finer.
+    pub(super) fn bounds(&self, scale: f32) -> (IVec3, IVec3) {
+        let r = Vec3::splat(self.reach);
+        (((self.centre - r) * scale).ceil().as_ivec3(), ((self.centre + r) * scale).floor().as_ivec3())
+    }
+
+    /// The tool's density at `point` from its squared distance: a square root only on the
+    /// ramp (outside the reach it is 0, inside the core 1), the values [`solid_density`] gives
+    /// of the distance once stored.
+    #[inline(always)]
+    pub(super) fn density_at(&self, point: Vec3) -> f32 {
+        let d2 = point.distance_squared(self.centre);
+        if d2 >= self.reach2 {
+            0.0
+        } else if d2 <= self.core2 {
+            1.0
+        } else {
+            solid_density(d2.sqrt() - self.radius)
+        }
+    }
+
+    /// Whether a brick's share `a ..= b` of the box holds a point within reach (its nearest
+    /// point is; the corners of the box lie outside the ball).
+    #[inline(always)]
+    pub(super) fn reaches(&self, a: IVec3, b: IVec3) -> bool {
+        self.centre.clamp(a.as_vec3(), b.as_vec3()).distance_squared(self.centre) <= self.reach2
+    }
+
+    /// The span `(first, last)` of row `(y, z)` within reach, and one or two more samples each
+    /// side for rounding (empty where `first > last`).
+    #[inline(always)]
+    pub(super) fn row(&self, y: i32, z: i32) -> (i32, i32) {
+        let c = self.centre;
+        let across = self.reach2 - Vec2::new(y as f32 - c.y, z as f32 - c.z).length_squared();
+        if across <= 0.0 {
+            return (1, 0);
+        }
+        let half = across.sqrt();
+        // Truncation, one more sample out either way, covers the floor and the ceiling.
+        ((c.x - half) as i32 - 1, (c.x + half) as i32 + 1)
+    }
 }
 
 /// How a solid combines with the clay already there.

@@ -196,8 +196,14 @@ fn the_general_path_and_the_sphere_kernel_agree() {
     assert!(c.dirtied > 0 && c.bricks >= 8);
     let mut fast = Field::new(VOXEL_M, 0.5);
     let c = apply_tool(&mut fast, &Tool { scale: Vec3::splat(2.0), ..tool }, at, 0.0);
-    assert_eq!(fast.mass(), a.mass(), "the sphere path is the stamp_sphere kernel");
-    assert!(c.visited > c.dirtied && c.dirtied > 0);
+    assert!(fast.same_samples(&a), "the sphere path is the stamp_sphere kernel");
+    // It computes only the points within the ball's reach, of all those of its box.
+    assert!(c.visited > c.computed && c.computed > c.dirtied && c.dirtied > 0, "{c:?}");
+    // Carving the clay both left, off centre: the same samples again.
+    let carve = Pose { position_m: at.position_m + Vec3::new(0.0061, 0.0013, -0.0007), ..at };
+    stamp_sphere(&mut a, carve.position_m, 0.006, Action::Remove, [1.0; 4]);
+    apply_tool(&mut fast, &Tool::new(ToolShape::sphere(0.006), Action::Remove, [1.0; 4]), carve, 0.0);
+    assert!(fast.same_samples(&a) && fast.mass() < b.mass(), "removing");
 }
 
 #[test]
