@@ -82,7 +82,7 @@ enum Command {
         #[arg(long)]
         open_dir: Option<PathBuf>,
         /// The hand's tool edits the finest resolution level whatever its size. By default a
-        /// tool spanning more than 16 voxels edits the coarser level its size chooses, unless
+        /// tool spanning more than 32 voxels edits the coarser level its size chooses, unless
         /// its scene tool sets `level_samples`.
         #[arg(long)]
         edit_finest: bool,

@@ -2078,10 +2078,10 @@ mod tests {
                 (0..crate::field::LEVELS).filter(|&l| field.level_brick_count(l) > 0).collect();
             (levels, shown)
         };
-        // 40 voxels across: by default at most 16 across, level 2 (4 mm voxels).
+        // 40 voxels across: by default at most 32 across, level 1 (2 mm voxels).
         let (levels, shown) = stroke(Some(HAND_SIZE_SAMPLES), 0);
-        assert_eq!(levels, [2], "{shown}");
-        assert!(shown.contains("sphere 40 mm, add, 4 mm voxels"), "{shown}");
+        assert_eq!(levels, [1], "{shown}");
+        assert!(shown.contains("sphere 40 mm, add, 2 mm voxels"), "{shown}");
         // --edit-finest: the finest level.
         let (levels, shown) = stroke(None, 0);
         assert_eq!(levels, [0], "{shown}");

@@ -517,13 +517,19 @@ impl Field {
         changes: impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool,
         edit: impl FnMut(IVec3, &mut f32, &mut Colour),
     ) {
-        self.edit_level_then(level, lo, hi, create, changes, edit, true);
+        self.edit_level_then(level, lo, hi, create, changes, whole_rows, edit, true);
     }
 
     /// [`Field::edit_level`] for edits that reach the finer bricks themselves: the level is
     /// edited as there, and its change is not carried into the finer bricks under it; the
     /// caller edits those at their own resolution with [`Field::edit_stored`] (a tool
     /// evaluated on each finer lattice keeps its edge as sharp as that lattice holds it).
+    ///
+    /// `rows(y, z)` gives the span of each row the edit can change, as for
+    /// [`Field::edit_where`]; it is honoured where no finer level holds a brick (over finer
+    /// clay the level takes the finer values at every point of the box first, so every point
+    /// is walked).
+    #[allow(clippy::too_many_arguments)]
     pub fn edit_level_alone(
         &mut self,
         level: usize,
@@ -531,9 +537,10 @@ impl Field {
         hi: IVec3,
         create: bool,
         changes: impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool,
+        rows: impl Fn(i32, i32) -> (i32, i32),
         edit: impl FnMut(IVec3, &mut f32, &mut Colour),
     ) {
-        self.edit_level_then(level, lo, hi, create, changes, edit, false);
+        self.edit_level_then(level, lo, hi, create, changes, rows, edit, false);
     }
 
     /// Edits the bricks `level` stores over its points `lo ..= hi`, creating and refining none
@@ -557,6 +564,7 @@ impl Field {
         hi: IVec3,
         create: bool,
         changes: impl Fn(IVec3, IVec3, Option<(f32, f32)>) -> bool,
+        rows: impl Fn(i32, i32) -> (i32, i32),
         mut edit: impl FnMut(IVec3, &mut f32, &mut Colour),
         carry: bool,
     ) {
@@ -582,7 +590,8 @@ impl Field {
         // Where finer clay lies under the level, the level takes its values (they may change
         // nothing: bricks that hold no detail are dropped again).
         let walk = Walk { create: create || finer, refine: true };
-        self.edit_samples(level, lo, hi, walk, Reach { bricks: changes, rows: whole_rows }, |p, d, c| {
+        let rows = |y, z| if finer { whole_rows(y, z) } else { rows(y, z) };
+        self.edit_samples(level, lo, hi, walk, Reach { bricks: changes, rows }, |p, d, c| {
             if finer {
                 (*d, *c) = truth[at(p, lo, dims)];
             }

@@ -14,7 +14,7 @@ use super::shapes::ToolFrame;
 use super::shapes::ToolShape;
 use super::stamp::{mix_in, Ball, SOLID_BAND_VOXELS};
 use super::stroke::Tool;
-use crate::field::{brick_key, lattice_points, stores_differently, Colour, Field, LEVELS};
+use crate::field::{brick_key, lattice_points, stores_differently, whole_rows, Colour, Field, LEVELS};
 use crate::math::{IVec3, Pose, Vec3};
 
 /// Work done by one stamp (or a sum of stamps), as in Ferley et al.'s performance table.
@@ -48,12 +48,17 @@ impl AddAssign for StampCounters {
 pub const MAX_SIZE_SAMPLES: f32 = 8.0;
 
 /// The bound on a hand tool's samples across its size (see [`Tool::level_samples`]) where its
-/// scene tool sets none: in the station and the headset, a tool spanning up to 16 voxels of
-/// the finest level edits it, a larger one the level its size chooses. Of the bounds 8, 16
-/// and 32 this one gives the cheapest stamp with its re-mesh for tools of 20 and 40 mm on
-/// 1 mm voxels (BENCHMARKS.md, "hand tools by their size"), and keeps the finest level for
-/// the tools that shape detail.
-pub const HAND_SIZE_SAMPLES: f32 = 16.0;
+/// scene tool sets none: in the station and the headset, a tool spanning up to 32 voxels of
+/// the finest level edits it, a larger one the level its size chooses.
+///
+/// On the finest level a stamp's field work grows with the cube of the tool's size, and so do
+/// the bricks it stores and the undo history it fills: a stroke of 200 stamps of a 40 mm ball
+/// on 1 mm voxels stores 36 MB there, under 1 MB on a coarser level. The re-mesh takes back
+/// what a coarse level saves in time, for the mesher makes the finest bricks of coarse clay by
+/// interpolation and meshes them on the finest lattice: of the bounds 8, 16 and 32, this one
+/// keeps stamp and re-mesh within a quarter of the finest level's time (BENCHMARKS.md, "hand
+/// tools by their size"), and the finest level for the tools that shape detail.
+pub const HAND_SIZE_SAMPLES: f32 = 32.0;
 
 /// The level a tool of size `size_m` (metres) edits when it may span at most `samples`
 /// voxels of it: the finest such level, or the coarsest.
@@ -243,6 +248,7 @@ pub fn apply_tool(field: &mut Field, tool: &Tool, pose: Pose, dt_s: f32) -> Stam
         fp.hi,
         tool.action.may_create(),
         |_, _, _| true,
+        whole_rows,
         |p, d, c| kernel.apply(&fp, p, d, c, &mut walk),
     );
     for finer in (0..level).rev() {
@@ -403,22 +409,19 @@ fn sphere_fast_path(
             last_brick: None,
         };
         // One closure per walk, each inlined into its walk.
+        // Within the ball's reach; a full brick stays full when adding.
+        let within = move |a, b, range: Option<(f32, f32)>| {
+            ball.reaches(a, b) && !(add && range.is_some_and(|r: (f32, f32)| r.0 >= 1.0))
+        };
+        let rows = move |y, z| ball.row(y, z);
         if level == 0 {
-            // What `edit_level` does on the finest level, within the ball's reach; a full
-            // brick stays full when adding.
-            let changes = move |a, b, range: Option<(f32, f32)>| {
-                ball.reaches(a, b) && !(add && range.is_some_and(|r| r.0 >= 1.0))
-            };
-            field.edit_where(
-                lo,
-                hi,
-                add,
-                changes,
-                move |y, z| ball.row(y, z),
-                |p, d, c| kernel.apply(p, d, c),
-            );
+            // What `edit_level` does on the finest level.
+            field.edit_where(lo, hi, add, within, rows, |p, d, c| kernel.apply(p, d, c));
         } else if on == level {
-            field.edit_level_alone(level, lo, hi, add, |_, _, _| true, |p, d, c| kernel.apply(p, d, c));
+            // Over finer clay the level takes its values at every point of the box first.
+            let alone = (0..level).all(|l| field.level_brick_count(l) == 0);
+            let changes = move |a, b, range| !alone || within(a, b, range);
+            field.edit_level_alone(level, lo, hi, add, changes, rows, |p, d, c| kernel.apply(p, d, c));
         } else {
             field.edit_stored(on, lo, hi, |p, d, c| kernel.apply(p, d, c));
         }
