@@ -14,7 +14,7 @@ use crate::mesh::{mesh_all, ChunkMesh, MeshDiff, Mesher};
 use crate::render::ViewPasses;
 use crate::scene::Scene;
 use crate::stereo::display::{DisplayMode, Parity};
-use crate::tool::{stamp_sphere, Action};
+use crate::tool::{stamp_sphere, Action, MAX_SIZE_SAMPLES};
 
 /// A standard workload.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -30,6 +30,11 @@ pub enum Workload {
     /// incremental re-mesh after each stamp, and the 40 mm one on the finest level for
     /// comparison.
     StampAdaptive,
+    /// Strokes of 10, 20, 40 and 80 mm sphere tools on a 1 mm finest level, each on the
+    /// finest level and editing by its size with at most 8, 16 and 32 voxels across it (the
+    /// hand tools' bound, [`crate::tool::HAND_SIZE_SAMPLES`], is chosen from these): the stamp
+    /// alone, with the re-mesh after it, and the field's bytes.
+    HandTools,
     /// Full extraction of the surface of a solid sphere of radius 100 voxels, of the field a
     /// stroke of radius-16 stamps leaves, and of the coarse clay a short stroke of a 40 mm
     /// tool editing by its size leaves, on one thread and on all.
@@ -68,10 +73,11 @@ pub enum Workload {
 
 impl Workload {
     /// Every workload, in the order `argile bench` runs them.
-    pub const ALL: [Workload; 14] = [
+    pub const ALL: [Workload; 15] = [
         Workload::Stamp,
         Workload::StampCarve,
         Workload::StampAdaptive,
+        Workload::HandTools,
         Workload::MeshFull,
         Workload::RemeshStamp,
         Workload::RenderStereo,
@@ -155,6 +161,7 @@ pub fn run(workloads: &[Workload], size: BenchSize, mut emit: impl FnMut(Value))
             Workload::Stamp => bench_stamp(size, &mut emit),
             Workload::StampCarve => bench_stamp_carve(size, &mut emit),
             Workload::StampAdaptive => bench_stamp_adaptive(size, &mut emit),
+            Workload::HandTools => bench_hand_tools(size, &mut emit),
             Workload::MeshFull => bench_mesh_full(size, &mut emit)?,
             Workload::RemeshStamp => bench_remesh_stamp(size, &mut emit),
             Workload::RenderStereo => bench_render(size, &mut emit)?,
@@ -306,7 +313,9 @@ fn bench_stamp_carve(size: BenchSize, emit: &mut impl FnMut(Value)) {
 /// 40 mm stroke's time to the 4 mm one's; and for the tools editing by their size, the median
 /// µs per stamp with the incremental re-mesh after each stamp and the triangles it upserted.
 fn bench_stamp_adaptive(size: BenchSize, emit: &mut impl FnMut(Value)) {
-    let run = |radius_m, by_size, remesh| tool_stroke(size.stamps, radius_m, by_size, remesh);
+    let run = |radius_m, by_size: bool, remesh| {
+        tool_stroke(size.stamps, radius_m, by_size.then_some(MAX_SIZE_SAMPLES), remesh)
+    };
     let mut medians = Vec::new();
     for (radius_m, by_size) in [(0.004f32, true), (0.04, true), (0.04, false)] {
         let mut times = Vec::new();
@@ -356,23 +365,53 @@ fn bench_stamp_adaptive(size: BenchSize, emit: &mut impl FnMut(Value)) {
     }
 }
 
+/// The hand tools' strokes (see [`Workload::HandTools`]): per radius and bound, µs per stamp
+/// (medians of the repetitions) without and with the re-mesh after each stamp, the level
+/// written and the field's bytes.
+fn bench_hand_tools(size: BenchSize, emit: &mut impl FnMut(Value)) {
+    // 80 mm stamps on the finest level take milliseconds each: fewer stamps than the others.
+    let stamps = size.stamps.min(30);
+    for radius_mm in [10.0f32, 20.0, 40.0, 80.0] {
+        for bound in [None, Some(8.0), Some(16.0), Some(32.0)] {
+            let timed = |remesh| {
+                median(
+                    (0..size.repetitions)
+                        .map(|_| tool_stroke(stamps, radius_mm * 0.001, bound, remesh).0)
+                        .collect(),
+                )
+            };
+            let (field_us, with_remesh_us) = (timed(false), timed(true));
+            let (_, counters, _, field) = tool_stroke(stamps, radius_mm * 0.001, bound, false);
+            emit(json!({
+                "workload": "hand-tools",
+                "radius_mm": radius_mm,
+                "level_samples": bound,
+                "level": counters.level,
+                "stamps": stamps,
+                "repetitions": size.repetitions,
+                "us_per_stamp_median": field_us,
+                "with_remesh_us_per_stamp_median": with_remesh_us,
+                "field_bytes": field.memory_bytes(),
+            }));
+        }
+    }
+}
+
 /// A stroke of `stamps` adding sphere-tool stamps of radius `radius_m` along +X, spacing half
-/// the radius, into an empty field of 1 mm voxels, the tool editing by its size or on the
-/// finest level, with or without the incremental re-mesh after each stamp: (µs per stamp,
-/// the stamps' counters, triangles re-meshed, the field left).
+/// the radius, into an empty field of 1 mm voxels, the tool editing the finest level or by its
+/// size with at most `level_samples` voxels across it, with or without the incremental re-mesh
+/// after each stamp: (µs per stamp, the stamps' counters, triangles re-meshed, the field left).
 fn tool_stroke(
     stamps: usize,
     radius_m: f32,
-    by_size: bool,
+    level_samples: Option<f32>,
     remesh: bool,
 ) -> (f64, crate::tool::StampCounters, usize, Field) {
     use crate::math::Pose;
-    use crate::tool::{apply_tool, StampCounters, Tool, ToolShape, MAX_SIZE_SAMPLES};
+    use crate::tool::{apply_tool, StampCounters, Tool, ToolShape};
     let mut field = Field::new(0.001, 0.5);
-    let tool = Tool {
-        level_samples: by_size.then_some(MAX_SIZE_SAMPLES),
-        ..Tool::new(ToolShape::sphere(radius_m), Action::Add, [0.7, 0.4, 0.2, 1.0])
-    };
+    let tool =
+        Tool { level_samples, ..Tool::new(ToolShape::sphere(radius_m), Action::Add, [0.7, 0.4, 0.2, 1.0]) };
     let mut total = StampCounters::default();
     let mut mesher = Mesher::default();
     let mut triangles = 0;
@@ -413,7 +452,7 @@ fn bench_mesh_full(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> 
     }
     // Coarse clay: a short stroke of a 40 mm tool editing by its size (level 3, 8 mm voxels),
     // meshed on the finest lattice from bricks the coarser levels give.
-    let (_, _, _, coarse_field) = tool_stroke(size.stamps.min(10), 0.04, true, false);
+    let (_, _, _, coarse_field) = tool_stroke(size.stamps.min(10), 0.04, Some(MAX_SIZE_SAMPLES), false);
     let sphere = sphere_field(size.sphere_radius_voxels);
     for (name, field) in
         [("sphere", &sphere), ("stamp-add-16", &stroke_field), ("stroke-40mm-by-size", &coarse_field)]
@@ -984,6 +1023,27 @@ mod tests {
             assert!(l["share_displacement"].as_f64().unwrap() > 0.0, "the ball moves the bar: {l}");
             assert!(l["mass_drift"].as_f64().unwrap().abs() < 1e-3, "{l}");
         }
+    }
+
+    #[test]
+    fn the_hand_tools_report_each_size_and_bound_with_the_level_it_chooses() {
+        let mut lines = Vec::new();
+        run(&[Workload::HandTools], BenchSize::QUICK, |v| lines.push(v)).unwrap();
+        assert_eq!(lines.len(), 16);
+        let level = |mm: f64, bound: Option<f64>| {
+            let l = lines
+                .iter()
+                .find(|l| l["radius_mm"].as_f64() == Some(mm) && l["level_samples"].as_f64() == bound)
+                .unwrap_or_else(|| panic!("{mm} mm, {bound:?}"));
+            assert!(l["us_per_stamp_median"].as_f64().unwrap() > 0.0, "{l}");
+            assert!(l["with_remesh_us_per_stamp_median"].as_f64().unwrap() > 0.0, "{l}");
+            (l["level"].as_u64().unwrap(), l["field_bytes"].as_u64().unwrap())
+        };
+        // 1 mm voxels: a 40 mm ball spans 40 of them.
+        assert_eq!([None, Some(8.0), Some(16.0), Some(32.0)].map(|b| level(40.0, b).0), [0, 3, 2, 1]);
+        assert_eq!([None, Some(8.0), Some(16.0), Some(32.0)].map(|b| level(10.0, b).0), [0, 1, 0, 0]);
+        // A coarser level stores less of the large tool's stroke.
+        assert!(level(80.0, Some(32.0)).1 < level(80.0, None).1 / 4);
     }
 
     #[test]

@@ -52,12 +52,14 @@ pub const MAX_SIZE_SAMPLES: f32 = 8.0;
 /// the finest level edits it, a larger one the level its size chooses.
 ///
 /// On the finest level a stamp's field work grows with the cube of the tool's size, and so do
-/// the bricks it stores and the undo history it fills: a stroke of 200 stamps of a 40 mm ball
-/// on 1 mm voxels stores 36 MB there, under 1 MB on a coarser level. The re-mesh takes back
-/// what a coarse level saves in time, for the mesher makes the finest bricks of coarse clay by
-/// interpolation and meshes them on the finest lattice: of the bounds 8, 16 and 32, this one
-/// keeps stamp and re-mesh within a quarter of the finest level's time (BENCHMARKS.md, "hand
-/// tools by their size"), and the finest level for the tools that shape detail.
+/// the bricks it stores and the undo history it fills: the field of a stroke of 30 stamps of
+/// a 40 mm ball on 1 mm voxels takes 5.8 MB there and 1.2 MB on level 1; of an 80 mm one,
+/// 24 MB there and 1.2 MB on level 2. The re-mesh takes back what a coarse level saves in
+/// time, for the mesher makes the finest bricks of coarse clay by interpolation and meshes
+/// them on the finest lattice: of the bounds 8, 16 and 32, this one keeps stamp and re-mesh
+/// within about a tenth of the finest level's time (above it for a 40 mm tool, below for an
+/// 80 mm one: `argile bench hand-tools`, BENCHMARKS.md), and the finest level for the tools
+/// that shape detail.
 pub const HAND_SIZE_SAMPLES: f32 = 32.0;
 
 /// The level a tool of size `size_m` (metres) edits when it may span at most `samples`
