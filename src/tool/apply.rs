@@ -410,8 +410,8 @@ fn sphere_fast_path(
             counters,
             last_brick: None,
         };
-        // One closure per walk, each inlined into its walk.
-        // Within the ball's reach; a full brick stays full when adding.
+        // Within the ball's reach; a full brick stays full when adding. Each walk below gets
+        // a closure of its own around the kernel, which it inlines.
         let within = move |a, b, range: Option<(f32, f32)>| {
             ball.reaches(a, b) && !(add && range.is_some_and(|r: (f32, f32)| r.0 >= 1.0))
         };
