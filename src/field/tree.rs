@@ -613,7 +613,9 @@ impl Field {
                     stored = true;
                 }
             }
-            if !changes(base + a, base + b, self.levels[level].ranges.get(&key).map(|r| r.all)) {
+            // The brick's range as it stands (refined above, if it was).
+            let prior = self.levels[level].ranges.get(&key).map(|r| r.all);
+            if !changes(base + a, base + b, prior) {
                 continue;
             }
             if !stored && !walk.create {
@@ -629,7 +631,6 @@ impl Field {
             // An empty brick says nothing unless coarser clay would show through it (then the
             // coarsening below drops it if that clay is empty there too).
             let keep_empty = above && self.reads_above(level, key);
-            let prior = self.levels[level].ranges.get(&key).map(|r| r.all);
             // Copies the brick if the history, the journal or a tile shares it.
             let brick = Arc::make_mut(self.levels[level].bricks.entry(key).or_default());
             let changed = samples(brick, base, a, b, fresh);
