@@ -363,3 +363,160 @@ fn coarse_clay_meshes_closed_and_continuous_with_fine_clay_beside_it() {
     assert_eq!(euler_characteristic(&full), 2);
     assert_on_iso_level(&f, &full);
 }
+
+/// A ball of radius `radius` level voxels written on level `level` alone, centred on world
+/// position `centre`, adding or carving.
+fn level_ball(field: &mut Field, level: usize, centre: Vec3, radius: f32, add: bool) {
+    let voxel = 0.001 * (1 << level) as f32;
+    let c = centre / voxel;
+    let reach = IVec3::splat(radius.ceil() as i32 + 2);
+    let mid = c.round().as_ivec3();
+    field.edit_level(
+        level,
+        mid - reach,
+        mid + reach,
+        add,
+        |_, _, _| true,
+        |q, d, colour| {
+            let v = (0.5 - (q.as_vec3() - c).length() + radius).clamp(0.0, 1.0);
+            if add {
+                if v > *d {
+                    *colour = [0.3, 0.6, 0.2, 1.0];
+                }
+                *d = d.max(v);
+            } else {
+                *d = d.min(1.0 - v);
+            }
+        },
+    );
+}
+
+/// No triangle of a welded mesh is flat: its height over its longest side is more than a
+/// millionth of that side. (Marching cubes makes small triangles, where a sample lies near
+/// the iso-level, and thin ones, but keeps its vertices 10⁻⁴ of an edge from the samples: a
+/// thinner triangle has its corners in a line.)
+fn assert_no_flat_triangle(w: &Welded) {
+    for t in &w.triangles {
+        let [a, b, c] = t.map(|i| w.positions[i as usize].as_dvec3());
+        let twice_area = (b - a).cross(c - a).length();
+        let longest = (b - a).length().max((c - b).length()).max((a - c).length());
+        assert!(
+            twice_area > 1e-6 * longest * longest,
+            "triangle {t:?} at {a} is flat: height {} over a side of {longest}",
+            twice_area / longest
+        );
+    }
+}
+
+/// Coarse clay (level 2, 4 mm voxels) meshed on its own lattice: a sixteenth of the finest
+/// level's triangles for the same sphere, closed, on the iso-level, of the right volume.
+#[test]
+fn coarse_clay_is_meshed_on_its_own_level() {
+    let mut coarse = Field::new(0.001, 0.5);
+    level_ball(&mut coarse, 2, Vec3::new(0.0013, -0.0021, 0.0007), 7.6, true);
+    let mut fine = Field::new(0.001, 0.5);
+    level_ball(&mut fine, 0, Vec3::new(0.0013, -0.0021, 0.0007), 7.6 * 4.0, true);
+    let (c, f) = (mesh_all(&coarse), mesh_all(&fine));
+    assert!(c.upserted.iter().all(|(k, _)| argile::mesh::mesh_level(&coarse, *k) == 2));
+    let ratio = f.upserted_triangles() as f32 / c.upserted_triangles() as f32;
+    assert!(
+        (12.0..20.0).contains(&ratio),
+        "{} finest triangles against {} coarse",
+        f.upserted_triangles(),
+        c.upserted_triangles()
+    );
+    let w = weld(c.upserted.iter().map(|(_, m)| m));
+    assert_closed_and_oriented(&w);
+    assert_eq!(euler_characteristic(&w), 2);
+    assert_on_iso_level(&coarse, &w);
+    assert_no_flat_triangle(&w);
+    let (_, volume) = area_and_volume(&w);
+    let want = 4.0 / 3.0 * std::f32::consts::PI * (7.6f32 * 0.004).powi(3);
+    assert!((volume / want - 1.0).abs() < 0.03, "volume {volume} against {want}");
+}
+
+/// Fine clay touching coarse clay of every coarser level across a face, along an edge only
+/// and at a corner only: the coarse cells conform and the surface is closed, one piece.
+#[test]
+fn fine_clay_meets_coarse_clay_across_faces_edges_and_corners_without_a_crack() {
+    for level in 1..=3 {
+        let scale = (1 << level) as f32;
+        // A coarse slab about 80 mm wide and 12 to 24 mm thick, then a fine ball on its top
+        // face and a fine dent in its bottom one, each about a brick corner: the finest
+        // bricks meet coarse ones across faces, along edges only and at corners only.
+        let mut f = Field::new(0.001, 0.5);
+        let half = (IVec3::new(40, 40, 6) / (1 << level)).max(IVec3::ONE);
+        f.edit_level(
+            level,
+            -half,
+            half,
+            true,
+            |_, _, _| true,
+            |q, d, _| {
+                let inside = (half.as_vec3() - q.as_vec3().abs()).min_element();
+                *d = (0.5 + inside).clamp(0.0, 1.0);
+            },
+        );
+        // The slab's faces lie at z = ±(half.z + 0.5) level voxels.
+        let top = (half.z as f32 + 0.5) * scale * 0.001;
+        level_ball(&mut f, 0, Vec3::new(0.0081, 0.0079, top + 0.0007), 5.3, true);
+        f.begin_stroke();
+        level_ball(&mut f, 0, Vec3::new(-0.0161, 0.0159, -top - 0.0003), 4.1, false);
+        f.end_stroke();
+        let diff = mesh_all(&f);
+        let levels: Vec<usize> =
+            diff.upserted.iter().map(|(k, _)| argile::mesh::mesh_level(&f, *k)).collect();
+        let on = |l: usize| levels.iter().filter(|&&m| m == l).count();
+        assert!(on(0) > 0 && on(level) > 2 * on(0), "level {level}: {levels:?}");
+        assert!(levels.iter().all(|&m| m == 0 || m == level), "level {level}: {levels:?}");
+        let w = weld(diff.upserted.iter().map(|(_, m)| m));
+        assert_closed_and_oriented(&w);
+        assert_eq!(euler_characteristic(&w), 2, "level {level}: one closed piece");
+        assert_on_iso_level(&f, &w);
+        assert_no_flat_triangle(&w);
+        assert!(area_and_volume(&w).1 > 0.0);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 40, rng_seed: proptest::test_runner::RngSeed::Fixed(0x4d4c_564c), ..ProptestConfig::default() })]
+
+    /// Balls added and carved on levels 0 to 3 in any order, then some strokes undone: every
+    /// brick meshed on the coarsest level its clay allows, the incremental chunks equal a full
+    /// re-mesh after each step, and the welded surface is closed, oriented, on the iso-level
+    /// and without a flat triangle.
+    #[test]
+    fn meshes_of_mixed_levels_are_closed_and_incremental(
+        stamps in stamps(),
+        levels in prop::collection::vec(0usize..=3, 12),
+        undo in 0usize..4,
+    ) {
+        let mut field = Field::new(0.001, 0.5);
+        let mut chunks: HashMap<ChunkKey, ChunkMesh> = HashMap::new();
+        let apply = |field: &mut Field, chunks: &mut HashMap<ChunkKey, ChunkMesh>| {
+            let diff = remesh_dirty(field);
+            for key in diff.removed {
+                chunks.remove(&key);
+            }
+            chunks.extend(diff.upserted);
+        };
+        for (s, &level) in stamps.iter().zip(&levels) {
+            field.begin_stroke();
+            let radius = s.radius / (0.001 * (1 << level) as f32);
+            level_ball(&mut field, level, s.centre, radius.max(1.2), s.add);
+            field.end_stroke();
+            apply(&mut field, &mut chunks);
+        }
+        for _ in 0..undo {
+            field.undo().unwrap();
+            apply(&mut field, &mut chunks);
+        }
+        let full: HashMap<ChunkKey, ChunkMesh> = mesh_all(&field).upserted.into_iter().collect();
+        prop_assert_eq!(&chunks, &full);
+        let w = weld(full.values());
+        prop_assert!(w.positions.iter().chain(&w.normals).all(|v| v.is_finite()));
+        assert_closed_and_oriented(&w);
+        assert_on_iso_level(&field, &w);
+        assert_no_flat_triangle(&w);
+    }
+}

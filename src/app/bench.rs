@@ -451,7 +451,7 @@ fn bench_mesh_full(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> 
         stamp_sphere(&mut stroke_field, centre, 0.016, Action::Add, [0.7, 0.4, 0.2, 1.0]);
     }
     // Coarse clay: a short stroke of a 40 mm tool editing by its size (level 3, 8 mm voxels),
-    // meshed on the finest lattice from bricks the coarser levels give.
+    // meshed on its own level.
     let (_, _, _, coarse_field) = tool_stroke(size.stamps.min(10), 0.04, Some(MAX_SIZE_SAMPLES), false);
     let sphere = sphere_field(size.sphere_radius_voxels);
     for (name, field) in

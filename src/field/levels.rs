@@ -263,6 +263,20 @@ impl Field {
         upsample(&coarse, c_lo, c_hi, lo, hi, out);
     }
 
+    /// The values of level `level`'s points `lo ..= hi` as that level reads them, into `out`
+    /// (x fastest): its own samples where it holds a brick, the coarser levels' interpolation
+    /// elsewhere; finer levels are not read. Where no finer level holds a brick, these are the
+    /// values readers see (the mesher meshes such clay on its own level).
+    pub fn level_values(&self, level: usize, lo: IVec3, hi: IVec3, out: &mut Vec<(f32, Colour)>) {
+        self.level_block(level, lo, hi, true, out);
+    }
+
+    /// Whether level `level` holds a brick over any of its points `lo ..= hi`.
+    pub fn level_holds_over(&self, level: usize, lo: IVec3, hi: IVec3) -> bool {
+        let bricks = &self.levels[level].bricks;
+        !bricks.is_empty() && keys_over(lo, hi).any(|k| bricks.contains_key(&k))
+    }
+
     /// The lattice of level `level`: the finest's origin, voxels `2^level` times as large.
     pub fn level_transform(&self, level: usize) -> crate::math::VoxelTransform {
         let mut t = self.transform;

@@ -369,14 +369,38 @@ impl Field {
             Some(value) => self.tile(value, brick),
             None => brick,
         };
-        self.levels[usize::from(key.level)].bricks.insert(key.key, brick)
+        let old = self.levels[usize::from(key.level)].bricks.insert(key.key, brick);
+        if old.is_none() {
+            self.note_presence(key);
+        }
+        old
     }
 
     /// Removes the brick at `key`; returns what was there.
     pub(super) fn remove(&mut self, key: LevelKey) -> Option<Arc<Brick>> {
         let level = &mut self.levels[usize::from(key.level)];
         level.ranges.remove(&key.key);
-        level.bricks.remove(&key.key)
+        let old = level.bricks.remove(&key.key);
+        if old.is_some() {
+            self.note_presence(key);
+        }
+        old
+    }
+
+    /// After brick `key` came or went: where the field has more than one level, which level
+    /// holds the clay there changed, though no density may have. A reader that meshes each
+    /// region on the finest level present there, with cells that conform to finer neighbours
+    /// (the mesher), meshes the bricks reading the brick's points, and their neighbours,
+    /// differently: those are marked dirty.
+    fn note_presence(&mut self, key: LevelKey) {
+        let level = usize::from(key.level);
+        if level == 0 && !self.has_levels_above(0) {
+            return;
+        }
+        let scale = 1 << level;
+        let base = key.key * BRICK_SIZE * scale;
+        let top = (key.key * BRICK_SIZE + IVec3::splat(BRICK_SIZE - 1)) * scale;
+        self.mark_dirty(base - IVec3::splat(BRICK_SIZE), top + IVec3::splat(BRICK_SIZE));
     }
 
     /// The shared tile of `value`, made from `brick` (which holds it) if there is none yet.
@@ -628,6 +652,9 @@ impl Field {
             // A brick made by this edit holds no matter yet: its colour is that of the
             // first matter the edit puts in it.
             let fresh = !stored;
+            if fresh {
+                self.note_presence(level_key);
+            }
             // An empty brick says nothing unless coarser clay would show through it (then the
             // coarsening below drops it if that clay is empty there too).
             let keep_empty = above && self.reads_above(level, key);

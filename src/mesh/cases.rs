@@ -70,6 +70,22 @@ fn faces() -> [[usize; 4]; 6] {
     out
 }
 
+/// The rule on one face: of its crossings, listed counter-clockwise seen from outside the
+/// cell as (vertex, whether the ring goes from an empty sample to a dense one there), links
+/// each empty→dense crossing to the next dense→empty one, calling `link(start, end)`.
+pub(super) fn link_crossings<T: Copy>(crossings: &[(T, bool)], mut link: impl FnMut(T, T)) {
+    for (i, &(start, is_start)) in crossings.iter().enumerate() {
+        if !is_start {
+            continue;
+        }
+        let end = (1..crossings.len())
+            .map(|k| crossings[(i + k) % crossings.len()])
+            .find(|&(_, s)| !s)
+            .expect("crossings alternate");
+        link(start, end.0);
+    }
+}
+
 /// Triangles of one case, as triples of edge indices.
 pub type CaseTriangles = Vec<[u8; 3]>;
 
@@ -85,16 +101,7 @@ fn build_case(mask: usize) -> CaseTriangles {
                 crossings.push((edge_between(a, b), dense(b)));
             }
         }
-        for (i, &(start, is_start)) in crossings.iter().enumerate() {
-            if !is_start {
-                continue;
-            }
-            let end = (1..crossings.len())
-                .map(|k| crossings[(i + k) % crossings.len()])
-                .find(|&(_, s)| !s)
-                .expect("crossings alternate");
-            next[start] = end.0 as u8;
-        }
+        link_crossings(&crossings, |start, end| next[start] = end as u8);
     }
     let mut triangles = Vec::new();
     let mut seen = [false; 12];

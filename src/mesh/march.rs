@@ -268,13 +268,9 @@ fn edge_vertex<const AXIS: usize>(
     let (x1, y1, z1) = (x + step[0], y + step[1], z + step[2]);
     let (a, b) = (at(x, y, z), at(x1, y1, z1));
     let (va, vb) = (block.density[a], block.density[b]);
-    // Kept off the ends so that a sample lying exactly on the iso-level (tool values are
-    // multiples of 1/64) does not put the vertices of several edges at one point: positions
-    // then stay distinct and a mesh welded by position keeps its topology.
-    let t = ((iso - va) / (vb - va)).clamp(1e-4, 1.0 - 1e-4);
-    let mut lattice = (block.origin + IVec3::new(x as i32, y as i32, z as i32)).as_vec3();
-    lattice[axis] += t;
-    let position = transform.index_to_world(lattice);
+    let t = crossing(iso, va, vb);
+    let position =
+        crossing_position(transform, block.origin + IVec3::new(x as i32, y as i32, z as i32), axis, 1, t);
     let gradient = block.gradient(x, y, z).lerp(block.gradient(x1, y1, z1), t);
     let normal = if gradient.length_squared() > 1e-20 {
         -gradient.normalize()
@@ -284,18 +280,51 @@ fn edge_vertex<const AXIS: usize>(
         n[axis] = if va >= iso { 1.0 } else { -1.0 };
         n
     };
-    // Colour is weighted by matter as well as by position: the empty end of an edge holds no
-    // clay, so its (meaningless) colour must not tint the surface.
     let (ca, cb) = (colours.colour_in_block(x, y, z), colours.colour_in_block(x1, y1, z1));
+    let colour = crossing_colour((va, ca), (vb, cb), t);
+    Vertex { position: position.to_array(), normal: normal.to_array(), colour }
+}
+
+/// Where the surface crosses an edge whose ends hold `va` and `vb`, as a fraction of the edge
+/// from the `va` end. Kept off the ends so that a sample lying exactly on the iso-level (tool
+/// values are multiples of 1/64) does not put the vertices of several edges at one point:
+/// positions then stay distinct and a mesh welded by position keeps its topology.
+#[inline]
+pub(super) fn crossing(iso: f32, va: f32, vb: f32) -> f32 {
+    ((iso - va) / (vb - va)).clamp(1e-4, 1.0 - 1e-4)
+}
+
+/// World position of the crossing at fraction `t` of the edge of `length` finest voxels from
+/// finest lattice point `lower` along `axis`. Every mesh level computes an edge's vertex here,
+/// from the same two samples: where meshes of two levels share an edge, they share its vertex
+/// bit for bit.
+#[inline]
+pub(super) fn crossing_position(
+    transform: &VoxelTransform,
+    lower: IVec3,
+    axis: usize,
+    length: i32,
+    t: f32,
+) -> Vec3 {
+    let mut lattice = lower.as_vec3();
+    // (`t · 1` is `t` exactly: the finest level's kernel agrees.)
+    lattice[axis] += t * length as f32;
+    transform.index_to_world(lattice)
+}
+
+/// The colour at fraction `t` of an edge between samples `a` and `b` (density, colour),
+/// weighted by matter as well as by position: the empty end of an edge holds no clay, so its
+/// (meaningless) colour must not tint the surface.
+#[inline]
+pub(super) fn crossing_colour((va, ca): (f32, Colour), (vb, cb): (f32, Colour), t: f32) -> Colour {
     let (wa, wb) = (va.max(0.0) * (1.0 - t), vb.max(0.0) * t);
     let total = wa + wb;
-    let colour = if ca == cb {
+    if ca == cb {
         // One colour at both ends (most edges): it is the vertex's, exactly.
         ca
     } else if total > 0.0 {
         std::array::from_fn(|i| (ca[i] * wa + cb[i] * wb) / total)
     } else {
         std::array::from_fn(|i| ca[i] + (cb[i] - ca[i]) * t)
-    };
-    Vertex { position: position.to_array(), normal: normal.to_array(), colour }
+    }
 }

@@ -7,6 +7,7 @@ use std::sync::Mutex;
 use rustc_hash::{FxHashMap, FxHashSet};
 
 use super::cases::flat_cases;
+use super::coarse::{levels_around, march_coarse, mesh_level, CoarseScratch};
 use super::march::{march_brick, Block, MarchScratch, Neighbourhood, BLOCK, BLOCK_VOLUME};
 use super::types::{ChunkMesh, MeshDiff};
 use crate::field::{dequantize, Brick, BrickKey, Field, Quantum, BRICK_SIZE, BRICK_VOLUME};
@@ -17,8 +18,8 @@ use crate::math::IVec3;
 /// copy). Returns the bricks it read, for the kernel's colour look-ups, and the block.
 ///
 /// Where the finest level holds no brick but coarser levels hold clay, the brick the coarser
-/// levels give is made in the block's spare bricks and read like a stored one: coarse clay
-/// is meshed on the finest lattice, continuous with the finest bricks around it.
+/// levels give is made in the block's spare bricks and read like a stored one: a brick meshed
+/// on the finest level reads coarse clay beside it as the finest lattice sees it.
 pub fn gather_block<'f>(
     field: &'f Field,
     key: BrickKey,
@@ -150,7 +151,8 @@ fn copy_block(around: &[Option<&Brick>; 27], stored: &mut [Quantum], density: &m
     }
 }
 
-/// Meshes one brick into `out`, reusing the caller's buffers.
+/// Meshes one brick into `out`, on its mesh level ([`mesh_level`]), reusing the caller's
+/// buffers (those of the finest level's kernel).
 pub fn mesh_brick(
     field: &Field,
     key: BrickKey,
@@ -158,18 +160,27 @@ pub fn mesh_brick(
     scratch: &mut MarchScratch,
     out: &mut ChunkMesh,
 ) {
-    mesh_brick_with(field, key, block, None, scratch, out);
+    let level = mesh_level(field, key);
+    mesh_brick_with(field, key, level, block, None, scratch, &mut CoarseScratch::default(), out);
 }
 
-/// [`mesh_brick`] reading the bricks the coarser levels give from `made` when given.
+/// [`mesh_brick`] on mesh level `level` ([`mesh_level`]), reading the finest bricks the
+/// coarser levels give from `made` when given.
+#[allow(clippy::too_many_arguments)]
 fn mesh_brick_with(
     field: &Field,
     key: BrickKey,
+    level: usize,
     block: &mut Block,
     made: Option<&CoarseBricks>,
     scratch: &mut MarchScratch,
+    coarse: &mut CoarseScratch,
     out: &mut ChunkMesh,
 ) {
+    if level > 0 {
+        march_coarse(field, key, level, &levels_around(field, key), coarse, out);
+        return;
+    }
     let (around, block) = gather(field, key, block, made);
     march_brick(block, &around, field.surface_level(), field.transform(), scratch, out);
 }
@@ -284,6 +295,7 @@ fn volume(lo: IVec3, hi: IVec3) -> usize {
 struct Worker {
     block: Block,
     scratch: MarchScratch,
+    coarse: CoarseScratch,
     /// Sized for the largest chunk a brick can make, so it never grows.
     mesh: ChunkMesh,
 }
@@ -298,7 +310,12 @@ impl Default for Worker {
             vertices: Vec::with_capacity(max_vertices),
             indices: Vec::with_capacity(max_indices),
         };
-        Self { block: Block::default(), scratch: MarchScratch::default(), mesh }
+        Self {
+            block: Block::default(),
+            scratch: MarchScratch::default(),
+            coarse: CoarseScratch::default(),
+            mesh,
+        }
     }
 }
 
@@ -316,6 +333,10 @@ pub struct Mesher {
     /// One per thread of the pool, by thread index (locked by that thread only).
     workers: Vec<Mutex<Worker>>,
     keys: Vec<BrickKey>,
+    /// The mesh level of each key ([`mesh_level`]).
+    levels: Vec<u8>,
+    /// The keys meshed on the finest level, whose neighbours the coarser levels may give.
+    finest: Vec<BrickKey>,
     slots: Vec<ChunkMesh>,
     /// The slot each chunk of `diff.upserted` came from.
     upserted_slots: Vec<usize>,
@@ -441,21 +462,31 @@ impl Mesher {
         if self.workers.len() < threads {
             self.workers.resize_with(threads, Mutex::default);
         }
-        self.coarse.make(field, &self.keys);
+        self.levels.clear();
+        self.finest.clear();
+        if field.has_levels_above(0) {
+            self.levels.extend(self.keys.iter().map(|&k| mesh_level(field, k) as u8));
+            self.finest.extend(self.keys.iter().zip(&self.levels).filter(|(_, &l)| l == 0).map(|(&k, _)| k));
+        } else {
+            self.levels.resize(n, 0);
+        }
+        self.coarse.make(field, &self.finest);
         let (workers, coarse) = (&self.workers, &self.coarse);
-        self.keys.par_iter().zip(self.slots[..n].par_iter_mut()).for_each(|(&key, slot)| {
+        let keys = self.keys.par_iter().zip(self.levels.par_iter());
+        keys.zip(self.slots[..n].par_iter_mut()).for_each(|((&key, &level), slot)| {
             let index = rayon::current_thread_index().unwrap_or(0) % workers.len();
             let mut worker = workers[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-            let Worker { block, scratch, mesh } = &mut *worker;
+            let Worker { block, scratch, coarse: coarse_scratch, mesh } = &mut *worker;
+            let level = usize::from(level);
             if slot.vertices.capacity() == 0 {
                 // A new slot: marched into the worker's chunk, which never grows, and given
                 // just what it needs, rather than grown by doublings.
-                mesh_brick_with(field, key, block, Some(coarse), scratch, mesh);
+                mesh_brick_with(field, key, level, block, Some(coarse), scratch, coarse_scratch, mesh);
                 slot.vertices.extend_from_slice(&mesh.vertices);
                 slot.indices.extend_from_slice(&mesh.indices);
             } else {
                 // A slot that held a chunk before keeps its vectors and takes this one in place.
-                mesh_brick_with(field, key, block, Some(coarse), scratch, slot);
+                mesh_brick_with(field, key, level, block, Some(coarse), scratch, coarse_scratch, slot);
             }
         });
         for (i, (&key, slot)) in self.keys.iter().zip(&mut self.slots).enumerate() {

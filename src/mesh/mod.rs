@@ -35,23 +35,33 @@
 //! buffers of its own. A mesher kept from call to call reuses every buffer, the chunks of its
 //! diff included: its steady state allocates nothing (`tests/mesh_alloc.rs`).
 //!
-//! ## Coarse clay
+//! ## Resolution levels
 //!
-//! Where the finest level holds no brick but coarser levels hold clay (a tool that edited by
-//! its size), the finest brick is made by interpolating the coarser levels and meshed like a
-//! stored one: the surface is continuous across levels by construction, at the cost of the
-//! finest level's triangles. Such a brick is told empty or full, like a stored one, from the
-//! range of the coarse samples its interpolation reads (not the coarse brick's whole range,
-//! which crosses the surface over hundreds of finest bricks that do not). A mesher call makes
-//! each brick it reads once, in parallel, before marching, for all the bricks whose blocks
-//! read it (each was otherwise made again for every neighbour, up to 27 times). Those bricks
-//! are allocated per call: the no-allocation steady state holds for clay of the finest level.
+//! Each brick is meshed on the coarsest level, up to cells as wide as the brick, under which
+//! no finer level holds a brick over what its cells read (`coarse::mesh_level`): clay a tool
+//! wrote on a coarse level is meshed on that level's lattice, with a quarter of the triangles
+//! per level, while the finest bricks keep the kernel below. Where levels meet, the coarse
+//! cells conform to the finer ones: a coarse cell's face toward a finer brick is cut into that
+//! brick's squares, and its edges along a finer brick (across a face, or along an edge only)
+//! into that brick's edges; the surface on such a cell is traced on those faces with the case
+//! table's own rule, so both sides draw the same segments through the same vertices, and the
+//! welded surface is closed (see the `coarse` module). No transition cell thicker than a face,
+//! no restriction on the ratio of levels between neighbours.
+//!
+//! Where a finest brick is meshed next to coarse clay, the bricks its block reads from the
+//! coarser levels are made by interpolation, once per mesher call, in parallel, for all the
+//! finest bricks of the call that read them (each was otherwise made again for every
+//! neighbour, up to 27 times); a brick is told empty or full, like a stored one, from the
+//! range of the coarse samples its interpolation reads. Those bricks, and the coarse level's
+//! samples, are allocated per call: the no-allocation steady state holds for clay of the
+//! finest level.
 //!
 //! The kernel classifies the brick's 9³ cell corners once, as one bit per corner in rows along
 //! x, so that a cell's case is a few shifts and rows of cells the surface does not cross are
 //! skipped whole.
 
 mod cases;
+mod coarse;
 pub mod export;
 mod march;
 mod mesher;
@@ -59,6 +69,7 @@ mod types;
 mod weld;
 
 pub use cases::{case_table, CORNER_OFFSETS, EDGES};
+pub use coarse::{levels_around, march_coarse, mesh_level, CoarseScratch, MAX_MESH_LEVEL};
 pub use march::{march_brick, Block, MarchScratch, Neighbourhood, BLOCK, BLOCK_VOLUME};
 pub use mesher::{gather_block, mesh_all, mesh_brick, meshable_bricks, remesh, remesh_dirty, Mesher};
 pub use types::*;

@@ -1,0 +1,523 @@
+//! Coarse clay meshed on its own level, its cells conforming to finer neighbours.
+//!
+//! ```text
+//!   level 2 brick, meshed on level 2        level 0 brick (the finest)
+//!   ┌───────────┬───────────┐┬──┬──┬──┬──┬──┬──┬──┬──┐
+//!   │           │           ││  │  │  │  │  │  │  │  │   the coarse cell's face toward
+//!   │  regular  │ conforming●●──┼──┼──┼──┼──┼──┼──┼──┤   the finer brick is cut into that
+//!   │   cell    │   cell    ││  │  │  │  │  │  │  │  │   brick's squares, and its edges on
+//!   ├───────────┼───────────●┼──┼──┼──┼──┼──┼──┼──┼──┤   the brick's face into its edges:
+//!   │           │           ││  │  │  │  │  │  │  │  │   the cell is a polyhedron whose
+//!   │           │           ●●──┼──┼──┼──┼──┼──┼──┼──┤   faces are the squares the finer
+//!   │           │           ││  │  │  │  │  │  │  │  │   cells show it
+//!   └───────────┴───────────┘┴──┴──┴──┴──┴──┴──┴──┴──┘
+//! ```
+//!
+//! - **Which level.** A brick is meshed on the coarsest level, up to [`MAX_MESH_LEVEL`]
+//!   (cells as wide as the brick), under which no finer level holds a brick over the points
+//!   its cells read ([`mesh_level`]). There the finer levels' values are the coarse level's
+//!   interpolation: the coarse cells hold all the clay says, with a fraction of the finest
+//!   level's triangles (a quarter per level).
+//! - **Where levels meet.** Every face and edge of a cell has a resolution: the finest mesh
+//!   level of the bricks whose cells it bounds. A cell whose faces and edges are all of its own
+//!   level is marched with the case table; a cell with a finer face or edge is a polyhedron
+//!   whose faces are that face's squares (each edge on the face's rim cut into that edge's
+//!   pieces) and whose other faces are polygons with their edges cut likewise. Its surface is
+//!   traced with the case table's own rule (on each face, walked counter-clockwise from
+//!   outside, a segment from each empty→dense crossing to the next dense→empty one), which
+//!   reads nothing but the face's samples: the finer cells draw the same segments on the
+//!   squares they share with it, in reverse. The segments close into loops, each fanned into
+//!   triangles from a vertex chosen so that no triangle or chord lies in one face and none is
+//!   flat or turned over.
+//! - **Same vertices.** A vertex is made on an edge piece from its two samples with the
+//!   kernel's formula ([`super::march`]'s `crossing_position`): finer and coarser meshes sharing
+//!   an edge piece share the vertex bit for bit, and welding by position closes the surface.
+//! - **No transition cells needed thicker than a face**, and no limit on the ratio of levels
+//!   across a face: a level-3 cell next to the finest level has a face of 8 × 8 squares.
+//!   Cells meeting finer bricks along an edge only (the case Transvoxel's face cells leave
+//!   open) have that edge cut, and so do the cells around it.
+//! - **Incremental.** A brick's mesh depends on its neighbours' levels; the field marks a
+//!   brick's surroundings dirty when a brick of any level comes or goes (see `Field`).
+
+use rustc_hash::FxHashMap;
+
+use super::cases::{case_table, link_crossings, CORNER_OFFSETS, EDGES};
+use super::march::{crossing, crossing_colour, crossing_position};
+use super::types::{ChunkMesh, Vertex};
+use crate::field::{BrickKey, Colour, Field, BRICK_SIZE, LEVELS};
+use crate::math::{IVec3, Vec3, VoxelTransform};
+
+/// The coarsest level a brick is meshed on: there one cell spans the brick.
+pub const MAX_MESH_LEVEL: usize = BRICK_SIZE.trailing_zeros() as usize;
+const _: () = assert!(1 << MAX_MESH_LEVEL == BRICK_SIZE && MAX_MESH_LEVEL < LEVELS);
+
+/// The level brick `key`'s cells are meshed on: the coarsest, up to [`MAX_MESH_LEVEL`], under
+/// which no level holds a brick over the points the cells read (`key·S ..= key·S + S` on the
+/// finest lattice); 0 in a field of one level.
+pub fn mesh_level(field: &Field, key: BrickKey) -> usize {
+    if !field.has_levels_above(0) {
+        return 0;
+    }
+    let lo = key * BRICK_SIZE;
+    let hi = lo + IVec3::splat(BRICK_SIZE);
+    (0..MAX_MESH_LEVEL)
+        .find(|&l| field.level_holds_over(l, lo >> l as i32, hi >> l as i32))
+        .unwrap_or(MAX_MESH_LEVEL)
+}
+
+/// The mesh levels of brick `key` and its 26 neighbours, `(dx + 1) + 3·(dy + 1) + 9·(dz + 1)`.
+pub fn levels_around(field: &Field, key: BrickKey) -> [u8; 27] {
+    std::array::from_fn(|i| {
+        let i = i as i32;
+        mesh_level(field, key + IVec3::new(i % 3 - 1, (i / 3) % 3 - 1, i / 9 - 1)) as u8
+    })
+}
+
+/// Reusable buffers of the coarse marcher.
+#[derive(Debug, Default)]
+pub struct CoarseScratch {
+    /// The level's values over the brick's cells and an apron of one (gradients).
+    samples: Vec<(f32, Colour)>,
+    /// The finest values a conforming cell reads, over the cell.
+    fine: Vec<(f32, Colour)>,
+    /// The chunk's vertex on each edge piece: (lower point, axis) → index.
+    vertex_of: FxHashMap<(IVec3, u8), u32>,
+    /// A conforming cell's polygons: each vertex's two faces.
+    faces_of: FxHashMap<u32, [u32; 2]>,
+    /// A conforming cell's segments: start → end.
+    next: FxHashMap<u32, u32>,
+    /// Segment starts in the order found.
+    starts: Vec<u32>,
+    ring: Vec<IVec3>,
+    crossings: Vec<(u32, bool)>,
+    loop_: Vec<u32>,
+}
+
+/// What one brick's cells read: the level's values and the lattice.
+struct Cells<'a> {
+    field: &'a Field,
+    transform: &'a VoxelTransform,
+    iso: f32,
+    level: usize,
+    /// Cell width in finest voxels.
+    width: i32,
+    /// Level point of `samples[0]`, and the samples' extent per axis.
+    lo: IVec3,
+    dims: i32,
+}
+
+impl Cells<'_> {
+    #[inline]
+    fn index(&self, q: IVec3) -> usize {
+        let d = q - self.lo;
+        (d.x + self.dims * (d.y + self.dims * d.z)) as usize
+    }
+
+    /// Central-difference gradient at level point `q` (per level voxel).
+    fn gradient(&self, samples: &[(f32, Colour)], q: IVec3) -> Vec3 {
+        let d = |o: IVec3| samples[self.index(q + o)].0 - samples[self.index(q - o)].0;
+        Vec3::new(d(IVec3::X), d(IVec3::Y), d(IVec3::Z)) * 0.5
+    }
+}
+
+/// One cell being meshed: its lowest finest point and its corners' gradients.
+struct Cell {
+    lo: IVec3,
+    gradients: [Vec3; 8],
+}
+
+impl Cell {
+    /// The gradient at finest lattice position `p` in the cell: the corners' trilinearly
+    /// interpolated (on an edge, the two ends' lerp, as the finest kernel's).
+    fn gradient_at(&self, p: Vec3, width: i32) -> Vec3 {
+        let f = ((p - self.lo.as_vec3()) / width as f32).clamp(Vec3::ZERO, Vec3::ONE);
+        let mut g = Vec3::ZERO;
+        for (o, &grad) in CORNER_OFFSETS.iter().zip(&self.gradients) {
+            let w = |a: usize| if o[a] == 1 { f[a] } else { 1.0 - f[a] };
+            g += grad * (w(0) * w(1) * w(2));
+        }
+        g
+    }
+}
+
+/// The vertex on the edge piece from finest point `lower` along `axis`, `length` long, whose
+/// ends hold `a` and `b`: made once per chunk.
+#[allow(clippy::too_many_arguments)]
+fn piece_vertex(
+    cells: &Cells<'_>,
+    cell: &Cell,
+    vertex_of: &mut FxHashMap<(IVec3, u8), u32>,
+    out: &mut ChunkMesh,
+    lower: IVec3,
+    axis: usize,
+    length: i32,
+    a: (f32, Colour),
+    b: (f32, Colour),
+) -> u32 {
+    *vertex_of.entry((lower, axis as u8)).or_insert_with(|| {
+        let t = crossing(cells.iso, a.0, b.0);
+        let position = crossing_position(cells.transform, lower, axis, length, t);
+        let mut lattice = lower.as_vec3();
+        lattice[axis] += t * length as f32;
+        let gradient = cell.gradient_at(lattice, cells.width);
+        let normal = if gradient.length_squared() > 1e-20 {
+            -gradient.normalize()
+        } else {
+            let mut n = Vec3::ZERO;
+            n[axis] = if a.0 >= cells.iso { 1.0 } else { -1.0 };
+            n
+        };
+        out.vertices.push(Vertex {
+            position: position.to_array(),
+            normal: normal.to_array(),
+            colour: crossing_colour(a, b, t),
+        });
+        (out.vertices.len() - 1) as u32
+    })
+}
+
+/// Meshes brick `key` on level `level` (≥ 1, see [`mesh_level`]) into `out`; `around` holds
+/// the mesh levels of the brick and its neighbours ([`levels_around`]).
+pub fn march_coarse(
+    field: &Field,
+    key: BrickKey,
+    level: usize,
+    around: &[u8; 27],
+    scratch: &mut CoarseScratch,
+    out: &mut ChunkMesh,
+) {
+    debug_assert!((1..=MAX_MESH_LEVEL).contains(&level));
+    out.reset();
+    scratch.vertex_of.clear();
+    let width = 1i32 << level;
+    let n = BRICK_SIZE >> level;
+    // The level point at the brick's base, and the samples: the cells' corners and an apron.
+    let q0 = (key * BRICK_SIZE) >> level as i32;
+    let cells = Cells {
+        field,
+        transform: field.transform(),
+        iso: field.surface_level(),
+        level,
+        width,
+        lo: q0 - IVec3::ONE,
+        dims: n + 3,
+    };
+    field.level_values(level, cells.lo, q0 + IVec3::splat(n + 1), &mut scratch.samples);
+    let finer_around = around.iter().any(|&l| usize::from(l) < level);
+    let samples = std::mem::take(&mut scratch.samples);
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let c = IVec3::new(x, y, z);
+                let corner = q0 + c;
+                let mut mask = 0usize;
+                for (i, o) in CORNER_OFFSETS.iter().enumerate() {
+                    if samples[cells.index(corner + IVec3::from(*o))].0 >= cells.iso {
+                        mask |= 1 << i;
+                    }
+                }
+                // All corners on one side: so is every finer point between them (each is a
+                // mean of the corners, rounded to a stored value), so no face crosses.
+                if mask == 0 || mask == 255 {
+                    continue;
+                }
+                let cell = Cell {
+                    lo: corner * width,
+                    gradients: CORNER_OFFSETS.map(|o| cells.gradient(&samples, corner + IVec3::from(o))),
+                };
+                let res = |spans: [i8; 3]| resolution(c, n, around, spans);
+                if finer_around && conforms(&res, level) {
+                    conforming_cell(&cells, &cell, &res, scratch, out);
+                } else {
+                    for triangle in &case_table()[mask] {
+                        for &e in triangle {
+                            let (lower, axis) = EDGES[usize::from(e)];
+                            let (lower, axis) =
+                                (corner + IVec3::from(CORNER_OFFSETS[usize::from(lower)]), usize::from(axis));
+                            let mut upper = lower;
+                            upper[axis] += 1;
+                            let (a, b) = (samples[cells.index(lower)], samples[cells.index(upper)]);
+                            let v = piece_vertex(
+                                &cells,
+                                &cell,
+                                &mut scratch.vertex_of,
+                                out,
+                                lower * width,
+                                axis,
+                                width,
+                                a,
+                                b,
+                            );
+                            out.indices.push(v);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    scratch.samples = samples;
+}
+
+/// The resolution (mesh level) of a face or edge of cell `c` (of `n` per axis in its brick):
+/// the finest mesh level among the bricks whose cells it bounds. `spans[a]` is −1 where the
+/// element spans axis `a`, else its side (0 or 1) of the cell on that axis.
+fn resolution(c: IVec3, n: i32, around: &[u8; 27], spans: [i8; 3]) -> u8 {
+    let range = |a: usize| match spans[a] {
+        0 if c[a] == 0 => -1..=0,
+        1 if c[a] == n - 1 => 0..=1,
+        _ => 0..=0,
+    };
+    let mut finest = around[13];
+    for dz in range(2) {
+        for dy in range(1) {
+            for dx in range(0) {
+                finest = finest.min(around[((dx + 1) + 3 * (dy + 1) + 9 * (dz + 1)) as usize]);
+            }
+        }
+    }
+    finest
+}
+
+/// The spans of face `f` (`2·axis + side`).
+fn face_spans(f: usize) -> [i8; 3] {
+    let mut spans = [-1; 3];
+    spans[f / 2] = (f % 2) as i8;
+    spans
+}
+
+/// Whether a cell of `level` has a face or an edge of a finer resolution.
+fn conforms(res: &impl Fn([i8; 3]) -> u8, level: usize) -> bool {
+    (0..6).any(|f| {
+        let (axis, spans) = (f / 2, face_spans(f));
+        let u = (axis + 1) % 3;
+        usize::from(res(spans)) < level
+            || (0..2).any(|side| {
+                let mut edge = spans;
+                edge[u] = side;
+                usize::from(res(edge)) < level
+            })
+    })
+}
+
+/// Meshes a cell with finer faces or edges as the polyhedron they make (see the module docs).
+fn conforming_cell(
+    cells: &Cells<'_>,
+    cell: &Cell,
+    res: &impl Fn([i8; 3]) -> u8,
+    scratch: &mut CoarseScratch,
+    out: &mut ChunkMesh,
+) {
+    let level = cells.level;
+    let width = cells.width;
+    // The finest resolution of the cell's faces and edges: every point the polygons use lies
+    // on that level.
+    let mut finest = level as u8;
+    for f in 0..6 {
+        let spans = face_spans(f);
+        finest = finest.min(res(spans));
+        for a in 0..3 {
+            if a != f / 2 {
+                for side in 0..2 {
+                    let mut edge = spans;
+                    edge[a] = side;
+                    finest = finest.min(res(edge));
+                }
+            }
+        }
+    }
+    let r = i32::from(finest);
+    let f_lo = cell.lo >> r;
+    let f_dims = (width >> r) + 1;
+    cells.field.level_values(usize::from(finest), f_lo, f_lo + IVec3::splat(f_dims - 1), &mut scratch.fine);
+    let CoarseScratch { fine, vertex_of, faces_of, next, starts, ring, crossings, loop_, .. } = scratch;
+    let sample = |p: IVec3| -> (f32, Colour) {
+        let d = (p >> r) - f_lo;
+        fine[(d.x + f_dims * (d.y + f_dims * d.z)) as usize]
+    };
+    faces_of.clear();
+    next.clear();
+    starts.clear();
+    let mut polygon = 0u32;
+    for f in 0..6 {
+        let (axis, side) = (f / 2, (f % 2) as i32);
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        let spans = face_spans(f);
+        let square = 1i32 << res(spans);
+        let k = width / square;
+        // The piece length of the rim's edge at side `s` across axis `across`.
+        let rim = |across: usize, s: i8| {
+            let mut e = spans;
+            e[across] = s;
+            1i32 << res(e)
+        };
+        // Along u at v-sides 0 and 1, along v at u-sides 0 and 1.
+        let (u0, u1, v0, v1) = (rim(v, 0), rim(v, 1), rim(u, 0), rim(u, 1));
+        let (eu, ev) = (unit(u), unit(v));
+        for j in 0..k {
+            for i in 0..k {
+                ring.clear();
+                let origin = cell.lo + unit(axis) * side * width + eu * (i * square) + ev * (j * square);
+                // Counter-clockwise seen from +axis: (0,0) → (1,0) → (1,1) → (0,1).
+                let sides = [
+                    (origin, eu, if j == 0 { u0 } else { square }),
+                    (origin + eu * square, ev, if i == k - 1 { v1 } else { square }),
+                    (origin + (eu + ev) * square, -eu, if j == k - 1 { u1 } else { square }),
+                    (origin + ev * square, -ev, if i == 0 { v0 } else { square }),
+                ];
+                for (start, dir, step) in sides {
+                    ring.extend((0..square / step).map(|s| start + dir * (s * step)));
+                }
+                if side == 0 {
+                    ring.reverse();
+                }
+                // Crossings in ring order: (vertex, starts a segment).
+                crossings.clear();
+                for (idx, &a) in ring.iter().enumerate() {
+                    let b = ring[(idx + 1) % ring.len()];
+                    let (sa, sb) = (sample(a), sample(b));
+                    let (da, db) = (sa.0 >= cells.iso, sb.0 >= cells.iso);
+                    if da == db {
+                        continue;
+                    }
+                    let step = b - a;
+                    let along = (0..3).find(|&x| step[x] != 0).expect("a ring steps along an axis");
+                    let (lower, (sl, su)) = if step[along] > 0 { (a, (sa, sb)) } else { (b, (sb, sa)) };
+                    let id =
+                        piece_vertex(cells, cell, vertex_of, out, lower, along, step[along].abs(), sl, su);
+                    faces_of.entry(id).and_modify(|fs| fs[1] = polygon).or_insert([polygon, polygon]);
+                    crossings.push((id, db));
+                }
+                link_crossings(crossings, |start, end| {
+                    next.insert(start, end);
+                    starts.push(start);
+                });
+                polygon += 1;
+            }
+        }
+    }
+    // Follow the segments into loops and fan each.
+    let mut seen: Vec<u32> = Vec::new();
+    for &first in starts.iter() {
+        if seen.contains(&first) {
+            continue;
+        }
+        loop_.clear();
+        let mut e = first;
+        loop {
+            seen.push(e);
+            loop_.push(e);
+            e = next[&e];
+            if e == first {
+                break;
+            }
+            debug_assert!(!loop_.contains(&e), "segments close into loops");
+        }
+        fan(loop_, faces_of, out);
+    }
+}
+
+/// A unit step along `axis`.
+fn unit(axis: usize) -> IVec3 {
+    let mut u = IVec3::ZERO;
+    u[axis] = 1;
+    u
+}
+
+/// Fans loop `ring` (counter-clockwise seen from outside the clay) into triangles of `out`,
+/// from the vertex whose fan lays the fewest chords and triangles in one face of the cell,
+/// then the fewest flat or turned-over triangles.
+fn fan(ring: &[u32], faces_of: &FxHashMap<u32, [u32; 2]>, out: &mut ChunkMesh) {
+    let n = ring.len();
+    if n < 3 {
+        return;
+    }
+    let faces = |v: u32| faces_of[&v];
+    let share = |a: u32, b: u32| {
+        let (fa, fb) = (faces(a), faces(b));
+        fa.iter().any(|f| fb.contains(f))
+    };
+    let in_one_face = |a: u32, b: u32, c: u32| {
+        let (fa, fb, fc) = (faces(a), faces(b), faces(c));
+        fa.iter().any(|f| fb.contains(f) && fc.contains(f))
+    };
+    let position = |v: u32| Vec3::from(out.vertices[v as usize].position);
+    // The loop's normal (Newell's), against which a turned-over triangle is told.
+    let centre = ring.iter().map(|&v| position(v)).sum::<Vec3>() / n as f32;
+    let normal: Vec3 =
+        (0..n).map(|i| (position(ring[i]) - centre).cross(position(ring[(i + 1) % n]) - centre)).sum();
+    let scale = ring.iter().map(|&v| (position(v) - centre).length_squared()).fold(0.0f32, f32::max);
+    let score = |apex: usize| {
+        let (mut chords, mut flat_in_face, mut bad) = (0, 0, 0);
+        for i in 1..n - 1 {
+            let (b, c) = (ring[(apex + i) % n], ring[(apex + i + 1) % n]);
+            let a = ring[apex];
+            if i > 1 && share(a, b) {
+                chords += 1;
+            }
+            if in_one_face(a, b, c) {
+                flat_in_face += 1;
+            }
+            let cross = (position(b) - position(a)).cross(position(c) - position(a));
+            if cross.length_squared() <= 1e-12 * scale * scale || cross.dot(normal) <= 0.0 {
+                bad += 1;
+            }
+        }
+        (chords, flat_in_face, bad)
+    };
+    let apex = (0..n).min_by_key(|&a| score(a)).unwrap_or(0);
+    for i in 1..n - 1 {
+        out.indices.extend([ring[apex], ring[(apex + i) % n], ring[(apex + i + 1) % n]]);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_brick_is_meshed_on_the_coarsest_level_free_of_finer_bricks_over_its_cells() {
+        let mut f = Field::new(0.001, 0.5);
+        assert_eq!(mesh_level(&f, IVec3::ZERO), 0, "one level: the finest");
+        // Clay on level 2 alone (4 mm voxels): its bricks are meshed on level 2.
+        f.edit_level(2, IVec3::splat(-20), IVec3::splat(20), true, |_, _, _| true, |_, d, _| *d = 0.7);
+        assert_eq!(mesh_level(&f, IVec3::new(3, -2, 1)), 2);
+        // A finest brick at key 4: the brick's cells read it, and so do the cells of the bricks
+        // below it on each axis (their upper faces are its lower ones); those beyond do not.
+        f.edit_box(IVec3::splat(32), IVec3::splat(33), false, |_, d, _| *d = 0.2);
+        assert!(f.brick(IVec3::splat(4)).is_some());
+        assert_eq!(mesh_level(&f, IVec3::splat(4)), 0);
+        assert_eq!(mesh_level(&f, IVec3::new(3, 4, 4)), 0);
+        assert_eq!(mesh_level(&f, IVec3::splat(3)), 0);
+        assert_eq!(mesh_level(&f, IVec3::new(5, 4, 4)), 2);
+        assert_eq!(mesh_level(&f, IVec3::new(4, 2, 4)), 2);
+        let around = levels_around(&f, IVec3::new(5, 4, 4));
+        assert_eq!((around[13], around[12], around[14]), (2, 0, 2));
+    }
+
+    /// Whether cell `c` of a level-2 brick (2 cells per axis) among neighbours of `around`'s
+    /// mesh levels conforms to a finer one.
+    fn conforming(around: &[u8; 27], c: IVec3) -> bool {
+        conforms(&|spans| resolution(c, 2, around, spans), 2)
+    }
+
+    #[test]
+    fn a_cell_conforms_where_a_face_or_an_edge_borders_a_finer_brick() {
+        // The brick of level 2 at the centre, a finest brick beside it (dx = −1) only: the
+        // cells on the brick's lower x face conform, the others do not.
+        let mut around = [2u8; 27];
+        around[12] = 0;
+        let at = |x, y, z| conforming(&around, IVec3::new(x, y, z));
+        assert!(at(0, 0, 0) && at(0, 1, 1));
+        assert!(!at(1, 0, 0) && !at(1, 1, 1));
+        // A finest brick along an edge only (dx = −1, dy = −1): the cells along that edge.
+        let mut around = [2u8; 27];
+        around[9] = 0;
+        let at = |x, y, z| conforming(&around, IVec3::new(x, y, z));
+        assert!(at(0, 0, 0) && at(0, 0, 1));
+        assert!(!at(0, 1, 0) && !at(1, 0, 0));
+        // At a corner only (dx = dy = dz = −1): no cell has a finer face or edge.
+        let mut around = [2u8; 27];
+        around[0] = 0;
+        assert!(!conforming(&around, IVec3::ZERO));
+    }
+}
