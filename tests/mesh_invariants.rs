@@ -479,7 +479,7 @@ fn fine_clay_meets_coarse_clay_across_faces_edges_and_corners_without_a_crack() 
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 40, rng_seed: proptest::test_runner::RngSeed::Fixed(0x4d4c_564c), ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 64, rng_seed: proptest::test_runner::RngSeed::Fixed(0x4d4c_564c), ..ProptestConfig::default() })]
 
     /// Balls added and carved on levels 0 to 3 in any order, then some strokes undone: every
     /// brick meshed on the coarsest level its clay allows, the incremental chunks equal a full

@@ -102,16 +102,38 @@ fn upsample(coarse: &[Sample], c_lo: IVec3, c_hi: IVec3, lo: IVec3, hi: IVec3, o
         fill_missing(coarse, c_dims, &maps, out, |i| (fine[i], first));
         return;
     }
-    let carried: Vec<[f32; 9]> = coarse
+    // Density, colour premultiplied by density, plain colour, and 1 where the plain colour is
+    // that of all the matter the point reads (0 elsewhere).
+    let carried: Vec<[f32; 10]> = coarse
         .iter()
-        .map(|&(d, c)| [d, d * c[0], d * c[1], d * c[2], d * c[3], c[0], c[1], c[2], c[3]])
+        .map(|&(d, c)| {
+            [d, d * c[0], d * c[1], d * c[2], d * c[3], c[0], c[1], c[2], c[3], f32::from(d > 0.0)]
+        })
         .collect();
-    let fine = separable(carried, c_dims, &maps, |a, b| std::array::from_fn(|k| 0.5 * (a[k] + b[k])));
+    let fine = separable(carried, c_dims, &maps, |a, b| {
+        let mut m: [f32; 10] = std::array::from_fn(|k| 0.5 * (a[k] + b[k]));
+        // Matter of one colour keeps it exactly, as where all the coarse matter has one
+        // colour: a point's colour then depends on the samples it reads alone.
+        let one = match (a[0] > 0.0, b[0] > 0.0) {
+            (true, true) => (a[9] == 1.0 && b[9] == 1.0 && a[5..9] == b[5..9]).then_some(a),
+            (true, false) => (a[9] == 1.0).then_some(a),
+            (false, true) => (b[9] == 1.0).then_some(b),
+            (false, false) => None,
+        };
+        m[9] = 0.0;
+        if let Some(c) = one {
+            m[5..10].copy_from_slice(&c[5..10]);
+        }
+        m
+    });
     fill_missing(coarse, c_dims, &maps, out, |i| {
         let f = &fine[i];
         let d = f[0];
-        let colour =
-            if d > 0.0 { [f[1] / d, f[2] / d, f[3] / d, f[4] / d] } else { [f[5], f[6], f[7], f[8]] };
+        let colour = if d > 0.0 && f[9] == 0.0 {
+            [f[1] / d, f[2] / d, f[3] / d, f[4] / d]
+        } else {
+            [f[5], f[6], f[7], f[8]]
+        };
         (d, colour)
     });
 }
@@ -755,6 +777,41 @@ impl Field {
 mod tests {
     use super::super::brick::{DENSITY_ONE, DENSITY_TOLERANCE};
     use super::*;
+
+    #[test]
+    fn an_interpolated_colour_depends_on_the_samples_read_alone() {
+        // Level-1 clay of one colour, with a spot of another a few points away: a finest
+        // point reading only the first colour's matter takes it exactly, whether its brick is
+        // refined whole (its coarse samples of two colours) or the point alone.
+        let mut f = Field::new(0.001, 0.5);
+        let (red, blue) = ([0.8, 0.1, 0.1, 1.0], [0.1, 0.2, 0.9, 1.0]);
+        f.edit_level(
+            1,
+            IVec3::splat(-6),
+            IVec3::splat(6),
+            true,
+            |_, _, _| true,
+            |q, d, c| {
+                *d = (0.3 + 0.05 * q.x as f32 + 0.03 * q.y as f32).clamp(0.0, 1.0);
+                *c = if q == IVec3::new(3, 2, 1) { blue } else { red };
+            },
+        );
+        let mut scratch = Brick::default();
+        let brick = f.read_brick(IVec3::ZERO, &mut scratch).expect("coarse clay there").clone();
+        let mut exact = 0;
+        for i in 0..BRICK_VOLUME {
+            let p = IVec3::new(i as i32 % 8, i as i32 / 8 % 8, i as i32 / 64);
+            let (d, c) = f.sample(p);
+            assert_eq!(brick.density(i), d, "{p}");
+            if d > 0.0 {
+                assert_eq!(brick.colour[i], c, "{p}");
+                // Points whose coarse samples around hold red matter only are red, exactly.
+                let reads_blue = (p - IVec3::new(6, 4, 2)).abs().max_element() < 2;
+                exact += usize::from(!reads_blue && c == red);
+            }
+        }
+        assert!(exact > 400, "{exact} points exactly red");
+    }
 
     #[test]
     fn refining_in_integers_gives_the_float_interpolations_stored_values() {

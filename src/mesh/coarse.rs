@@ -26,9 +26,9 @@
 //!   traced with the case table's own rule (on each face, walked counter-clockwise from
 //!   outside, a segment from each empty→dense crossing to the next dense→empty one), which
 //!   reads nothing but the face's samples: the finer cells draw the same segments on the
-//!   squares they share with it, in reverse. The segments close into loops, each fanned into
-//!   triangles from a vertex chosen so that no triangle or chord lies in one face and none is
-//!   flat or turned over.
+//!   squares they share with it, in reverse. The segments close into loops, each triangulated
+//!   so that no triangle or chord lies in one face and none turns over, and of those ways the
+//!   one whose thinnest triangle is the least thin.
 //! - **Same vertices.** A vertex is made on an edge piece from its two samples with the
 //!   kernel's formula ([`super::march`]'s `crossing_position`): finer and coarser meshes sharing
 //!   an edge piece share the vertex bit for bit, and welding by position closes the surface.
@@ -91,6 +91,7 @@ pub struct CoarseScratch {
     ring: Vec<IVec3>,
     crossings: Vec<(u32, bool)>,
     loop_: Vec<u32>,
+    triangulations: Triangulations,
 }
 
 /// What one brick's cells read: the level's values and the lattice.
@@ -329,7 +330,9 @@ fn conforming_cell(
     let f_lo = cell.lo >> r;
     let f_dims = (width >> r) + 1;
     cells.field.level_values(usize::from(finest), f_lo, f_lo + IVec3::splat(f_dims - 1), &mut scratch.fine);
-    let CoarseScratch { fine, vertex_of, faces_of, next, starts, ring, crossings, loop_, .. } = scratch;
+    let CoarseScratch {
+        fine, vertex_of, faces_of, next, starts, ring, crossings, loop_, triangulations, ..
+    } = scratch;
     let sample = |p: IVec3| -> (f32, Colour) {
         let d = (p >> r) - f_lo;
         fine[(d.x + f_dims * (d.y + f_dims * d.z)) as usize]
@@ -395,7 +398,7 @@ fn conforming_cell(
             }
         }
     }
-    // Follow the segments into loops and fan each.
+    // Follow the segments into loops and triangulate each.
     let mut seen: Vec<u32> = Vec::new();
     for &first in starts.iter() {
         if seen.contains(&first) {
@@ -412,7 +415,7 @@ fn conforming_cell(
             }
             debug_assert!(!loop_.contains(&e), "segments close into loops");
         }
-        fan(loop_, faces_of, out);
+        triangulate(loop_, faces_of, triangulations, out);
     }
 }
 
@@ -423,50 +426,70 @@ fn unit(axis: usize) -> IVec3 {
     u
 }
 
-/// Fans loop `ring` (counter-clockwise seen from outside the clay) into triangles of `out`,
-/// from the vertex whose fan lays the fewest chords and triangles in one face of the cell,
-/// then the fewest flat or turned-over triangles.
-fn fan(ring: &[u32], faces_of: &FxHashMap<u32, [u32; 2]>, out: &mut ChunkMesh) {
+/// The best triangulation of each run `i ..= j` of a loop: its faults, its thinnest
+/// triangle's height over longest side, and the vertex its triangle on `(i, j)` takes.
+type Triangulations = Vec<(u32, f32, u16)>;
+
+/// Triangulates loop `ring` (counter-clockwise seen from outside the clay) into `out`: of all
+/// its triangulations, one with the fewest faults (a chord or a triangle in one face of the
+/// cell, a triangle turned against the loop), and of those the one whose thinnest triangle is
+/// the least thin (height over longest side), found by dynamic programming over the loop's
+/// runs. A loop along finer faces has runs of vertices in a line, which a fan from one vertex,
+/// or ears cut greedily, would lay into flat triangles.
+fn triangulate(
+    ring: &[u32],
+    faces_of: &FxHashMap<u32, [u32; 2]>,
+    best: &mut Triangulations,
+    out: &mut ChunkMesh,
+) {
     let n = ring.len();
     if n < 3 {
         return;
     }
-    let faces = |v: u32| faces_of[&v];
-    let share = |a: u32, b: u32| {
-        let (fa, fb) = (faces(a), faces(b));
-        fa.iter().any(|f| fb.contains(f))
-    };
-    let in_one_face = |a: u32, b: u32, c: u32| {
-        let (fa, fb, fc) = (faces(a), faces(b), faces(c));
-        fa.iter().any(|f| fb.contains(f) && fc.contains(f))
-    };
-    let position = |v: u32| Vec3::from(out.vertices[v as usize].position);
+    let faces = |i: usize| faces_of[&ring[i]];
+    let share = |i: usize, j: usize| faces(i).iter().any(|f| faces(j).contains(f));
+    let position = |i: usize| Vec3::from(out.vertices[ring[i] as usize].position);
     // The loop's normal (Newell's), against which a turned-over triangle is told.
-    let centre = ring.iter().map(|&v| position(v)).sum::<Vec3>() / n as f32;
-    let normal: Vec3 =
-        (0..n).map(|i| (position(ring[i]) - centre).cross(position(ring[(i + 1) % n]) - centre)).sum();
-    let scale = ring.iter().map(|&v| (position(v) - centre).length_squared()).fold(0.0f32, f32::max);
-    let score = |apex: usize| {
-        let (mut chords, mut flat_in_face, mut bad) = (0, 0, 0);
-        for i in 1..n - 1 {
-            let (b, c) = (ring[(apex + i) % n], ring[(apex + i + 1) % n]);
-            let a = ring[apex];
-            if i > 1 && share(a, b) {
-                chords += 1;
-            }
-            if in_one_face(a, b, c) {
-                flat_in_face += 1;
-            }
-            let cross = (position(b) - position(a)).cross(position(c) - position(a));
-            if cross.length_squared() <= 1e-12 * scale * scale || cross.dot(normal) <= 0.0 {
-                bad += 1;
-            }
-        }
-        (chords, flat_in_face, bad)
+    let centre = (0..n).map(position).sum::<Vec3>() / n as f32;
+    let normal: Vec3 = (0..n).map(|i| (position(i) - centre).cross(position((i + 1) % n) - centre)).sum();
+    let triangle = |i: usize, k: usize, j: usize| {
+        let in_face = faces(i).iter().any(|f| faces(k).contains(f) && faces(j).contains(f));
+        let (a, b, c) = (position(i), position(k), position(j));
+        let cross = (b - a).cross(c - a);
+        let longest = (b - a).length_squared().max((c - b).length_squared()).max((a - c).length_squared());
+        (
+            u32::from(in_face) + u32::from(cross.dot(normal) <= 0.0),
+            cross.length() / longest.max(f32::MIN_POSITIVE),
+        )
     };
-    let apex = (0..n).min_by_key(|&a| score(a)).unwrap_or(0);
-    for i in 1..n - 1 {
-        out.indices.extend([ring[apex], ring[(apex + i) % n], ring[(apex + i + 1) % n]]);
+    best.clear();
+    best.resize(n * n, (0, f32::INFINITY, 0));
+    for len in 2..n {
+        for i in 0..n - len {
+            let j = i + len;
+            // The run's own side (i, j) is a chord unless it is the loop's closing side.
+            let chord = u32::from(len < n - 1 && share(i, j));
+            let mut pick = (u32::MAX, f32::NEG_INFINITY, 0u16);
+            for k in i + 1..j {
+                let (l, r) = (best[i * n + k], best[k * n + j]);
+                let (faults, quality) = triangle(i, k, j);
+                let candidate = (l.0 + r.0 + faults + chord, l.1.min(r.1).min(quality), k as u16);
+                if candidate.0 < pick.0 || (candidate.0 == pick.0 && candidate.1 > pick.1) {
+                    pick = candidate;
+                }
+            }
+            best[i * n + j] = pick;
+        }
+    }
+    // The triangles, from the whole loop's run down.
+    let mut runs = vec![(0, n - 1)];
+    while let Some((i, j)) = runs.pop() {
+        if j - i < 2 {
+            continue;
+        }
+        let k = usize::from(best[i * n + j].2);
+        out.indices.extend([ring[i], ring[k], ring[j]]);
+        runs.extend([(i, k), (k, j)]);
     }
 }
 

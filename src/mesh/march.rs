@@ -319,9 +319,12 @@ pub(super) fn crossing_position(
 pub(super) fn crossing_colour((va, ca): (f32, Colour), (vb, cb): (f32, Colour), t: f32) -> Colour {
     let (wa, wb) = (va.max(0.0) * (1.0 - t), vb.max(0.0) * t);
     let total = wa + wb;
-    if ca == cb {
-        // One colour at both ends (most edges): it is the vertex's, exactly.
+    if ca == cb || wb == 0.0 {
+        // One colour at both ends (most edges), or matter at one end only: it is the
+        // vertex's, exactly (an empty sample's colour, whatever it is, changes nothing).
         ca
+    } else if wa == 0.0 {
+        cb
     } else if total > 0.0 {
         std::array::from_fn(|i| (ca[i] * wa + cb[i] * wb) / total)
     } else {
