@@ -30,6 +30,12 @@ pub type BrickKey = IVec3;
 /// Resolution levels of a field: level `l` has voxels `2^l` times the finest's (1x to 16x).
 pub const LEVELS: usize = 5;
 
+/// The levels whose bricks' presence decides the lattice a brick's surface is meshed on: the
+/// coarsest level, up to `log2 S` (cells as wide as the brick), under which no finer level
+/// holds a brick. The dirty set follows the presence of bricks of these levels.
+pub const MESHED_LEVELS: usize = BRICK_SIZE.trailing_zeros() as usize;
+const _: () = assert!(1 << MESHED_LEVELS == BRICK_SIZE && MESHED_LEVELS < LEVELS);
+
 /// A brick of one resolution level: level `l`'s lattice point `q` sits where the finest
 /// level's point `q · 2^l` does, and its bricks are keyed on its own lattice like the finest's.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

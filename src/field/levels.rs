@@ -258,12 +258,24 @@ impl Field {
                 let Some(brick) = self.levels[level].bricks.get(&key) else { continue };
                 let base = key * BRICK_SIZE;
                 let (a, b) = (lo.max(base), hi.min(base + IVec3::splat(BRICK_SIZE - 1)));
+                let len = (b.x - a.x + 1) as usize;
                 for z in a.z..=b.z {
                     for y in a.y..=b.y {
-                        for x in a.x..=b.x {
-                            let p = IVec3::new(x, y, z);
-                            let i = Brick::linear(p - base);
-                            out[at(p, lo, dims)] = (brick.density(i), brick.colour[i]);
+                        // A row at a time: a run of samples in the brick and in the block.
+                        let p = IVec3::new(a.x, y, z);
+                        let (from, to) = (Brick::linear(p - base), at(p, lo, dims));
+                        let (src, dst) = (&brick.density[from..from + len], &mut out[to..to + len]);
+                        match &brick.colour {
+                            BrickColours::Uniform(c) => {
+                                for (o, &q) in dst.iter_mut().zip(src) {
+                                    *o = (dequantize(q), *c);
+                                }
+                            }
+                            BrickColours::PerSample(colours) => {
+                                for ((o, &q), c) in dst.iter_mut().zip(src).zip(&colours[from..from + len]) {
+                                    *o = (dequantize(q), *c);
+                                }
+                            }
                         }
                     }
                 }

@@ -25,7 +25,7 @@ mod tree;
 pub use brick::{
     brick_key, dequantize, lattice_points, quantize, split_index, stores_differently, Brick, BrickColours,
     BrickKey, Colour, LevelKey, Quantum, BRICK_SIZE, BRICK_VOLUME, DEFAULT_COLOUR, DENSITY_ONE,
-    DENSITY_TOLERANCE, LEVELS,
+    DENSITY_TOLERANCE, LEVELS, MESHED_LEVELS,
 };
 pub use history::{HistoryConfig, HistoryError, HistoryStats, BRICK_BYTES};
 pub use levels::{COLOUR_DETAIL_TOLERANCE, DETAIL_TOLERANCE};

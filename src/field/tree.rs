@@ -6,7 +6,7 @@ use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 
 use super::brick::{
     dequantize, keys_over, quantize, Brick, BrickColours, BrickKey, Colour, LevelKey, Quantum, BRICK_SIZE,
-    BRICK_VOLUME, DENSITY_ONE, LEVELS,
+    BRICK_VOLUME, DENSITY_ONE, LEVELS, MESHED_LEVELS,
 };
 use super::history::{History, HistoryConfig, HistoryError, HistoryStats, Step};
 use crate::math::{IVec3, VoxelTransform};
@@ -388,13 +388,13 @@ impl Field {
     }
 
     /// After brick `key` came or went: where the field has more than one level, which level
-    /// holds the clay there changed, though no density may have. A reader that meshes each
-    /// region on the finest level present there, with cells that conform to finer neighbours
-    /// (the mesher), meshes the bricks reading the brick's points, and their neighbours,
-    /// differently: those are marked dirty.
+    /// holds the clay there changed, though no density may have. The mesher meshes each brick
+    /// on the coarsest level free of bricks of the finer [`MESHED_LEVELS`], with cells that
+    /// conform to finer neighbours: it meshes the bricks reading the brick's points, and their
+    /// neighbours, differently, and those are marked dirty.
     fn note_presence(&mut self, key: LevelKey) {
         let level = usize::from(key.level);
-        if level == 0 && !self.has_levels_above(0) {
+        if level >= MESHED_LEVELS || (level == 0 && !self.has_levels_above(0)) {
             return;
         }
         let scale = 1 << level;

@@ -44,12 +44,15 @@ use rustc_hash::FxHashMap;
 use super::cases::{case_table, link_crossings, CORNER_OFFSETS, EDGES};
 use super::march::{crossing, crossing_colour, crossing_position};
 use super::types::{ChunkMesh, Vertex};
-use crate::field::{BrickKey, Colour, Field, BRICK_SIZE, LEVELS};
+use crate::field::{BrickKey, Colour, Field, BRICK_SIZE, MESHED_LEVELS};
 use crate::math::{IVec3, Vec3, VoxelTransform};
 
-/// The coarsest level a brick is meshed on: there one cell spans the brick.
-pub const MAX_MESH_LEVEL: usize = BRICK_SIZE.trailing_zeros() as usize;
-const _: () = assert!(1 << MAX_MESH_LEVEL == BRICK_SIZE && MAX_MESH_LEVEL < LEVELS);
+/// The coarsest level a brick is meshed on: there one cell spans the brick. The field's dirty
+/// set follows the presence of the finer levels' bricks ([`MESHED_LEVELS`]).
+pub const MAX_MESH_LEVEL: usize = MESHED_LEVELS;
+
+/// Cell corners of a brick meshed on level 1 or coarser: at most `(S/2 + 1)³`.
+const MAX_CORNERS: usize = (BRICK_SIZE as usize / 2 + 1).pow(3);
 
 /// The level brick `key`'s cells are meshed on: the coarsest, up to [`MAX_MESH_LEVEL`], under
 /// which no level holds a brick over the points the cells read (`key·S ..= key·S + S` on the
@@ -80,8 +83,10 @@ pub struct CoarseScratch {
     samples: Vec<(f32, Colour)>,
     /// The finest values a conforming cell reads, over the cell.
     fine: Vec<(f32, Colour)>,
-    /// The chunk's vertex on each edge piece: (lower point, axis) → index.
-    vertex_of: FxHashMap<(IVec3, u8), u32>,
+    /// The chunk's vertex on each edge piece.
+    vertex_of: VertexMap,
+    /// The level's gradient at each cell corner of the brick, x fastest.
+    gradients: Vec<Vec3>,
     /// A conforming cell's polygons: each vertex's two faces.
     faces_of: FxHashMap<u32, [u32; 2]>,
     /// A conforming cell's segments: start → end.
@@ -94,6 +99,34 @@ pub struct CoarseScratch {
     triangulations: Triangulations,
 }
 
+/// The chunk's vertex on each edge piece: on a cell edge, by its lower corner and axis, in
+/// `dense` (`u32::MAX`: none yet); on a finer piece, by its lower point and axis.
+#[derive(Debug, Default)]
+struct VertexMap {
+    dense: Vec<u32>,
+    sparse: FxHashMap<(IVec3, u8), u32>,
+}
+
+impl VertexMap {
+    fn clear(&mut self, corners: usize) {
+        self.dense.clear();
+        self.dense.resize(3 * corners, u32::MAX);
+        self.sparse.clear();
+    }
+
+    /// The slot of the piece from finest point `lower` along `axis`, `length` long.
+    #[inline]
+    fn slot(&mut self, cells: &Cells<'_>, lower: IVec3, axis: usize, length: i32) -> &mut u32 {
+        if length == cells.width {
+            let q = (lower >> cells.level as i32) - cells.base;
+            let c = cells.dims - 2;
+            &mut self.dense[3 * (q.x + c * (q.y + c * q.z)) as usize + axis]
+        } else {
+            self.sparse.entry((lower, axis as u8)).or_insert(u32::MAX)
+        }
+    }
+}
+
 /// What one brick's cells read: the level's values and the lattice.
 struct Cells<'a> {
     field: &'a Field,
@@ -102,7 +135,9 @@ struct Cells<'a> {
     level: usize,
     /// Cell width in finest voxels.
     width: i32,
-    /// Level point of `samples[0]`, and the samples' extent per axis.
+    /// Level point of the brick's base, of `samples[0]`, and the samples' extent per axis
+    /// (the cells' corners per axis are `dims − 2`).
+    base: IVec3,
     lo: IVec3,
     dims: i32,
 }
@@ -147,7 +182,7 @@ impl Cell {
 fn piece_vertex(
     cells: &Cells<'_>,
     cell: &Cell,
-    vertex_of: &mut FxHashMap<(IVec3, u8), u32>,
+    vertex_of: &mut VertexMap,
     out: &mut ChunkMesh,
     lower: IVec3,
     axis: usize,
@@ -155,7 +190,11 @@ fn piece_vertex(
     a: (f32, Colour),
     b: (f32, Colour),
 ) -> u32 {
-    *vertex_of.entry((lower, axis as u8)).or_insert_with(|| {
+    let slot = vertex_of.slot(cells, lower, axis, length);
+    if *slot != u32::MAX {
+        return *slot;
+    }
+    *slot = {
         let t = crossing(cells.iso, a.0, b.0);
         let position = crossing_position(cells.transform, lower, axis, length, t);
         let mut lattice = lower.as_vec3();
@@ -174,7 +213,8 @@ fn piece_vertex(
             colour: crossing_colour(a, b, t),
         });
         (out.vertices.len() - 1) as u32
-    })
+    };
+    *slot
 }
 
 /// Meshes brick `key` on level `level` (≥ 1, see [`mesh_level`]) into `out`; `around` holds
@@ -189,9 +229,10 @@ pub fn march_coarse(
 ) {
     debug_assert!((1..=MAX_MESH_LEVEL).contains(&level));
     out.reset();
-    scratch.vertex_of.clear();
     let width = 1i32 << level;
     let n = BRICK_SIZE >> level;
+    let corners = (n + 1) as usize;
+    scratch.vertex_of.clear(corners.pow(3));
     // The level point at the brick's base, and the samples: the cells' corners and an apron.
     let q0 = (key * BRICK_SIZE) >> level as i32;
     let cells = Cells {
@@ -200,12 +241,34 @@ pub fn march_coarse(
         iso: field.surface_level(),
         level,
         width,
+        base: q0,
         lo: q0 - IVec3::ONE,
         dims: n + 3,
     };
     field.level_values(level, cells.lo, q0 + IVec3::splat(n + 1), &mut scratch.samples);
     let finer_around = around.iter().any(|&l| usize::from(l) < level);
     let samples = std::mem::take(&mut scratch.samples);
+    // Which cell corners are dense; none or all: no cell crosses (see below).
+    let corner_index = |c: IVec3| (c.x + (n + 1) * (c.y + (n + 1) * c.z)) as usize;
+    let mut dense = [false; MAX_CORNERS];
+    let mut count = 0;
+    for z in 0..=n {
+        for y in 0..=n {
+            for x in 0..=n {
+                let c = IVec3::new(x, y, z);
+                dense[corner_index(c)] = samples[cells.index(q0 + c)].0 >= cells.iso;
+                count += usize::from(dense[corner_index(c)]);
+            }
+        }
+    }
+    if count == 0 || count == corners.pow(3) {
+        scratch.samples = samples;
+        return;
+    }
+    // Gradients at the corners, each made when a cell first needs it.
+    let mut gradients = std::mem::take(&mut scratch.gradients);
+    gradients.clear();
+    gradients.resize(corners.pow(3), Vec3::NAN);
     for z in 0..n {
         for y in 0..n {
             for x in 0..n {
@@ -213,9 +276,7 @@ pub fn march_coarse(
                 let corner = q0 + c;
                 let mut mask = 0usize;
                 for (i, o) in CORNER_OFFSETS.iter().enumerate() {
-                    if samples[cells.index(corner + IVec3::from(*o))].0 >= cells.iso {
-                        mask |= 1 << i;
-                    }
+                    mask |= usize::from(dense[corner_index(c + IVec3::from(*o))]) << i;
                 }
                 // All corners on one side: so is every finer point between them (each is a
                 // mean of the corners, rounded to a stored value), so no face crosses.
@@ -224,7 +285,13 @@ pub fn march_coarse(
                 }
                 let cell = Cell {
                     lo: corner * width,
-                    gradients: CORNER_OFFSETS.map(|o| cells.gradient(&samples, corner + IVec3::from(o))),
+                    gradients: CORNER_OFFSETS.map(|o| {
+                        let g = &mut gradients[corner_index(c + IVec3::from(o))];
+                        if g.x.is_nan() {
+                            *g = cells.gradient(&samples, corner + IVec3::from(o));
+                        }
+                        *g
+                    }),
                 };
                 let res = |spans: [i8; 3]| resolution(c, n, around, spans);
                 if finer_around && conforms(&res, level) {
@@ -257,6 +324,7 @@ pub fn march_coarse(
         }
     }
     scratch.samples = samples;
+    scratch.gradients = gradients;
 }
 
 /// The resolution (mesh level) of a face or edge of cell `c` (of `n` per axis in its brick):

@@ -161,16 +161,19 @@ pub fn mesh_brick(
     out: &mut ChunkMesh,
 ) {
     let level = mesh_level(field, key);
-    mesh_brick_with(field, key, level, block, None, scratch, &mut CoarseScratch::default(), out);
+    let around = if level > 0 { levels_around(field, key) } else { [0; 27] };
+    mesh_brick_with(field, key, level, &around, block, None, scratch, &mut CoarseScratch::default(), out);
 }
 
-/// [`mesh_brick`] on mesh level `level` ([`mesh_level`]), reading the finest bricks the
-/// coarser levels give from `made` when given.
+/// [`mesh_brick`] on mesh level `level` ([`mesh_level`]; `around`: the levels of the brick
+/// and its neighbours, read where it is coarse), reading the finest bricks the coarser levels
+/// give from `made` when given.
 #[allow(clippy::too_many_arguments)]
 fn mesh_brick_with(
     field: &Field,
     key: BrickKey,
     level: usize,
+    around: &[u8; 27],
     block: &mut Block,
     made: Option<&CoarseBricks>,
     scratch: &mut MarchScratch,
@@ -178,7 +181,7 @@ fn mesh_brick_with(
     out: &mut ChunkMesh,
 ) {
     if level > 0 {
-        march_coarse(field, key, level, &levels_around(field, key), coarse, out);
+        march_coarse(field, key, level, around, coarse, out);
         return;
     }
     let (around, block) = gather(field, key, block, made);
@@ -335,6 +338,8 @@ pub struct Mesher {
     keys: Vec<BrickKey>,
     /// The mesh level of each key ([`mesh_level`]).
     levels: Vec<u8>,
+    /// The mesh levels of the keys and of the coarse ones' neighbours, each found once.
+    mesh_levels: FxHashMap<BrickKey, u8>,
     /// The keys meshed on the finest level, whose neighbours the coarser levels may give.
     finest: Vec<BrickKey>,
     slots: Vec<ChunkMesh>,
@@ -464,29 +469,63 @@ impl Mesher {
         }
         self.levels.clear();
         self.finest.clear();
+        self.mesh_levels.clear();
         if field.has_levels_above(0) {
-            self.levels.extend(self.keys.iter().map(|&k| mesh_level(field, k) as u8));
-            self.finest.extend(self.keys.iter().zip(&self.levels).filter(|(_, &l)| l == 0).map(|(&k, _)| k));
+            let known = &mut self.mesh_levels;
+            let mut level_of = |k: BrickKey| *known.entry(k).or_insert_with(|| mesh_level(field, k) as u8);
+            for &key in &self.keys {
+                let level = level_of(key);
+                self.levels.push(level);
+                if level == 0 {
+                    self.finest.push(key);
+                } else {
+                    // A coarse brick's cells conform to its neighbours' levels.
+                    for i in 0..27 {
+                        level_of(neighbour(key, i));
+                    }
+                }
+            }
         } else {
             self.levels.resize(n, 0);
         }
         self.coarse.make(field, &self.finest);
-        let (workers, coarse) = (&self.workers, &self.coarse);
+        let (workers, coarse, known) = (&self.workers, &self.coarse, &self.mesh_levels);
         let keys = self.keys.par_iter().zip(self.levels.par_iter());
         keys.zip(self.slots[..n].par_iter_mut()).for_each(|((&key, &level), slot)| {
             let index = rayon::current_thread_index().unwrap_or(0) % workers.len();
             let mut worker = workers[index].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
             let Worker { block, scratch, coarse: coarse_scratch, mesh } = &mut *worker;
             let level = usize::from(level);
+            let around = if level > 0 { std::array::from_fn(|i| known[&neighbour(key, i)]) } else { [0; 27] };
             if slot.vertices.capacity() == 0 {
                 // A new slot: marched into the worker's chunk, which never grows, and given
                 // just what it needs, rather than grown by doublings.
-                mesh_brick_with(field, key, level, block, Some(coarse), scratch, coarse_scratch, mesh);
+                mesh_brick_with(
+                    field,
+                    key,
+                    level,
+                    &around,
+                    block,
+                    Some(coarse),
+                    scratch,
+                    coarse_scratch,
+                    mesh,
+                );
                 slot.vertices.extend_from_slice(&mesh.vertices);
                 slot.indices.extend_from_slice(&mesh.indices);
             } else {
                 // A slot that held a chunk before keeps its vectors and takes this one in place.
-                mesh_brick_with(field, key, level, block, Some(coarse), scratch, coarse_scratch, slot);
+                mesh_brick_with(
+                    field,
+                    key,
+                    level,
+                    &around,
+                    block,
+                    Some(coarse),
+                    scratch,
+                    coarse_scratch,
+                    slot,
+                );
             }
         });
         for (i, (&key, slot)) in self.keys.iter().zip(&mut self.slots).enumerate() {
