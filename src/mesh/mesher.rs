@@ -497,9 +497,7 @@ impl Mesher {
             let Worker { block, scratch, coarse: coarse_scratch, mesh } = &mut *worker;
             let level = usize::from(level);
             let around = if level > 0 { std::array::from_fn(|i| known[&neighbour(key, i)]) } else { [0; 27] };
-            if slot.vertices.capacity() == 0 {
-                // A new slot: marched into the worker's chunk, which never grows, and given
-                // just what it needs, rather than grown by doublings.
+            let mut mesh_into = |out: &mut ChunkMesh| {
                 mesh_brick_with(
                     field,
                     key,
@@ -509,23 +507,18 @@ impl Mesher {
                     Some(coarse),
                     scratch,
                     coarse_scratch,
-                    mesh,
+                    out,
                 );
+            };
+            if slot.vertices.capacity() == 0 {
+                // A new slot: marched into the worker's chunk, which never grows, and given
+                // just what it needs, rather than grown by doublings.
+                mesh_into(mesh);
                 slot.vertices.extend_from_slice(&mesh.vertices);
                 slot.indices.extend_from_slice(&mesh.indices);
             } else {
                 // A slot that held a chunk before keeps its vectors and takes this one in place.
-                mesh_brick_with(
-                    field,
-                    key,
-                    level,
-                    &around,
-                    block,
-                    Some(coarse),
-                    scratch,
-                    coarse_scratch,
-                    slot,
-                );
+                mesh_into(slot);
             }
         });
         for (i, (&key, slot)) in self.keys.iter().zip(&mut self.slots).enumerate() {
