@@ -387,14 +387,24 @@ impl Field {
         old
     }
 
+    /// [`Self::note_presence_in_levels`] where the field has more than one level (kept out of
+    /// line: the edit walks call it for every brick they make).
+    #[inline]
+    fn note_presence(&mut self, key: LevelKey) {
+        if key.level != 0 || self.has_levels_above(0) {
+            self.note_presence_in_levels(key);
+        }
+    }
+
     /// After brick `key` came or went: where the field has more than one level, which level
     /// holds the clay there changed, though no density may have. The mesher meshes each brick
     /// on the coarsest level free of bricks of the finer [`MESHED_LEVELS`], with cells that
     /// conform to finer neighbours: it meshes the bricks reading the brick's points, and their
     /// neighbours, differently, and those are marked dirty.
-    fn note_presence(&mut self, key: LevelKey) {
+    #[inline(never)]
+    fn note_presence_in_levels(&mut self, key: LevelKey) {
         let level = usize::from(key.level);
-        if level >= MESHED_LEVELS || (level == 0 && !self.has_levels_above(0)) {
+        if level >= MESHED_LEVELS {
             return;
         }
         let scale = 1 << level;
@@ -471,6 +481,7 @@ impl Field {
     /// (none where `first > last`; every sample with [`whole_rows`]), so that, say, a ball's
     /// edit visits only the samples within its reach. `edit` is called on the samples both
     /// allow, and only on those.
+    #[inline(never)]
     pub fn edit_where(
         &mut self,
         lo: IVec3,

@@ -96,7 +96,11 @@ pub struct CoarseScratch {
     ring: Vec<IVec3>,
     crossings: Vec<(u32, bool)>,
     loop_: Vec<u32>,
+    /// The segment starts already in a loop.
+    seen: Vec<u32>,
     triangulations: Triangulations,
+    /// The runs of a loop still to cut into triangles.
+    runs: Vec<(usize, usize)>,
 }
 
 /// The chunk's vertex on each edge piece: on a cell edge, by its lower corner and axis, in
@@ -399,7 +403,18 @@ fn conforming_cell(
     let f_dims = (width >> r) + 1;
     cells.field.level_values(usize::from(finest), f_lo, f_lo + IVec3::splat(f_dims - 1), &mut scratch.fine);
     let CoarseScratch {
-        fine, vertex_of, faces_of, next, starts, ring, crossings, loop_, triangulations, ..
+        fine,
+        vertex_of,
+        faces_of,
+        next,
+        starts,
+        ring,
+        crossings,
+        loop_,
+        seen,
+        triangulations,
+        runs,
+        ..
     } = scratch;
     let sample = |p: IVec3| -> (f32, Colour) {
         let d = (p >> r) - f_lo;
@@ -467,7 +482,7 @@ fn conforming_cell(
         }
     }
     // Follow the segments into loops and triangulate each.
-    let mut seen: Vec<u32> = Vec::new();
+    seen.clear();
     for &first in starts.iter() {
         if seen.contains(&first) {
             continue;
@@ -483,7 +498,7 @@ fn conforming_cell(
             }
             debug_assert!(!loop_.contains(&e), "segments close into loops");
         }
-        triangulate(loop_, faces_of, triangulations, out);
+        triangulate(loop_, faces_of, (triangulations, runs), out);
     }
 }
 
@@ -507,7 +522,7 @@ type Triangulations = Vec<(u32, f32, u16)>;
 fn triangulate(
     ring: &[u32],
     faces_of: &FxHashMap<u32, [u32; 2]>,
-    best: &mut Triangulations,
+    (best, runs): (&mut Triangulations, &mut Vec<(usize, usize)>),
     out: &mut ChunkMesh,
 ) {
     let n = ring.len();
@@ -550,7 +565,8 @@ fn triangulate(
         }
     }
     // The triangles, from the whole loop's run down.
-    let mut runs = vec![(0, n - 1)];
+    runs.clear();
+    runs.push((0, n - 1));
     while let Some((i, j)) = runs.pop() {
         if j - i < 2 {
             continue;

@@ -88,7 +88,7 @@ impl CoarseBricks {
     /// parallel), dropping those of the last call.
     fn make(&mut self, field: &Field, keys: &[BrickKey]) {
         self.bricks.clear();
-        if !field.has_levels_above(0) {
+        if keys.is_empty() || !field.has_levels_above(0) {
             return;
         }
         for &key in keys {

@@ -52,9 +52,10 @@
 //! coarser levels are made by interpolation, once per mesher call, in parallel, for all the
 //! finest bricks of the call that read them (each was otherwise made again for every
 //! neighbour, up to 27 times); a brick is told empty or full, like a stored one, from the
-//! range of the coarse samples its interpolation reads. Those bricks, and the coarse level's
-//! samples, are allocated per call: the no-allocation steady state holds for clay of the
-//! finest level.
+//! range of the coarse samples its interpolation reads. Those bricks, and a coarse level's
+//! samples where they are read through a coarser level, are allocated per call: the
+//! no-allocation steady state holds for clay of one level, the finest or a coarse one
+//! (`tests/mesh_alloc.rs`).
 //!
 //! The kernel classifies the brick's 9³ cell corners once, as one bit per corner in rows along
 //! x, so that a cell's case is a few shifts and rows of cells the surface does not cross are
