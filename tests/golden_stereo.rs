@@ -87,6 +87,11 @@ fn a_tool_editing_by_its_size_matches_golden() {
 }
 
 #[test]
+fn levels_meeting_match_golden() {
+    golden_case("levels-meet", "scenes/tests/levels-meet.toml", None);
+}
+
+#[test]
 fn tool_eraser_matches_golden() {
     golden_tool_case("tool-eraser");
 }
