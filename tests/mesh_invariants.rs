@@ -391,6 +391,31 @@ fn level_ball(field: &mut Field, level: usize, centre: Vec3, radius: f32, add: b
     );
 }
 
+/// The seam contract across chunks of any levels: a vertex two chunks share (by position) has
+/// the same normal and colour, bit for bit, in both, so shading is one across the seams.
+/// Returns how many vertices chunks share.
+fn assert_shared_vertices_agree(chunks: &[(ChunkKey, ChunkMesh)]) -> usize {
+    let mut seen: HashMap<[u32; 3], (ChunkKey, argile::mesh::Vertex)> = HashMap::new();
+    let mut shared = 0;
+    for (key, chunk) in chunks {
+        for v in &chunk.vertices {
+            match seen.entry(v.position.map(f32::to_bits)) {
+                std::collections::hash_map::Entry::Occupied(e) => {
+                    let (other, first) = e.get();
+                    if other != key {
+                        assert_eq!(first, v, "chunks {other} and {key}");
+                        shared += 1;
+                    }
+                }
+                std::collections::hash_map::Entry::Vacant(e) => {
+                    e.insert((*key, *v));
+                }
+            }
+        }
+    }
+    shared
+}
+
 /// No triangle of a welded mesh is flat: its height over its longest side is more than a
 /// millionth of that side. (Marching cubes makes small triangles, where a sample lies near
 /// the iso-level, and thin ones, but keeps its vertices 10⁻⁴ of an edge from the samples: a
@@ -469,6 +494,7 @@ fn fine_clay_meets_coarse_clay_across_faces_edges_and_corners_without_a_crack() 
         let on = |l: usize| levels.iter().filter(|&&m| m == l).count();
         assert!(on(0) > 0 && on(level) > 2 * on(0), "level {level}: {levels:?}");
         assert!(levels.iter().all(|&m| m == 0 || m == level), "level {level}: {levels:?}");
+        assert!(assert_shared_vertices_agree(&diff.upserted) > 100, "level {level}");
         let w = weld(diff.upserted.iter().map(|(_, m)| m));
         assert_closed_and_oriented(&w);
         assert_eq!(euler_characteristic(&w), 2, "level {level}: one closed piece");
@@ -511,7 +537,9 @@ proptest! {
             field.undo().unwrap();
             apply(&mut field, &mut chunks);
         }
-        let full: HashMap<ChunkKey, ChunkMesh> = mesh_all(&field).upserted.into_iter().collect();
+        let all = mesh_all(&field).upserted;
+        assert_shared_vertices_agree(&all);
+        let full: HashMap<ChunkKey, ChunkMesh> = all.into_iter().collect();
         prop_assert_eq!(&chunks, &full);
         let w = weld(full.values());
         prop_assert!(w.positions.iter().chain(&w.normals).all(|v| v.is_finite()));

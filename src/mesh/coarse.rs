@@ -32,6 +32,9 @@
 //! - **Same vertices.** A vertex is made on an edge piece from its two samples with the
 //!   kernel's formula ([`super::march`]'s `crossing_position`): finer and coarser meshes sharing
 //!   an edge piece share the vertex bit for bit, and welding by position closes the surface.
+//!   On a finer piece its normal is the one the finer level's mesh gives it (central
+//!   differences on that level at the piece's ends, weighed as that mesh weighs them), and so
+//!   is its colour: the shading runs on across the seam (tested, vertex for vertex).
 //! - **No transition cells needed thicker than a face**, and no limit on the ratio of levels
 //!   across a face: a level-3 cell next to the finest level has a face of 8 × 8 squares.
 //!   Cells meeting finer bricks along an edge only (the case Transvoxel's face cells leave
@@ -109,6 +112,8 @@ pub struct CoarseScratch {
 struct VertexMap {
     dense: Vec<u32>,
     sparse: FxHashMap<(IVec3, u8), u32>,
+    /// The samples around a finer piece, for its ends' gradients.
+    around: Vec<(f32, Colour)>,
 }
 
 impl VertexMap {
@@ -194,16 +199,46 @@ fn piece_vertex(
     a: (f32, Colour),
     b: (f32, Colour),
 ) -> u32 {
-    let slot = vertex_of.slot(cells, lower, axis, length);
-    if *slot != u32::MAX {
-        return *slot;
+    let known = *vertex_of.slot(cells, lower, axis, length);
+    if known != u32::MAX {
+        return known;
     }
-    *slot = {
+    let made = {
         let t = crossing(cells.iso, a.0, b.0);
         let position = crossing_position(cells.transform, lower, axis, length, t);
-        let mut lattice = lower.as_vec3();
-        lattice[axis] += t * length as f32;
-        let gradient = cell.gradient_at(lattice, cells.width);
+        let gradient = if length < cells.width {
+            // A piece of a finer level's edge: the gradient that level's mesh gives it (its
+            // ends' central differences on that level, lerped), so that the shading is one
+            // across the levels' seam.
+            let level = length.trailing_zeros() as i32;
+            let (qa, mut qb) = (lower >> level, lower >> level);
+            qb[axis] += 1;
+            let (lo, hi) = (qa - IVec3::ONE, qb + IVec3::ONE);
+            cells.field.level_values(level as usize, lo, hi, &mut vertex_of.around);
+            let dims = hi - lo + IVec3::ONE;
+            let value = |q: IVec3| {
+                let d = q - lo;
+                vertex_of.around[(d.x + dims.x * (d.y + dims.y * d.z)) as usize].0
+            };
+            let gradient = |q: IVec3| {
+                let d = |o: IVec3| value(q + o) - value(q - o);
+                Vec3::new(d(IVec3::X), d(IVec3::Y), d(IVec3::Z)) * 0.5
+            };
+            let (ga, gb) = (gradient(qa), gradient(qb));
+            if level == 0 {
+                // As the finest kernel weighs its ends.
+                ga.lerp(gb, t)
+            } else {
+                // As a coarse cell's trilinear weights come out on its edge (`Cell::gradient_at`).
+                let along = lower.as_vec3()[axis] + t * length as f32;
+                let f = ((along - lower[axis] as f32) / length as f32).clamp(0.0, 1.0);
+                ga * (1.0 - f) + gb * f
+            }
+        } else {
+            let mut lattice = lower.as_vec3();
+            lattice[axis] += t * length as f32;
+            cell.gradient_at(lattice, cells.width)
+        };
         let normal = if gradient.length_squared() > 1e-20 {
             -gradient.normalize()
         } else {
@@ -218,7 +253,8 @@ fn piece_vertex(
         });
         (out.vertices.len() - 1) as u32
     };
-    *slot
+    *vertex_of.slot(cells, lower, axis, length) = made;
+    made
 }
 
 /// Meshes brick `key` on level `level` (≥ 1, see [`mesh_level`]) into `out`; `around` holds
