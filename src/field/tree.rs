@@ -410,7 +410,12 @@ impl Field {
         let scale = 1 << level;
         let base = key.key * BRICK_SIZE * scale;
         let top = (key.key * BRICK_SIZE + IVec3::splat(BRICK_SIZE - 1)) * scale;
-        self.mark_dirty(base - IVec3::splat(BRICK_SIZE), top + IVec3::splat(BRICK_SIZE));
+        // Where no other level holds a brick, the bricks around are meshed on this level or
+        // hold no clay: none conforms to another's level, and only those reading the brick's
+        // points change.
+        let alone = self.levels.iter().enumerate().all(|(l, other)| l == level || other.bricks.is_empty());
+        let beyond = if alone { IVec3::ZERO } else { IVec3::splat(BRICK_SIZE) };
+        self.mark_dirty(base - beyond, top + beyond);
     }
 
     /// The shared tile of `value`, made from `brick` (which holds it) if there is none yet.
