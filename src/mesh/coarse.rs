@@ -45,7 +45,7 @@
 use rustc_hash::FxHashMap;
 
 use super::cases::{case_table, link_crossings, CORNER_OFFSETS, EDGES};
-use super::march::{crossing, crossing_colour, crossing_position};
+use super::march::{crossing, crossing_colour, crossing_position, neighbour};
 use super::types::{ChunkMesh, Vertex};
 use crate::field::{BrickKey, Colour, Field, BRICK_SIZE, MESHED_LEVELS};
 use crate::math::{IVec3, Vec3, VoxelTransform};
@@ -59,7 +59,7 @@ const MAX_CORNERS: usize = (BRICK_SIZE as usize / 2 + 1).pow(3);
 
 /// The level brick `key`'s cells are meshed on: the coarsest, up to [`MAX_MESH_LEVEL`], under
 /// which no level holds a brick over the points the cells read (`key·S ..= key·S + S` on the
-/// finest lattice); 0 in a field of one level.
+/// finest lattice); 0 in a field holding the finest level alone.
 pub fn mesh_level(field: &Field, key: BrickKey) -> usize {
     if !field.has_levels_above(0) {
         return 0;
@@ -73,10 +73,15 @@ pub fn mesh_level(field: &Field, key: BrickKey) -> usize {
 
 /// The mesh levels of brick `key` and its 26 neighbours, `(dx + 1) + 3·(dy + 1) + 9·(dz + 1)`.
 pub fn levels_around(field: &Field, key: BrickKey) -> [u8; 27] {
-    std::array::from_fn(|i| {
-        let i = i as i32;
-        mesh_level(field, key + IVec3::new(i % 3 - 1, (i / 3) % 3 - 1, i / 9 - 1)) as u8
-    })
+    std::array::from_fn(|i| mesh_level(field, neighbour(key, i)) as u8)
+}
+
+/// Central-difference gradient at point `q` of a lattice whose values `value` gives (per
+/// voxel of that lattice), as every mesh level takes it.
+#[inline]
+fn central_gradient(value: impl Fn(IVec3) -> f32, q: IVec3) -> Vec3 {
+    let d = |o: IVec3| value(q + o) - value(q - o);
+    Vec3::new(d(IVec3::X), d(IVec3::Y), d(IVec3::Z)) * 0.5
 }
 
 /// Reusable buffers of the coarse marcher.
@@ -160,8 +165,7 @@ impl Cells<'_> {
 
     /// Central-difference gradient at level point `q` (per level voxel).
     fn gradient(&self, samples: &[(f32, Colour)], q: IVec3) -> Vec3 {
-        let d = |o: IVec3| samples[self.index(q + o)].0 - samples[self.index(q - o)].0;
-        Vec3::new(d(IVec3::X), d(IVec3::Y), d(IVec3::Z)) * 0.5
+        central_gradient(|p| samples[self.index(p)].0, q)
     }
 }
 
@@ -207,33 +211,7 @@ fn piece_vertex(
         let t = crossing(cells.iso, a.0, b.0);
         let position = crossing_position(cells.transform, lower, axis, length, t);
         let gradient = if length < cells.width {
-            // A piece of a finer level's edge: the gradient that level's mesh gives it (its
-            // ends' central differences on that level, lerped), so that the shading is one
-            // across the levels' seam.
-            let level = length.trailing_zeros() as i32;
-            let (qa, mut qb) = (lower >> level, lower >> level);
-            qb[axis] += 1;
-            let (lo, hi) = (qa - IVec3::ONE, qb + IVec3::ONE);
-            cells.field.level_values(level as usize, lo, hi, &mut vertex_of.around);
-            let dims = hi - lo + IVec3::ONE;
-            let value = |q: IVec3| {
-                let d = q - lo;
-                vertex_of.around[(d.x + dims.x * (d.y + dims.y * d.z)) as usize].0
-            };
-            let gradient = |q: IVec3| {
-                let d = |o: IVec3| value(q + o) - value(q - o);
-                Vec3::new(d(IVec3::X), d(IVec3::Y), d(IVec3::Z)) * 0.5
-            };
-            let (ga, gb) = (gradient(qa), gradient(qb));
-            if level == 0 {
-                // As the finest kernel weighs its ends.
-                ga.lerp(gb, t)
-            } else {
-                // As a coarse cell's trilinear weights come out on its edge (`Cell::gradient_at`).
-                let along = lower.as_vec3()[axis] + t * length as f32;
-                let f = ((along - lower[axis] as f32) / length as f32).clamp(0.0, 1.0);
-                ga * (1.0 - f) + gb * f
-            }
+            finer_piece_gradient(cells.field, &mut vertex_of.around, lower, axis, length, t)
         } else {
             let mut lattice = lower.as_vec3();
             lattice[axis] += t * length as f32;
@@ -255,6 +233,40 @@ fn piece_vertex(
     };
     *vertex_of.slot(cells, lower, axis, length) = made;
     made
+}
+
+/// The gradient at fraction `t` of a finer level's edge piece, from finest point `lower` along
+/// `axis`, `length` long, as that level's mesh gives it: its ends' central differences on that
+/// level, weighed as that mesh weighs them; so that the shading is one across the levels'
+/// seam. `around`: scratch for the samples read.
+fn finer_piece_gradient(
+    field: &Field,
+    around: &mut Vec<(f32, Colour)>,
+    lower: IVec3,
+    axis: usize,
+    length: i32,
+    t: f32,
+) -> Vec3 {
+    let level = length.trailing_zeros() as i32;
+    let (qa, mut qb) = (lower >> level, lower >> level);
+    qb[axis] += 1;
+    let (lo, hi) = (qa - IVec3::ONE, qb + IVec3::ONE);
+    field.level_values(level as usize, lo, hi, around);
+    let dims = hi - lo + IVec3::ONE;
+    let value = |q: IVec3| {
+        let d = q - lo;
+        around[(d.x + dims.x * (d.y + dims.y * d.z)) as usize].0
+    };
+    let (ga, gb) = (central_gradient(value, qa), central_gradient(value, qb));
+    if level == 0 {
+        // As the finest kernel weighs its ends.
+        ga.lerp(gb, t)
+    } else {
+        // As a coarse cell's trilinear weights come out on its edge (`Cell::gradient_at`).
+        let along = lower.as_vec3()[axis] + t * length as f32;
+        let f = ((along - lower[axis] as f32) / length as f32).clamp(0.0, 1.0);
+        ga * (1.0 - f) + gb * f
+    }
 }
 
 /// Meshes brick `key` on level `level` (≥ 1, see [`mesh_level`]) into `out`; `around` holds
@@ -394,18 +406,27 @@ fn face_spans(f: usize) -> [i8; 3] {
     spans
 }
 
+/// The spans of a cell's 6 faces and 12 edges (see [`resolution`]).
+fn faces_and_edges() -> impl Iterator<Item = [i8; 3]> {
+    let edges = (0..12).map(|e| {
+        // Along axis `e / 4`, at sides `e & 1` and `e >> 1 & 1` of the two others.
+        let (along, sides) = (e / 4, [(e & 1) as i8, (e >> 1 & 1) as i8]);
+        let mut spans = [-1; 3];
+        spans[(along + 1) % 3] = sides[0];
+        spans[(along + 2) % 3] = sides[1];
+        spans
+    });
+    (0..6).map(face_spans).chain(edges)
+}
+
+/// The finest resolution of a cell's faces and edges.
+fn finest_around(res: &impl Fn([i8; 3]) -> u8) -> u8 {
+    faces_and_edges().map(res).min().unwrap_or(u8::MAX)
+}
+
 /// Whether a cell of `level` has a face or an edge of a finer resolution.
 fn conforms(res: &impl Fn([i8; 3]) -> u8, level: usize) -> bool {
-    (0..6).any(|f| {
-        let (axis, spans) = (f / 2, face_spans(f));
-        let u = (axis + 1) % 3;
-        usize::from(res(spans)) < level
-            || (0..2).any(|side| {
-                let mut edge = spans;
-                edge[u] = side;
-                usize::from(res(edge)) < level
-            })
-    })
+    usize::from(finest_around(res)) < level
 }
 
 /// Meshes a cell with finer faces or edges as the polyhedron they make (see the module docs).
@@ -416,24 +437,9 @@ fn conforming_cell(
     scratch: &mut CoarseScratch,
     out: &mut ChunkMesh,
 ) {
-    let level = cells.level;
     let width = cells.width;
-    // The finest resolution of the cell's faces and edges: every point the polygons use lies
-    // on that level.
-    let mut finest = level as u8;
-    for f in 0..6 {
-        let spans = face_spans(f);
-        finest = finest.min(res(spans));
-        for a in 0..3 {
-            if a != f / 2 {
-                for side in 0..2 {
-                    let mut edge = spans;
-                    edge[a] = side;
-                    finest = finest.min(res(edge));
-                }
-            }
-        }
-    }
+    // Every point the polygons use lies on the finest level of the cell's faces and edges.
+    let finest = finest_around(res);
     let r = i32::from(finest);
     let f_lo = cell.lo >> r;
     let f_dims = (width >> r) + 1;

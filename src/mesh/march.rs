@@ -44,6 +44,14 @@ impl Default for Block {
     }
 }
 
+/// The key of neighbour `i` of brick `key`, `i = (dx + 1) + 3·(dy + 1) + 9·(dz + 1)` (the
+/// order of [`Neighbourhood::bricks`]).
+#[inline]
+pub(super) fn neighbour(key: BrickKey, i: usize) -> BrickKey {
+    let i = i as i32;
+    key + IVec3::new(i % 3 - 1, (i / 3) % 3 - 1, i / 9 - 1)
+}
+
 /// The bricks around one brick (itself and its 26 neighbours), looked up once.
 #[derive(Clone, Copy, Debug)]
 pub struct Neighbourhood<'f> {
@@ -56,11 +64,7 @@ pub struct Neighbourhood<'f> {
 impl<'f> Neighbourhood<'f> {
     /// Looks up brick `key` and its neighbours in `field`.
     pub fn new(field: &'f Field, key: BrickKey) -> Self {
-        let bricks = std::array::from_fn(|i| {
-            let i = i as i32;
-            field.brick(key + IVec3::new(i % 3 - 1, (i / 3) % 3 - 1, i / 9 - 1))
-        });
-        Self { key, bricks }
+        Self { key, bricks: std::array::from_fn(|i| field.brick(neighbour(key, i))) }
     }
 
     /// The colour at lattice point `p`, which must lie in the neighbourhood.

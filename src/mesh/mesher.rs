@@ -8,7 +8,7 @@ use rustc_hash::{FxHashMap, FxHashSet};
 
 use super::cases::flat_cases;
 use super::coarse::{levels_around, march_coarse, mesh_level, CoarseScratch};
-use super::march::{march_brick, Block, MarchScratch, Neighbourhood, BLOCK, BLOCK_VOLUME};
+use super::march::{march_brick, neighbour, Block, MarchScratch, Neighbourhood, BLOCK, BLOCK_VOLUME};
 use super::types::{ChunkMesh, MeshDiff};
 use crate::field::{dequantize, Brick, BrickKey, Field, Quantum, BRICK_SIZE, BRICK_VOLUME};
 use crate::math::IVec3;
@@ -108,12 +108,6 @@ impl CoarseBricks {
             .collect();
         self.bricks.extend(made);
     }
-}
-
-/// The key of neighbour `i` (as [`Neighbourhood::bricks`] orders them) of brick `key`.
-fn neighbour(key: BrickKey, i: usize) -> BrickKey {
-    let i = i as i32;
-    key + IVec3::new(i % 3 - 1, (i / 3) % 3 - 1, i / 9 - 1)
 }
 
 /// Copies the densities of a brick's block from the bricks around it (ordered as
