@@ -73,6 +73,10 @@ enum Command {
         /// In the headset, the left hand holds the tool (the right one grabs).
         #[arg(long, requires = "xr")]
         left_handed: bool,
+        /// When the OpenXR runtime goes away, how long to wait for it to come back (seconds)
+        /// before going on at the desktop station with the saved sculpt.
+        #[arg(long, requires = "xr", default_value_t = app::WAIT_FOR_RUNTIME_S, value_parser = parse_wait)]
+        xr_wait_s: f64,
         /// Desk input settings (see calibration/input.toml): what each device drives and its
         /// calibration file; else ~/.config/argile/input.toml if there is one.
         #[arg(long)]
@@ -237,6 +241,13 @@ fn parse_seconds(s: &str) -> Result<f64, String> {
     }
 }
 
+fn parse_wait(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if (0.0..=86_400.0).contains(&v) => Ok(v),
+        _ => Err(format!("`{s}` is not a number of seconds from 0 to 86400")),
+    }
+}
+
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) =
         s.split_once('x').ok_or_else(|| format!("`{s}` is not WIDTHxHEIGHT (for example 512x512)"))?;
@@ -261,7 +272,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         // A headset when one is ready, else the desktop station.
         None => {
-            let xr = (argile::xr::runtime_configured() && argile::xr::probe().ready()).then_some(false);
+            let xr = (argile::xr::runtime_configured() && argile::xr::probe().ready())
+                .then_some(XrChoice { left_handed: false, wait_for_runtime_s: app::WAIT_FOR_RUNTIME_S });
             station(None, xr, app::StationOptions::default())
         }
         Some(Command::Run {
@@ -278,12 +290,13 @@ fn main() -> ExitCode {
             validation,
             xr,
             left_handed,
+            xr_wait_s,
             input,
             open_dir,
             edit_finest,
         }) => station(
             scene,
-            xr.then_some(left_handed),
+            xr.then_some(XrChoice { left_handed, wait_for_runtime_s: xr_wait_s }),
             app::StationOptions {
                 frames,
                 screenshot,
@@ -354,12 +367,17 @@ fn main() -> ExitCode {
             })
         }
     };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+    let stopped = app::signals::received();
+    if let Err(e) = &result {
+        eprintln!("error: {e:#}");
+    }
+    match (stopped, result) {
+        (Some(signal), _) => {
+            println!("stopped by {}", app::signals::name(signal));
+            ExitCode::from(app::signals::exit_status(signal) as u8)
         }
+        (None, Ok(())) => ExitCode::SUCCESS,
+        (None, Err(_)) => ExitCode::FAILURE,
     }
 }
 
@@ -372,9 +390,22 @@ fn print_written(written: &[app::WrittenCapture]) {
     }
 }
 
-/// Runs the station: in the headset when `xr` is set (`Some(left_handed)`) and one is
-/// there, else in a window, else headless.
-fn station(scene_path: Option<PathBuf>, xr: Option<bool>, options: app::StationOptions) -> Result<()> {
+/// How the headset is used.
+#[derive(Clone, Copy, Debug)]
+struct XrChoice {
+    left_handed: bool,
+    wait_for_runtime_s: f64,
+}
+
+/// Runs the station: in the headset when `xr` is set and one is there, else in a window,
+/// else headless.
+fn station(
+    mut scene_path: Option<PathBuf>,
+    xr: Option<XrChoice>,
+    options: app::StationOptions,
+) -> Result<()> {
+    // SIGINT, SIGTERM and SIGHUP stop the desk or the headset as a clean exit does.
+    app::signals::install()?;
     let mut sculpt = None;
     let (scene, scene_text) = match &scene_path {
         Some(p) if app::is_sculpt(p) => {
@@ -395,8 +426,9 @@ fn station(scene_path: Option<PathBuf>, xr: Option<bool>, options: app::StationO
         .and_then(|p| p.file_stem())
         .map_or("default".to_owned(), |s| s.to_string_lossy().into_owned());
     app::recover_and_report();
-    if let Some(left_handed) = xr {
+    if let Some(XrChoice { left_handed, wait_for_runtime_s }) = xr {
         let xr_options = app::XrRunOptions {
+            wait_for_runtime_s,
             session: argile::xr::XrOptions { validation: options.validation, ..Default::default() },
             frames: options.frames,
             save_to: options.save_to.clone(),
@@ -429,7 +461,16 @@ fn station(scene_path: Option<PathBuf>, xr: Option<bool>, options: app::StationO
                 if let Some(p) = &report.saved {
                     println!("saved the sculpt to {}", p.display());
                 }
-                return Ok(());
+                match (&report.saved, report.runtime_gone && app::signals::received().is_none()) {
+                    // The runtime went away for good: the desktop station goes on with the
+                    // saved sculpt, saving back to it.
+                    (Some(saved), true) => {
+                        println!("Going on at the desktop stereo station with {}.", saved.display());
+                        sculpt = Some(app::open_sculpt(saved)?.1);
+                        scene_path = Some(saved.clone());
+                    }
+                    _ => return Ok(()),
+                }
             }
             Err(e) => match app::xr_absent(&e) {
                 Some(absent) => println!("No headset session: {absent}. Using the desktop stereo station."),

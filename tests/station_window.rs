@@ -147,3 +147,71 @@ fn quad_buffer_stereo_falls_back_with_a_notice_where_the_surface_has_one_layer()
         "{stdout}"
     );
 }
+
+/// The journal files of the autosave sessions under `state`.
+fn journals(state: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let Ok(sessions) = std::fs::read_dir(state.join("argile/autosave")) else { return Vec::new() };
+    sessions
+        .filter_map(|s| std::fs::read_dir(s.ok()?.path()).ok())
+        .flatten()
+        .filter_map(|f| f.ok().map(|f| f.path()))
+        .filter(|p| p.file_name().is_some_and(|n| n.to_string_lossy().starts_with("journal-")))
+        .collect()
+}
+
+#[test]
+fn sigint_at_the_desk_saves_the_strokes_closes_the_session_and_exits_130() {
+    let x = Xvfb::start();
+    let dir = out_dir("station-sigint");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let saved = dir.join("sigint.argile");
+    let scene = root().join("scenes/tests/station.toml");
+    let script = root().join("tests/fixtures/station-input.toml");
+    let state = dir.join("state");
+    // A scripted session that would run for an hour: the groove is carved in its first frames.
+    let child = Command::new(env!("CARGO_BIN_EXE_argile"))
+        .arg("run")
+        .arg(&scene)
+        .args(["--frames", "200000", "--size", "320x240", "--input-script"])
+        .arg(&script)
+        .arg("--save-to")
+        .arg(&saved)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .env("XDG_STATE_HOME", &state)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the argile binary runs");
+    // The journal starts with the session's header; the stroke is journaled once it ends.
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    let journaled =
+        || journals(&state).iter().filter_map(|j| std::fs::metadata(j).ok()).map(|m| m.len()).sum::<u64>();
+    let mut header = 0;
+    while header == 0 || journaled() <= header {
+        if header == 0 {
+            header = journaled();
+        }
+        assert!(std::time::Instant::now() < deadline, "no stroke was journaled within 60 s");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
+    let out = child.wait_with_output().expect("argile ends");
+    let said = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert_eq!(out.status.code(), Some(130), "{said}");
+    assert!(said.contains("stopped by SIGINT"), "{said}");
+    assert!(said.contains(&format!("saved the sculpt to {}", saved.display())), "{said}");
+    let sculpt = argile::app::load_sculpt(&saved).expect("the saved sculpt loads");
+    let slab = argile::app::final_field(&argile::scene::Scene::load(&scene).unwrap());
+    assert!(sculpt.field.mass() < 0.9 * slab.mass(), "the groove is saved");
+    // The session closed: nothing is left to recover.
+    let recover = Command::new(env!("CARGO_BIN_EXE_argile"))
+        .arg("recover")
+        .env("XDG_STATE_HOME", &state)
+        .output()
+        .expect("argile recover runs");
+    let said = String::from_utf8_lossy(&recover.stdout);
+    assert!(said.contains("No session is left to recover"), "{said}");
+}

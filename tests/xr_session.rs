@@ -1,11 +1,13 @@
 //! The headset session end to end, without a headset: `argile run --xr` against the repository's
 //! OpenXR test runtime (`tests/xr-runtime`), loaded by the real Khronos loader through
-//! `XR_RUNTIME_JSON`, with the Vulkan validation layer on. The runtime plays a scripted head
-//! and hands, writes the images submitted in the projection layer and logs every frame, state,
-//! haptic pulse and spec violation (`log.jsonl`).
+//! `XR_RUNTIME_JSON`, with the Vulkan validation layer and the OpenXR core validation layer
+//! (`XR_APILAYER_LUNARG_core_validation`, Debian package `openxr-layer-corevalidation`) on: a
+//! message from either fails the test. The runtime plays a scripted head and hands, writes the
+//! images submitted in the projection layer and logs every frame, state, haptic pulse and spec
+//! violation (`log.jsonl`).
 //!
-//! Needs the loader (Debian package `libopenxr-loader1`) and a Vulkan device; fails, never
-//! skips, without them.
+//! Needs the loader (Debian package `libopenxr-loader1`), the core validation layer and a
+//! Vulkan device; fails, never skips, without them.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -63,6 +65,9 @@ fn run_scene(
 fn argile_in(dir: &Path, manifest: &Path, script: &Path) -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_argile"));
     c.current_dir(dir)
+        .env("XR_ENABLE_API_LAYERS", CORE_VALIDATION)
+        .env("XR_CORE_VALIDATION_EXPORT_TYPE", "text")
+        .env("XR_CORE_VALIDATION_FILE_NAME", dir.join(XR_VALIDATION_FILE))
         .env("XR_RUNTIME_JSON", manifest)
         .env("ARGILE_XR_TEST_SCRIPT", script)
         .env("ARGILE_XR_TEST_OUT", dir.join("runtime"))
@@ -71,6 +76,32 @@ fn argile_in(dir: &Path, manifest: &Path, script: &Path) -> Command {
         .env_remove("WAYLAND_DISPLAY")
         .env("RUST_LOG", "warn");
     c
+}
+
+/// The OpenXR core validation layer.
+const CORE_VALIDATION: &str = "XR_APILAYER_LUNARG_core_validation";
+/// Where the core validation layer writes its messages, in a case's folder.
+const XR_VALIDATION_FILE: &str = "xr-validation.txt";
+
+/// The core validation layer ran (it says so on standard output when it starts) and reported
+/// nothing.
+fn xr_validation_clean(dir: &Path, said: &str) {
+    assert!(
+        said.contains("Core Validation output type: text"),
+        "the OpenXR core validation layer did not run (package openxr-layer-corevalidation):\n{said}"
+    );
+    let messages = std::fs::read_to_string(dir.join(XR_VALIDATION_FILE)).unwrap_or_default();
+    assert!(messages.trim().is_empty(), "the OpenXR core validation layer reported:\n{messages}");
+}
+
+/// A run that succeeded, with nothing from either validation layer and no warning (a real
+/// runtime's ordinary behaviour, such as its first IDLE event, warns of nothing); what it said.
+fn succeeded(dir: &Path, out: &Output) -> String {
+    let said = text(out);
+    assert!(out.status.success(), "argile failed:\n{said}");
+    assert!(!said.contains("WARN"), "argile warned:\n{said}");
+    xr_validation_clean(dir, &said);
+    said
 }
 
 fn text(o: &Output) -> String {
@@ -181,9 +212,11 @@ fn a_headset_session_submits_what_the_offscreen_renderer_draws_of_the_same_views
     let dir = case_dir("xr-session");
     let manifest = common::xr::test_runtime_manifest(&dir);
     let out = run_xr(&dir, &manifest, &carving_script(), &["--frames", "28"], &[]);
-    let said = text(&out);
-    assert!(out.status.success(), "argile failed:\n{said}");
+    let said = succeeded(&dir, &out);
     assert!(said.contains("headset session on") && said.contains("(with depth)"), "{said}");
+    // Scripted runs print the median of each stage of the frame, as the desk does.
+    assert!(said.contains("frame stages, median ms over 28 frames (128×128 per eye)"), "{said}");
+    assert!(said.contains("controller poses drawn"), "{said}");
     let log = log(&dir);
     no_violations(&log);
     let states: Vec<&str> = kind(&log, "state").iter().filter_map(|s| s["state"].as_str()).collect();
@@ -318,8 +351,7 @@ left = { trigger = 0.0 }
 right = { trigger = 0.0 }
 "#;
     let out = run_scene("scenes/tests/xr-bend.toml", &dir, &manifest, script, &["--frames", "40"], &[]);
-    let said = text(&out);
-    assert!(out.status.success(), "argile failed:\n{said}");
+    succeeded(&dir, &out);
     no_violations(&log(&dir));
     let bent = argile::app::load_sculpt(&dir.join("sculpt.argile")).expect("the sculpt was saved").field;
     let scene = Scene::load(&root().join("scenes/tests/xr-bend.toml")).unwrap();
@@ -370,7 +402,7 @@ fn a_pulse_marks_each_touch_and_the_vibration_follows_the_clay_while_sculpting()
     let dir = case_dir("xr-haptics");
     let manifest = common::xr::test_runtime_manifest(&dir);
     let out = run_xr(&dir, &manifest, &touching_script(), &["--frames", "32"], &[]);
-    assert!(out.status.success(), "argile failed:\n{}", text(&out));
+    succeeded(&dir, &out);
     let log = log(&dir);
     no_violations(&log);
     let haptics = kind(&log, "haptic");
@@ -412,7 +444,7 @@ fn the_runtime_asking_to_quit_mid_stroke_loses_no_work() {
     let dir = case_dir("xr-exit");
     let manifest = common::xr::test_runtime_manifest(&dir);
     let out = run_xr(&dir, &manifest, &carving_with("exit"), &[], &[]);
-    assert!(out.status.success(), "argile failed:\n{}", text(&out));
+    succeeded(&dir, &out);
     let log = log(&dir);
     no_violations(&log);
     let states: Vec<&str> = kind(&log, "state").iter().filter_map(|s| s["state"].as_str()).collect();
@@ -427,6 +459,7 @@ fn a_lost_session_mid_stroke_is_saved_and_made_again() {
     let out = run_xr(&dir, &manifest, &carving_with("session_loss"), &["--frames", "20"], &[]);
     let said = text(&out);
     assert!(out.status.success(), "argile failed:\n{said}");
+    xr_validation_clean(&dir, &said);
     assert!(said.contains("made again 1 time"), "{said}");
     let log = log(&dir);
     no_violations(&log);
@@ -436,14 +469,232 @@ fn a_lost_session_mid_stroke_is_saved_and_made_again() {
     assert_eq!(states.last(), Some(&"EXITING"));
 }
 
+/// `argile recover` in `dir`'s state folder: nothing is left to recover (every session that
+/// saved its sculpt closed its journal).
+fn nothing_to_recover(dir: &Path) {
+    let out = Command::new(env!("CARGO_BIN_EXE_argile"))
+        .arg("recover")
+        .current_dir(dir)
+        .env("XDG_STATE_HOME", dir.join("state"))
+        .output()
+        .expect("argile recover runs");
+    let said = text(&out);
+    assert!(out.status.success() && said.contains("No session is left to recover"), "{said}");
+}
+
+/// The carving script with the runtime going away at frame 8 (`kind`: `instance_loss` with its
+/// loss-pending event, `runtime_gone` without a word), back after `back_after_s` if given.
+fn carving_until_gone(kind: &str, back_after_s: Option<f64>) -> String {
+    let back = back_after_s.map_or(String::new(), |s| format!("back_after_s = {s}\n"));
+    format!("{}\n[[event]]\nframe = 8\nkind = \"{kind}\"\n{back}", carving_script())
+}
+
 #[test]
-fn a_lost_instance_mid_stroke_saves_and_quits() {
-    let dir = case_dir("xr-instance-loss");
+fn a_lost_instance_mid_stroke_is_saved_and_when_the_runtime_stays_away_the_desk_goes_on() {
+    for kind in ["instance_loss", "runtime_gone"] {
+        let dir = case_dir(&format!("xr-{kind}"));
+        let manifest = common::xr::test_runtime_manifest(&dir);
+        let out = run_xr(&dir, &manifest, &carving_until_gone(kind, None), &["--xr-wait-s", "0.6"], &[]);
+        let said = text(&out);
+        assert!(out.status.success(), "argile failed:\n{said}");
+        xr_validation_clean(&dir, &said);
+        no_violations(&log(&dir));
+        half_a_groove_is_saved(&dir);
+        assert!(said.contains("The OpenXR runtime went away; the sculpt is saved in"), "{kind}: {said}");
+        assert!(said.contains("did not come back within 0.6 s"), "{kind}: {said}");
+        // The desk goes on with the saved sculpt (here headless: no display).
+        assert!(said.contains("Going on at the desktop stereo station with"), "{kind}: {said}");
+        assert!(dir.join("argile-out").is_dir(), "{kind}: the headless station rendered: {said}");
+        // The sculpt is safe: the autosave session was closed, nothing is recovered twice.
+        nothing_to_recover(&dir);
+    }
+}
+
+#[test]
+fn a_runtime_that_goes_away_and_comes_back_gets_a_new_session_with_the_same_sculpt() {
+    let dir = case_dir("xr-runtime-back");
     let manifest = common::xr::test_runtime_manifest(&dir);
-    let out = run_xr(&dir, &manifest, &carving_with("instance_loss"), &[], &[]);
-    assert!(out.status.success(), "argile failed:\n{}", text(&out));
+    let out =
+        run_xr(&dir, &manifest, &carving_until_gone("runtime_gone", Some(0.5)), &["--frames", "24"], &[]);
+    let said = text(&out);
+    assert!(out.status.success(), "argile failed:\n{said}");
+    xr_validation_clean(&dir, &said);
+    assert!(said.contains("The OpenXR runtime went away"), "{said}");
+    assert!(said.contains("is back: a new headset session goes on with the sculpt"), "{said}");
+    let log = log(&dir);
+    no_violations(&log);
+    let back = kind(&log, "runtime_back");
+    assert_eq!(back.len(), 1, "one new instance: {back:#?}");
+    assert_eq!(back[0]["frame"], 9, "it resumes after the lost frame");
+    let states: Vec<&str> = kind(&log, "state").iter().filter_map(|s| s["state"].as_str()).collect();
+    assert_eq!(states.iter().filter(|s| **s == "FOCUSED").count(), 2, "{states:?}");
+    assert_eq!(states.last(), Some(&"EXITING"));
+    // The stroke went on in the new session: the whole groove is cut.
+    let field = argile::app::load_sculpt(&dir.join("sculpt.argile")).expect("the sculpt was saved").field;
+    assert!(density(&field, Vec3::new(0.035, 0.03, 0.012)) < 0.5, "the groove's start");
+    assert!(
+        density(&field, Vec3::new(-0.045, 0.03, 0.012)) < 0.5,
+        "the groove's end, carved after the return"
+    );
+    nothing_to_recover(&dir);
+}
+
+#[test]
+fn the_runtimes_view_size_and_pace_are_taken_as_it_chooses() {
+    let dir = case_dir("xr-runtime-choice");
+    let manifest = common::xr::test_runtime_manifest(&dir);
+    // A headless runtime: 320×240 views whatever the script recommends, frames paced at 20 Hz.
+    let script = format!("display_hz = 20.0\npace = true\ncapture = [3]\n[[key]]\nframe = 0\n{HEAD}\n");
+    let started = std::time::Instant::now();
+    let out =
+        run_xr(&dir, &manifest, &script, &["--frames", "8"], &[("ARGILE_XR_TEST_VIEW_SIZE", "320x240")]);
+    let took = started.elapsed();
+    let said = succeeded(&dir, &out);
+    assert!(said.contains("(320×240 per eye)"), "{said}");
+    let captured = image::open(dir.join("runtime/frame-0003-left.png")).expect("frame 3 captured");
+    assert_eq!((captured.width(), captured.height()), (320, 240));
+    // Eight frames at 20 Hz take at least 0.35 s of waiting.
+    assert!(took.as_secs_f64() > 0.35, "{took:?}");
     no_violations(&log(&dir));
-    half_a_groove_is_saved(&dir);
+}
+
+/// The right hand carves across the slab's front (frames 2 to 6), then presses its primary
+/// button (A; a Windows Mixed Reality controller's trackpad) at frame 9, on `profile`.
+fn profile_script(profile: &str) -> String {
+    format!(
+        r#"
+interaction_profile = "{profile}"
+recommended_size = [64, 64]
+[[key]]
+frame = 0
+{HEAD}
+right = {{ grip = {{ position = [0.05, 1.33, -0.43], orientation = [0, 0, 0, 1] }}, trigger = 0.0 }}
+[[key]]
+frame = 2
+right = {{ trigger = 1.0 }}
+[[key]]
+frame = 6
+right = {{ grip = {{ position = [-0.05, 1.33, -0.43] }}, trigger = 1.0 }}
+[[key]]
+frame = 7
+right = {{ trigger = 0.0 }}
+[[key]]
+frame = 9
+right = {{ a = true }}
+[[key]]
+frame = 10
+right = {{ a = false }}
+"#
+    )
+}
+
+#[test]
+fn every_suggested_controller_profile_is_used_and_its_buttons_act() {
+    for p in argile::xr::PROFILES {
+        let name = p.path.rsplit('/').next().unwrap();
+        let dir = case_dir(&format!("xr-profile-{name}"));
+        let manifest = common::xr::test_runtime_manifest(&dir);
+        let out = run_xr(&dir, &manifest, &profile_script(p.path), &["--frames", "14"], &[]);
+        succeeded(&dir, &out);
+        let log = log(&dir);
+        no_violations(&log);
+        let chosen: Vec<_> = kind(&log, "interaction_profile").iter().map(|e| e["profile"].clone()).collect();
+        assert_eq!(chosen, [serde_json::json!(p.path)], "{name}: the runtime fell back instead");
+        let field = argile::app::load_sculpt(&dir.join("sculpt.argile")).expect("saved").field;
+        let groove = density(&field, Vec3::new(0.0, 0.03, 0.012));
+        // The primary button undoes the groove where the controller has one.
+        if p.bindings.primary.0.is_some() {
+            assert!(groove > 0.5, "{name}: the primary button undid the groove ({groove})");
+        } else {
+            assert!(groove < 0.5, "{name}: the trigger carved ({groove})");
+        }
+    }
+}
+
+#[test]
+fn sigterm_in_the_headset_saves_closes_the_session_and_exits_143() {
+    let dir = case_dir("xr-sigterm");
+    let manifest = common::xr::test_runtime_manifest(&dir);
+    // The runtime never asks to quit; frames are paced at 90 Hz.
+    let script = format!("pace = true\n{}", carving_script());
+    let script_path = dir.join("script.toml");
+    std::fs::write(&script_path, script).unwrap();
+    let child = argile_in(&dir, &manifest, &script_path)
+        .args(["run", "--xr", "--validation", "--save-to"])
+        .arg(dir.join("sculpt.argile"))
+        .arg(root().join(SCENE))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("argile starts");
+    // Wait until the stroke is over (frame 16 ended), then ask it to stop.
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    loop {
+        let ended = std::fs::read_to_string(dir.join("runtime/log.jsonl"))
+            .map(|t| t.lines().filter(|l| l.contains("\"end_frame\"")).count())
+            .unwrap_or(0);
+        if ended >= 16 {
+            break;
+        }
+        assert!(std::time::Instant::now() < deadline, "the session never reached frame 16");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let status = Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap();
+    assert!(status.success());
+    let out = child.wait_with_output().expect("argile ends");
+    let said = text(&out);
+    assert_eq!(out.status.code(), Some(143), "{said}");
+    assert!(
+        said.contains("SIGTERM received: saving the sculpt") && said.contains("stopped by SIGTERM"),
+        "{said}"
+    );
+    xr_validation_clean(&dir, &said);
+    let log = log(&dir);
+    no_violations(&log);
+    let states: Vec<&str> = kind(&log, "state").iter().filter_map(|s| s["state"].as_str()).collect();
+    assert!(states.ends_with(&["STOPPING", "IDLE", "EXITING"]), "the session was ended properly: {states:?}");
+    let field = argile::app::load_sculpt(&dir.join("sculpt.argile")).expect("the sculpt was saved").field;
+    assert!(density(&field, Vec3::new(-0.045, 0.03, 0.012)) < 0.5, "the whole groove is saved");
+    nothing_to_recover(&dir);
+}
+
+#[test]
+fn the_palettes_quit_button_saves_and_ends_the_session() {
+    let dir = case_dir("xr-quit-button");
+    let manifest = common::xr::test_runtime_manifest(&dir);
+    // The left hand holds its palette still, facing forward; the right hand's grip goes onto
+    // the quit button (the fifth, 7 cm to the right of the palette, 12.5 cm ahead of the left
+    // grip, 3 cm above it) and pulls the trigger.
+    let script = format!(
+        r#"
+recommended_size = [64, 64]
+[[key]]
+frame = 0
+{HEAD}
+left = {{ grip = {{ position = [-0.1, 1.2, -0.1], orientation = [0, 0, 0, 1] }} }}
+right = {{ grip = {{ position = [0.2, 1.2, -0.1], orientation = [0, 0, 0, 1] }} }}
+[[key]]
+frame = 3
+right = {{ grip = {{ position = [-0.03, 1.23, -0.225] }}, trigger = 0.0 }}
+[[key]]
+frame = 5
+right = {{ trigger = 1.0 }}
+"#
+    );
+    let out = run_xr(&dir, &manifest, &script, &[], &[]);
+    let said = succeeded(&dir, &out);
+    let log = log(&dir);
+    no_violations(&log);
+    let states: Vec<&str> = kind(&log, "state").iter().filter_map(|s| s["state"].as_str()).collect();
+    assert!(states.ends_with(&["STOPPING", "IDLE", "EXITING"]), "{states:?}");
+    let last = kind(&log, "end_frame").len();
+    assert!(last < 12, "the session ended soon after the press: {last} frames");
+    assert!(said.contains("saved the sculpt to"), "{said}");
+    // The button's tick on arrival.
+    let ticks =
+        kind(&log, "haptic").into_iter().filter(|h| h["duration_ns"] == argile::app::BUTTON_PULSE.1).count();
+    assert_eq!(ticks, 1, "one tick as the hand came onto the button");
+    nothing_to_recover(&dir);
 }
 
 #[test]
@@ -456,8 +707,7 @@ fn with_no_command_a_ready_headset_is_chosen() {
     );
     std::fs::write(&script, text_).unwrap();
     let out = argile_in(&dir, &manifest, &script).output().expect("argile runs");
-    let said = text(&out);
-    assert!(out.status.success(), "{said}");
+    let said = succeeded(&dir, &out);
     assert!(said.contains("headset session on Argile XR test runtime"), "{said}");
     assert!(dir.join("default.argile").is_file(), "the sculpt is saved where the station saves it: {said}");
     no_violations(&log(&dir));
@@ -499,4 +749,33 @@ fn a_sculpt_file_opened_in_the_headset_is_sculpted_and_saved_back_to_itself() {
     let field = argile::app::load_sculpt(&sculpt).expect("the sculpt was saved").field;
     assert!(density(&field, Vec3::new(0.035, 0.03, 0.012)) < 0.5, "the file's groove, not the scene's clay");
     assert!(density(&field, Vec3::new(-0.045, 0.03, 0.012)) > 0.5);
+}
+
+#[test]
+fn bench_frame_xr_reports_the_view_size_the_runtime_chose_and_the_poses_age() {
+    let dir = case_dir("xr-bench-frame");
+    let out = Command::new(env!("CARGO_BIN_EXE_argile"))
+        .args(["bench", "--json", "--quick", "frame-xr"])
+        .current_dir(&dir)
+        .env("ARGILE_XR_TEST_RUNTIME", common::xr::runtime_library())
+        .env("ARGILE_XR_TEST_VIEW_SIZE", "320x240")
+        .env("XDG_STATE_HOME", dir.join("state"))
+        .env("RUST_LOG", "warn")
+        .output()
+        .expect("argile bench runs");
+    let said = text(&out);
+    assert!(out.status.success(), "{said}");
+    let line = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .find(|l| l.contains("\"frame-xr\""))
+        .map(str::to_owned)
+        .unwrap_or_else(|| panic!("no frame-xr line:\n{said}"));
+    let v: serde_json::Value = serde_json::from_str(&line).unwrap();
+    assert_eq!(v["eye_px"], serde_json::json!([320, 240]), "{line}");
+    for key in ["median_pose_age_ms", "median_input_pose_age_ms"] {
+        let age = v[key].as_f64().unwrap_or_else(|| panic!("{key} missing: {line}"));
+        assert!(age.is_finite() && age >= 0.0, "{key} = {age}");
+    }
+    // The poses the glyphs are drawn at are located after the step: never older.
+    assert!(v["median_pose_age_ms"].as_f64() <= v["median_input_pose_age_ms"].as_f64(), "{line}");
 }

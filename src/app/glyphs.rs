@@ -19,6 +19,9 @@
 //! ```text
 //!   palette, seen from above the hand that holds no tool (grip frame: −Z forward, +X right)
 //!
+//!     undo  redo  recentre  save  quit       buttons: BUTTON_AHEAD_M in front of the grip,
+//!      (●)   (●)    (◎)     [■]   [■]         the tool hand pokes one and pulls its trigger
+//!
 //!        shape   action   size bar (its length: the tool's largest extent)
 //!        ( ◇ )    (●)     ══════════►  +X
 //!                  ▲  PALETTE_AHEAD_M in front of the grip, PALETTE_ABOVE_M above it
@@ -26,6 +29,14 @@
 //!                │   │  handle: a slim cylinder along the grip's Z axis
 //!                └───┘
 //! ```
+//!
+//! | button | glyph | what the trigger does on it |
+//! | --- | --- | --- |
+//! | undo | amber ball | undoes the last stroke |
+//! | redo | teal ball | redoes it |
+//! | recentre | blue ring | brings the sculpture back in front of the head, at scale 1 |
+//! | save | green cube | saves the sculpt |
+//! | quit | red cube | saves the sculpt and ends the headset session |
 //!
 //! [`XrSculptor`]: super::XrSculptor
 
@@ -57,6 +68,93 @@ pub const PALETTE_BAR_RADIUS_M: f32 = 0.0025;
 pub const PALETTE_BAR_RANGE_M: (f32, f32) = (0.004, 0.15);
 /// The colour and opacity of the palette's shape and size items.
 pub const PALETTE_COLOUR: Vec4 = Vec4::new(0.85, 0.85, 0.82, 0.8);
+
+/// How far in front of the grip (along its −Z) the row of buttons is, room metres.
+pub const BUTTON_AHEAD_M: f32 = 0.125;
+/// Distance between two buttons along the grip's X axis, room metres.
+pub const BUTTON_STEP_M: f32 = 0.035;
+/// A button's radius as drawn, room metres.
+pub const BUTTON_RADIUS_M: f32 = 0.01;
+/// How near a button the tool hand's grip must be to point at it, room metres.
+pub const BUTTON_REACH_M: f32 = 0.02;
+
+/// A button of the headset's palette.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Button {
+    /// Undo the last stroke.
+    Undo,
+    /// Redo it.
+    Redo,
+    /// Bring the sculpture back in front of the head.
+    Recentre,
+    /// Save the sculpt.
+    Save,
+    /// Save and end the headset session.
+    Quit,
+}
+
+impl Button {
+    /// The buttons in their row, from the grip's −X to its +X.
+    pub const ALL: [Button; 5] = [Button::Undo, Button::Redo, Button::Recentre, Button::Save, Button::Quit];
+
+    /// What the button is called.
+    pub fn name(self) -> &'static str {
+        match self {
+            Button::Undo => "undo",
+            Button::Redo => "redo",
+            Button::Recentre => "recentre",
+            Button::Save => "save",
+            Button::Quit => "quit",
+        }
+    }
+
+    /// The button's centre in the room for the palette of the hand at `grip`.
+    pub fn centre(self, grip: Pose) -> Vec3 {
+        let i = Button::ALL.iter().position(|b| *b == self).unwrap_or(0) as f32;
+        let x = (i - 2.0) * BUTTON_STEP_M;
+        grip.position_m + grip.rotation * Vec3::new(x, PALETTE_ABOVE_M, -BUTTON_AHEAD_M)
+    }
+
+    /// The button the point `p` (room) is on, for the palette of the hand at `grip`.
+    pub fn at(grip: Pose, p: Vec3) -> Option<Button> {
+        Button::ALL
+            .into_iter()
+            .map(|b| (b, b.centre(grip).distance(p)))
+            .filter(|(_, d)| *d <= BUTTON_REACH_M)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(b, _)| b)
+    }
+
+    /// The button's glyph for the palette of the hand at `grip`; the button pointed at is
+    /// drawn larger and opaque.
+    pub fn glyph(self, grip: Pose, pointed: bool) -> ToolGlyph {
+        let (shape, rgb) = match self {
+            Button::Undo => (GlyphShape::Sphere, [0.95, 0.65, 0.2]),
+            Button::Redo => (GlyphShape::Sphere, [0.2, 0.8, 0.7]),
+            Button::Recentre => (GlyphShape::Torus { tube: 0.35 }, [0.3, 0.5, 1.0]),
+            Button::Save => (GlyphShape::Box, [0.3, 0.85, 0.35]),
+            Button::Quit => (GlyphShape::Box, [0.9, 0.2, 0.2]),
+        };
+        let (size, opacity) = if pointed { (1.3 * BUTTON_RADIUS_M, 1.0) } else { (BUTTON_RADIUS_M, 0.75) };
+        // The ring faces the viewer: its axis along the grip's Z.
+        let turn = match shape {
+            GlyphShape::Torus { .. } => Mat4::from_rotation_x(FRAC_PI_2),
+            _ => Mat4::IDENTITY,
+        };
+        let at = Pose { position_m: self.centre(grip), rotation: grip.rotation };
+        let half = if shape == GlyphShape::Box { 0.8 * size } else { size };
+        ToolGlyph {
+            shape,
+            model: at.to_matrix() * turn * Mat4::from_scale(Vec3::splat(half)),
+            colour: Vec3::from(rgb).extend(opacity),
+        }
+    }
+}
+
+/// The palette's buttons for the hand at `grip`, `pointed` drawn as pointed at.
+pub fn buttons(grip: Pose, pointed: Option<Button>) -> [ToolGlyph; 5] {
+    Button::ALL.map(|b| b.glyph(grip, pointed == Some(b)))
+}
 
 /// The glyph of a tool of `shape` scaled by `scale` along its local axes at `pose` (see the
 /// module's table), in `colour`.
@@ -160,6 +258,28 @@ mod tests {
     /// Where the glyph takes a local point of its unit shape.
     fn local(g: &ToolGlyph, p: Vec3) -> Vec3 {
         g.model.transform_point3(p)
+    }
+
+    #[test]
+    fn each_button_is_found_where_it_is_drawn_and_only_there() {
+        let grip = at(0.3);
+        for b in Button::ALL {
+            let g = b.glyph(grip, false);
+            let centre = g.model.w_axis.truncate();
+            assert!(centre.distance(b.centre(grip)) < 1e-6, "{}", b.name());
+            assert_eq!(Button::at(grip, centre), Some(b));
+            let beside = centre + grip.rotation * Vec3::new(0.0, BUTTON_REACH_M + 1e-3, 0.0);
+            assert_eq!(Button::at(grip, beside), None, "{} reaches too far", b.name());
+            // In front of the palette's first row, clear of the size bar.
+            let local = grip.rotation.inverse() * (centre - grip.position_m);
+            assert!(local.z < -PALETTE_AHEAD_M - 2.0 * BUTTON_REACH_M, "{local}");
+        }
+        let pointed = buttons(grip, Some(Button::Save));
+        assert_eq!(pointed[3].colour.w, 1.0);
+        assert!(pointed.iter().filter(|g| g.colour.w < 1.0).count() == 4);
+        // Between two buttons, the nearer one is pointed at.
+        let between = Button::Undo.centre(grip).lerp(Button::Redo.centre(grip), 0.4);
+        assert_eq!(Button::at(grip, between), Some(Button::Undo));
     }
 
     #[test]

@@ -14,6 +14,7 @@ mod frame;
 mod glyphs;
 mod playback;
 mod sculpt;
+pub mod signals;
 mod station;
 mod xr_station;
 
@@ -39,7 +40,10 @@ pub use station::{
     no_display_reason, run_station, InputScript, ScriptEvent, Station, StationOptions, StationReport,
     StepTimes, SCRIPTED_STEP_S,
 };
-pub use xr_station::{run_xr, xr_absent, XrReport, XrRunOptions, XrSculptor, CONTACT_NS, TOUCH_PULSE};
+pub use xr_station::{
+    run_xr, xr_absent, XrReport, XrRunOptions, XrSculptor, BUTTON_PULSE, CONTACT_NS, TOUCH_PULSE,
+    WAIT_FOR_RUNTIME_S,
+};
 
 use crate::field::HistoryConfig;
 

@@ -1483,7 +1483,11 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
     }
     let mut saved = app.station.saved.clone();
     let stats = app.station.playback.field().history_stats();
-    if options.frames.is_none() && stats.undo_in_memory + stats.undo_on_disk > 0 && saved.is_none() {
+    // Quitting saves unsaved strokes, and so does a stopping signal, scripted run or not.
+    let quitting = options.frames.is_none() || super::signals::received().is_some();
+    // Strokes made after a save are saved again.
+    let changed = stats.undo_in_memory + stats.undo_on_disk > 0 && saved.is_none();
+    if quitting && (changed || app.station.unsaved_strokes > 0) {
         saved = Some(app.station.save()?);
     }
     // The sculpt is safe (saved when it changed): the session closes cleanly, so nothing is
@@ -1656,7 +1660,9 @@ impl WindowApp<'_, '_> {
         if want_shot && self.screenshot.is_none() && self.frames > index {
             bail!("the window's swapchain cannot be read back, so no screenshot was taken");
         }
-        Ok(self.station.wants_quit() || self.options.frames.is_some_and(|n| self.frames >= n))
+        Ok(self.station.wants_quit()
+            || super::signals::received().is_some()
+            || self.options.frames.is_some_and(|n| self.frames >= n))
     }
 
     fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {

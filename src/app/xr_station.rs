@@ -16,14 +16,17 @@
 //! - right thumbstick up/down: tool size; left/right flick: next shape; click: next action;
 //! - A / B (X / Y on the left hand): undo / redo;
 //! - left squeeze: grab the sculpture; both squeezes: turn, move and scale it;
-//! - left menu: recentre the sculpture in front of the head.
+//! - left menu: recentre the sculpture in front of the head;
+//! - the palette's buttons (undo, redo, recentre, save, quit), in front of the left
+//!   controller: touch one with the right controller and pull the trigger. Every profile
+//!   has a trigger, so each of these is reachable on every controller.
 
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
 use super::frame::build_frame;
-use super::glyphs::{action_colour, controller_glyph, palette, tool_glyph};
+use super::glyphs::{action_colour, buttons, controller_glyph, palette, tool_glyph, Button};
 use super::playback::Playback;
 use super::station::{action_cycle, shape_cycle, shape_name};
 use crate::field::{Field, FieldReader};
@@ -35,8 +38,8 @@ use crate::render::{Frame, ToolGlyph};
 use crate::scene::{Hand, HandState as PlaybackHand, Scene};
 use crate::tool::{Action, Stroke, Tool, ToolShape, HAND_SIZE_SAMPLES};
 use crate::xr::{
-    one_hand_grab, recentred, two_hand_grab, FrameInput, FrameOutput, HandState, Haptic, Placement, Turn,
-    XrError, XrOptions, XrStation,
+    one_hand_grab, recentred, two_hand_grab, FrameInput, FrameOutput, HandState, Haptic, Held, Placement,
+    Turn, XrError, XrOptions, XrStation,
 };
 
 /// Trigger travel below which the tool is not applied.
@@ -55,9 +58,14 @@ pub const CONTACT_NS: i64 = 30_000_000;
 const CONTACT_REACH: f32 = 1.3;
 /// Density under the tool from which it touches the clay.
 const TOUCH_DENSITY: f32 = 0.5;
+/// The tick when the tool comes onto a palette button.
+pub const BUTTON_PULSE: (f32, i64) = (0.3, 10_000_000);
+
+/// How long a headset run waits for a runtime that went away to come back by default, seconds.
+pub const WAIT_FOR_RUNTIME_S: f64 = 30.0;
 
 /// How a headset run goes.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct XrRunOptions {
     /// The session's options (validation, samples, loader).
     pub session: XrOptions,
@@ -71,10 +79,27 @@ pub struct XrRunOptions {
     pub scene_toml: Option<String>,
     /// The dominant hand is the left one.
     pub left_handed: bool,
+    /// How long to wait for a runtime that went away to come back, seconds.
+    pub wait_for_runtime_s: f64,
     /// The tool edits the finest level whatever its size (by default one spanning more than
     /// [`HAND_SIZE_SAMPLES`] voxels edits the level its size chooses, unless its scene tool
     /// says which).
     pub edit_finest: bool,
+}
+
+impl Default for XrRunOptions {
+    fn default() -> Self {
+        Self {
+            session: XrOptions::default(),
+            frames: None,
+            save_to: None,
+            autosave: None,
+            scene_toml: None,
+            left_handed: false,
+            wait_for_runtime_s: WAIT_FOR_RUNTIME_S,
+            edit_finest: false,
+        }
+    }
 }
 
 /// What a headset run did.
@@ -82,16 +107,25 @@ pub struct XrRunOptions {
 pub struct XrReport {
     /// The runtime's name and version.
     pub runtime: String,
+    /// The size of each eye's image, pixels, as the runtime chose it.
+    pub eye_px: (u32, u32),
     /// Frames drawn.
     pub frames: u64,
     /// Sessions lost and made again.
     pub recreated: u32,
+    /// Times the runtime went away (instance loss).
+    pub instance_losses: u32,
+    /// The runtime went away and did not come back in time: the caller goes on at the desk.
+    pub runtime_gone: bool,
     /// Where the sculpt was saved, if it was.
     pub saved: Option<PathBuf>,
     /// Whether depth was submitted with the projection layer.
     pub depth: bool,
     /// Per drawn frame: (before the step, simulation, meshing, render submission), ms.
     pub stage_ms: Vec<[f64; 4]>,
+    /// Per drawn frame, at `xrEndFrame`: the age of the controller poses the glyphs were
+    /// drawn at, and of those the step acted on, ms.
+    pub pose_age_ms: Vec<[f64; 2]>,
 }
 
 /// A grab of the sculpture in progress: the placement and the hands when it began.
@@ -132,6 +166,10 @@ pub struct XrSculptor<'s> {
     scene_toml: Option<String>,
     /// Time spent in the last step: tools and simulation, meshing (ms).
     times: (f64, f64),
+    /// The palette button the tool hand points at.
+    pointed: Option<Button>,
+    /// The quit button was pressed.
+    quit: bool,
     /// Messages for the user.
     pub messages: Vec<String>,
     /// Re-meshes what each frame's edits dirtied, reusing its buffers from frame to frame.
@@ -167,6 +205,8 @@ impl<'s> XrSculptor<'s> {
             saved: None,
             scene_toml: None,
             times: (0.0, 0.0),
+            pointed: None,
+            quit: false,
             messages: Vec::new(),
             mesher: Mesher::default(),
         }
@@ -199,12 +239,19 @@ impl<'s> XrSculptor<'s> {
         &self.tool
     }
 
+    /// Whether the palette's quit button was pressed: the caller ends the session.
+    pub fn wants_quit(&self) -> bool {
+        self.quit
+    }
+
+    /// The palette button the tool hand points at, if any.
+    pub fn pointed(&self) -> Option<Button> {
+        self.pointed
+    }
+
     /// Writes the sculpt to the save path, atomically, first closing a stroke in progress.
     pub fn save(&mut self) -> Result<PathBuf> {
-        if self.stroke.take().is_some() {
-            self.playback.field_mut().end_stroke();
-            self.playback.journal();
-        }
+        self.end_stroke();
         let path = self.save_to.clone();
         super::sculpt::save_playback(&self.playback, self.scene_toml.as_deref(), None, &path)?;
         self.saved = Some(path.clone());
@@ -228,25 +275,69 @@ impl<'s> XrSculptor<'s> {
         tool
     }
 
+    fn undo(&mut self) {
+        self.end_stroke();
+        match self.playback.field_mut().undo() {
+            Ok(true) => self.playback.journal(),
+            Ok(false) => self.messages.push("nothing to undo".into()),
+            Err(e) => self.messages.push(format!("undo failed: {e}")),
+        }
+    }
+
+    fn redo(&mut self) {
+        self.end_stroke();
+        if self.playback.field_mut().redo() {
+            self.playback.journal();
+        } else {
+            self.messages.push("nothing to redo".into());
+        }
+    }
+
+    /// Closes the stroke in progress, journaling it.
+    fn end_stroke(&mut self) {
+        if self.stroke.take().is_some() {
+            self.playback.field_mut().end_stroke();
+            self.playback.journal();
+        }
+    }
+
+    /// The palette's buttons: the dominant hand's grip on one of them points at it (a tick on
+    /// arrival), and its trigger pressed there presses it. Returns whether the tool hand is on
+    /// the palette (it does not sculpt there).
+    fn palette_buttons(&mut self, input: &FrameInput, haptics: &mut Vec<Haptic>) -> bool {
+        let (d, o) = (self.dominant, 1 - self.dominant);
+        let pointed = match (input.hands[d].grip, input.hands[o].grip) {
+            (Some(tool), Some(palette)) => Button::at(palette, tool.position_m),
+            _ => None,
+        };
+        if pointed.is_some() && pointed != self.pointed {
+            let hand = if d == 0 { Hand::Left } else { Hand::Right };
+            haptics.push(Haptic { hand, amplitude: BUTTON_PULSE.0, duration_ns: BUTTON_PULSE.1 });
+        }
+        self.pointed = pointed;
+        let pressed = input.hands[d].trigger >= TRIGGER_ON && self.previous[d].trigger < TRIGGER_ON;
+        match pointed.filter(|_| pressed) {
+            Some(Button::Undo) => self.undo(),
+            Some(Button::Redo) => self.redo(),
+            Some(Button::Recentre) => self.placement = recentred(self.scene.rig.target_m, input.head),
+            Some(Button::Save) => match self.save() {
+                Ok(p) => self.messages.push(format!("saved the sculpt to {}", p.display())),
+                Err(e) => self.messages.push(format!("cannot save the sculpt: {e:#}")),
+            },
+            Some(Button::Quit) => self.quit = true,
+            None => {}
+        }
+        pointed.is_some()
+    }
+
     /// Buttons and thumbstick of the dominant hand; menu of the other.
     fn controls(&mut self, input: &FrameInput, dt_s: f32) {
         let (d, o) = (self.dominant, 1 - self.dominant);
         let (now, before) = (input.hands[d], self.previous[d]);
-        let field = self.playback.field_mut();
         if now.primary && !before.primary {
-            self.stroke = None;
-            match field.undo() {
-                Ok(true) => self.playback.journal(),
-                Ok(false) => self.messages.push("nothing to undo".into()),
-                Err(e) => self.messages.push(format!("undo failed: {e}")),
-            }
+            self.undo();
         } else if now.secondary && !before.secondary {
-            self.stroke = None;
-            if field.redo() {
-                self.playback.journal();
-            } else {
-                self.messages.push("nothing to redo".into());
-            }
+            self.redo();
         }
         let y = now.thumbstick.y;
         if y.abs() > 0.2 {
@@ -306,11 +397,14 @@ impl<'s> XrSculptor<'s> {
     pub fn step(&mut self, input: &FrameInput, mut apply: impl FnMut(&MeshDiff)) -> FrameOutput {
         let started = std::time::Instant::now();
         let dt_s = input.period_s.clamp(1e-4, 0.1);
+        let mut haptics = Vec::new();
+        let on_palette = self.palette_buttons(input, &mut haptics);
         self.controls(input, dt_s);
         self.grabs(&input.hands);
         let hand = input.hands[self.dominant];
         let tool_pose = hand.grip.map(|g| self.placement.pose_to_world(g));
-        let applying = hand.trigger >= TRIGGER_ON && tool_pose.is_some() && self.grab.is_none();
+        let applying =
+            hand.trigger >= TRIGGER_ON && tool_pose.is_some() && self.grab.is_none() && !on_palette;
         // The virtual clay: the dominant hand's push tool and the other hand's support act
         // through the playback, as the scene's scripted hands do.
         let pushing_tool = self.tool_index.filter(|_| self.tool.action == Action::Push);
@@ -330,7 +424,6 @@ impl<'s> XrSculptor<'s> {
         // The playback draws with the push tool; the stroke below is for the other actions.
         let applying_stroke = applying && pushing_tool.is_none();
         let tool = self.acting_tool(hand.trigger.clamp(0.0, 1.0));
-        let mut haptics = Vec::new();
         let side = if self.dominant == 0 { Hand::Left } else { Hand::Right };
         if let Some(pose) = tool_pose {
             let density = contact_density(self.playback.field(), pose, tool.half_extents_m());
@@ -377,9 +470,9 @@ impl<'s> XrSculptor<'s> {
             apply(diff);
         }
         self.times = (tools_ms, meshing.elapsed().as_secs_f64() * 1e3);
-        let frame = self.frame(&input.hands, tool_pose.map(|pose| (pose, applying)), &tool);
+        let (frame, held) = self.frame(&input.hands, tool_pose.map(|pose| (pose, applying)), &tool);
         self.previous = input.hands;
-        FrameOutput { frame, placement: self.placement, haptics }
+        FrameOutput { frame, placement: self.placement, haptics, held }
     }
 }
 
@@ -389,10 +482,20 @@ impl XrSculptor<'_> {
     /// the scene's push tool, which acts through the playback) in its action's colour; the
     /// support where the other hand holds or put it; and, room-sized, each tracked controller's
     /// handle and the palette of the current tool beside the other hand.
-    fn frame(&self, hands: &[HandState; 2], dominant: Option<(Pose, bool)>, acting: &Tool) -> Frame {
+    ///
+    /// Also returns the glyphs each hand holds (its controller, palette and tool), which the
+    /// session draws where that hand is located last.
+    fn frame(
+        &self,
+        hands: &[HandState; 2],
+        dominant: Option<(Pose, bool)>,
+        acting: &Tool,
+    ) -> (Frame, [Vec<Held>; 2]) {
         let mut frame = build_frame(self.scene, &[], true);
+        let mut held: [Vec<Held>; 2] = Default::default();
         let tools = self.playback.tools();
         if let Some((pose, applying)) = dominant {
+            held[self.dominant].push(Held::Tool(frame.tools.len()));
             let tool = match self.tool_index.filter(|_| self.tool.action == Action::Push) {
                 Some(i) => &tools[i],
                 None => acting,
@@ -410,12 +513,15 @@ impl XrSculptor<'_> {
         let in_scene = |g: ToolGlyph| ToolGlyph { model: room_to_scene * g.model, ..g };
         for (i, hand) in hands.iter().enumerate() {
             let Some(grip) = hand.grip else { continue };
+            let first = frame.controllers.len();
             frame.controllers.push(in_scene(controller_glyph(grip)));
             if i != self.dominant {
                 frame.controllers.extend(palette(grip, &self.tool).map(in_scene));
+                frame.controllers.extend(buttons(grip, self.pointed).map(in_scene));
             }
+            held[i].extend((first..frame.controllers.len()).map(Held::Controller));
         }
-        frame
+        (frame, held)
     }
 }
 
@@ -433,10 +539,20 @@ pub fn contact_density(field: &crate::field::Field, pose: Pose, half_m: Vec3) ->
         .fold(0.0, f32::max)
 }
 
-/// Runs the station in the headset on `scene` until the runtime ends the session (or the
-/// frame count of `options` is reached). Fails with an [`XrError`] that
-/// [`XrError::is_absent`] when there is no loader, runtime, Vulkan support or headset: the
-/// caller then falls back to the desktop stereo modes.
+/// Runs the station in the headset on `scene` until the runtime ends the session, the
+/// palette's quit button or a stopping signal (SIGINT, SIGTERM, SIGHUP) ends it, or the frame
+/// count of `options` is reached. The sculpt is then saved and the autosave session closed.
+///
+/// When the runtime goes away (the instance is lost, with its loss-pending event or with a
+/// call answering `XR_ERROR_INSTANCE_LOST`), the sculpt is saved at once and Argile waits up
+/// to [`XrRunOptions::wait_for_runtime_s`] for the runtime to come back, as the specification
+/// allows after an instance loss; a new session then goes on with the same sculpt, undo
+/// history and journal. If it does not come back, [`XrReport::runtime_gone`] says so and the
+/// caller goes on at the desktop station with the saved sculpt.
+///
+/// Fails with an [`XrError`] that [`XrError::is_absent`] when there is no loader, runtime,
+/// Vulkan support or headset at the start: the caller then falls back to the desktop stereo
+/// modes.
 pub fn run_xr(
     scene: &Scene,
     opened: Option<Sculpt>,
@@ -444,8 +560,8 @@ pub fn run_xr(
     options: &XrRunOptions,
 ) -> Result<XrReport> {
     let environment = super::environment::load_environment(&scene.environment.choice)?;
-    let mut station = XrStation::start(&options.session, &environment, scene.environment.intensity)?;
-    let validation = station.renderer().validation_log();
+    let intensity = scene.environment.intensity;
+    let first = XrStation::start(&options.session, &environment, intensity)?;
     let save_to = options.save_to.clone().unwrap_or_else(|| PathBuf::from(format!("{scene_name}.argile")));
     let source = scene.source.clone();
     let start = |field: &mut Field, tools: &[crate::io::StoredTool]| {
@@ -461,17 +577,40 @@ pub fn run_xr(
     sculptor.set_scene_toml(options.scene_toml.clone());
     sculptor.set_hand_samples((!options.edit_finest).then_some(HAND_SIZE_SAMPLES));
     let mut report = XrReport {
-        runtime: station.runtime().to_owned(),
+        runtime: first.runtime().to_owned(),
+        eye_px: first.eye_size(),
         frames: 0,
         recreated: 0,
+        instance_losses: 0,
+        runtime_gone: false,
         saved: None,
-        depth: station.submits_depth(),
+        depth: first.submits_depth(),
         stage_ms: Vec::new(),
+        pose_age_ms: Vec::new(),
     };
+    let mut validation = first.renderer().validation_log();
+    let mut problems = Vec::new();
+    let mut station = Some(first);
     let mut exit_asked = false;
-    loop {
+    let outcome: Result<()> = loop {
+        let Some(live) = station.as_mut() else { break Ok(()) };
+        // A stopping signal or the palette's quit button ends the session as the runtime's
+        // own exit does: it walks down to EXITING, then the sculpt is saved below.
+        let signalled = super::signals::received();
+        if !exit_asked && (signalled.is_some() || sculptor.wants_quit()) {
+            exit_asked = true;
+            if let Some(signal) = signalled {
+                println!(
+                    "{} received: saving the sculpt and ending the headset session",
+                    super::signals::name(signal)
+                );
+            }
+            if let Err(e) = live.request_exit() {
+                break Err(e.into());
+            }
+        }
         let mut upload = Ok(());
-        let turn = station.turn(|input, renderer| {
+        let turn = live.turn(|input, renderer| {
             sculptor.step(input, |diff| {
                 if upload.is_ok() {
                     upload = renderer.apply(diff);
@@ -480,42 +619,95 @@ pub fn run_xr(
         });
         let turn = match turn.and_then(|t| upload.map(|()| t).map_err(XrError::from)) {
             Ok(t) => t,
-            Err(e) => {
-                // No sculpt is lost to a failing runtime or renderer: save, then report.
-                let saved = sculptor.save();
-                let e = anyhow::Error::new(e);
-                return Err(match saved {
-                    Ok(p) => e.context(format!(
-                        "the headset session failed (the sculpt is saved in {})",
-                        p.display()
-                    )),
-                    Err(s) => e.context(format!("the headset session failed, and saving failed too: {s:#}")),
-                });
-            }
+            Err(e) => break Err(e.into()),
         };
         match turn {
             Turn::Waiting => std::thread::sleep(std::time::Duration::from_millis(5)),
             Turn::Skipped => {}
             Turn::Drawn => {
                 report.frames += 1;
-                let t = station.times();
+                let t = live.times();
                 report.stage_ms.push([t.before_ms, sculptor.times.0, sculptor.times.1, t.submit_ms]);
-                report.depth = station.submits_depth();
+                report.pose_age_ms.push([t.pose_age_ms, t.input_pose_age_ms]);
+                report.depth = live.submits_depth();
                 if options.frames.is_some_and(|n| report.frames >= n) && !exit_asked {
                     exit_asked = true;
-                    station.request_exit()?;
+                    if let Err(e) = live.request_exit() {
+                        break Err(e.into());
+                    }
                 }
             }
             Turn::Recreated => {
                 report.recreated += 1;
-                report.saved =
-                    Some(sculptor.save().context("cannot save the sculpt after the session was lost")?);
+                match sculptor.save() {
+                    Ok(p) => report.saved = Some(p),
+                    Err(e) => break Err(e.context("cannot save the sculpt after the session was lost")),
+                }
                 sculptor
                     .messages
                     .push("the headset session was lost and made again; the sculpt is saved".into());
             }
-            Turn::Finished => break,
+            Turn::Finished => break Ok(()),
+            Turn::InstanceLost => {
+                report.instance_losses += 1;
+                let saved = match sculptor.save() {
+                    Ok(p) => p,
+                    Err(e) => {
+                        break Err(e.context("the OpenXR runtime went away and the sculpt cannot be saved"))
+                    }
+                };
+                report.saved = Some(saved.clone());
+                // The lost instance's renderer goes; what the validation layer said of it stays.
+                station = None;
+                problems.extend(validation.take());
+                if exit_asked {
+                    break Ok(());
+                }
+                let wait = options.wait_for_runtime_s;
+                println!(
+                    "The OpenXR runtime went away; the sculpt is saved in {}. Waiting up to {wait} s for it to come back.",
+                    saved.display()
+                );
+                match wait_for_runtime(options, &environment, intensity, wait) {
+                    Ok(mut back) => {
+                        println!(
+                            "The OpenXR runtime {} is back: a new headset session goes on with the sculpt.",
+                            back.runtime()
+                        );
+                        validation = back.renderer().validation_log();
+                        let diff = sculptor.mesher.mesh_all(sculptor.playback.field());
+                        if let Err(e) = back.renderer_mut().apply(diff) {
+                            break Err(
+                                anyhow::Error::new(e).context("cannot draw the sculpt in the new session")
+                            );
+                        }
+                        report.runtime = back.runtime().to_owned();
+                        report.eye_px = back.eye_size();
+                        station = Some(back);
+                    }
+                    Err(why) => {
+                        println!("The OpenXR runtime did not come back within {wait} s ({why}).");
+                        report.runtime_gone = true;
+                    }
+                }
+            }
         }
+    };
+    if let Err(e) = outcome {
+        // No sculpt is lost to a failing runtime or renderer: save, then report. The autosave
+        // session is closed only once the sculpt is safe; otherwise the next start recovers it.
+        drop(station);
+        return Err(match sculptor.save() {
+            Ok(p) => {
+                if let Some(session) = sculptor.playback.finish_autosave() {
+                    session.close()?;
+                }
+                e.context(format!("the headset session failed (the sculpt is saved in {})", p.display()))
+            }
+            Err(s) => e.context(format!(
+                "the headset session failed, and saving failed too: {s:#} (the autosave journal keeps the strokes: `argile recover`)"
+            )),
+        });
     }
     for m in sculptor.messages.drain(..) {
         tracing::info!("{m}");
@@ -527,15 +719,64 @@ pub fn run_xr(
     // OpenXR and then Vulkan go (XrStation's drop order) before the report is returned, so
     // what the validation layer says of the teardown is read too.
     drop(station);
-    let messages = validation.take();
-    if !messages.is_empty() {
+    problems.extend(validation.take());
+    if !problems.is_empty() {
         anyhow::bail!(
             "the Vulkan validation layer reported {} problem(s):\n{}",
-            messages.len(),
-            messages.join("\n")
+            problems.len(),
+            problems.join("\n")
         );
     }
+    if options.frames.is_some() && !report.stage_ms.is_empty() {
+        println!("{}", report.stage_summary());
+    }
     Ok(report)
+}
+
+/// Tries to start a headset session every quarter second for `wait_s` seconds; returns the
+/// station, or why the last try failed. A stopping signal ends the wait.
+fn wait_for_runtime(
+    options: &XrRunOptions,
+    environment: &crate::render::Environment,
+    intensity: f32,
+    wait_s: f64,
+) -> Result<XrStation, String> {
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs_f64(wait_s.max(0.0));
+    loop {
+        let why = match XrStation::start(&options.session, environment, intensity) {
+            Ok(station) => return Ok(station),
+            Err(e) => e.to_string(),
+        };
+        if let Some(signal) = super::signals::received() {
+            return Err(format!("{} received", super::signals::name(signal)));
+        }
+        if std::time::Instant::now() >= deadline {
+            return Err(why);
+        }
+        std::thread::sleep(std::time::Duration::from_millis(250));
+    }
+}
+
+impl XrReport {
+    /// The medians of the frame's stages and of the poses' ages, one line.
+    pub fn stage_summary(&self) -> String {
+        let median = |v: Vec<f64>| super::bench::median(v);
+        let stage = |i: usize| median(self.stage_ms.iter().map(|s| s[i]).collect());
+        let age = |i: usize| median(self.pose_age_ms.iter().map(|s| s[i]).collect());
+        format!(
+            "frame stages, median ms over {} frames ({}×{} per eye): frame start {:.3}, tools {:.3}, mesh {:.3}, \
+             render submission {:.2}; controller poses drawn {:.2} ms old at submission (the step's {:.2} ms)",
+            self.stage_ms.len(),
+            self.eye_px.0,
+            self.eye_px.1,
+            stage(0),
+            stage(1),
+            stage(2),
+            stage(3),
+            age(0),
+            age(1),
+        )
+    }
 }
 
 /// Whether `e` says there is no headset here (no loader, runtime, Vulkan support or headset).
@@ -603,12 +844,14 @@ pub(super) fn bench_frame_xr(
     };
     let report = run_xr(&scene, None, "bench", &options)?;
     let timed = &report.stage_ms[2.min(report.stage_ms.len())..];
+    let timed_ages = &report.pose_age_ms[2.min(report.pose_age_ms.len())..];
     let median_of = |i: usize| super::bench::median(timed.iter().map(|s| s[i]).collect());
     let total = super::bench::median(timed.iter().map(|s| s.iter().sum()).collect());
     emit(serde_json::json!({
         "workload": "frame-xr",
         "runtime": report.runtime,
-        "eye_px": [eye_px, eye_px],
+        "eye_px": [report.eye_px.0, report.eye_px.1],
+        "eye_px_asked": [eye_px, eye_px],
         "frames": timed.len(),
         "depth": report.depth,
         "median_frame_start_ms": median_of(0),
@@ -616,6 +859,8 @@ pub(super) fn bench_frame_xr(
         "median_meshing_ms": median_of(2),
         "median_render_submission_ms": median_of(3),
         "median_frame_ms": total,
+        "median_pose_age_ms": super::bench::median(timed_ages.iter().map(|a| a[0]).collect()),
+        "median_input_pose_age_ms": super::bench::median(timed_ages.iter().map(|a| a[1]).collect()),
         "budget_ms_at_90_hz": 1000.0 / 90.0,
     }));
     Ok(())
@@ -683,6 +928,104 @@ mod tests {
     fn density(s: &XrSculptor<'_>, p: Vec3) -> f32 {
         let field = s.field();
         FieldReader::new(field).density_at(field.transform().world_to_index(p))
+    }
+
+    #[test]
+    fn the_palettes_buttons_undo_redo_recentre_save_and_quit_under_the_tool_hands_trigger() {
+        let scene = ball();
+        let dir = std::env::temp_dir().join(format!("argile-palette-buttons-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("palette.argile");
+        let mut s = XrSculptor::new(&scene, Playback::new(&scene), path.clone(), false);
+        let front = Vec3::new(0.0, 0.0, 0.045);
+        // A stroke on the ball's front, the left hand away.
+        let carve = HandState { grip: at(0.0, 1.3, -0.40), trigger: 1.0, ..HandState::default() };
+        frame(&mut s, [HandState::default(), carve]);
+        frame(&mut s, [HandState::default(), HandState { trigger: 0.0, ..carve }]);
+        assert!(density(&s, front) < 0.5, "carved");
+        let palette = Pose { position_m: Vec3::new(-0.1, 1.6, -0.1), rotation: Quat::from_rotation_y(0.3) };
+        let left = HandState { grip: Some(palette), ..HandState::default() };
+        let on = |b: Button, trigger: f32| HandState {
+            grip: Some(Pose { position_m: b.centre(palette), rotation: Quat::IDENTITY }),
+            trigger,
+            ..HandState::default()
+        };
+        let press = |s: &mut XrSculptor<'_>, b: Button| {
+            let out = frame(s, [left, on(b, 0.0)]);
+            assert_eq!(s.pointed(), Some(b));
+            assert!(
+                out.haptics
+                    .iter()
+                    .any(|h| (h.amplitude, h.duration_ns) == BUTTON_PULSE && h.hand == Hand::Right),
+                "a tick on arrival at {}",
+                b.name()
+            );
+            // The pointed button is drawn opaque, the others not.
+            let opaque = out.frame.controllers.iter().filter(|g| g.colour.w == 1.0).count();
+            assert_eq!(opaque, 1, "{}", b.name());
+            let out = frame(s, [left, on(b, 1.0)]);
+            frame(s, [left, on(b, 0.0)]);
+            out
+        };
+        press(&mut s, Button::Undo);
+        assert!(density(&s, front) > 0.5, "undone");
+        press(&mut s, Button::Redo);
+        assert!(density(&s, front) < 0.5, "redone");
+        // Holding the trigger on a button presses it once and sculpts nothing.
+        let before = s.field().history_stats();
+        for _ in 0..5 {
+            frame(&mut s, [left, on(Button::Undo, 1.0)]);
+        }
+        assert!(density(&s, front) > 0.5);
+        frame(&mut s, [left, on(Button::Undo, 0.0)]);
+        assert_ne!(s.field().history_stats(), before, "one undo");
+        press(&mut s, Button::Redo);
+        // Dragged away, the sculpture comes back with the recentre button.
+        let grip = |x: f32, y: f32| HandState { grip: at(x, y, -0.4), squeeze: 1.0, ..HandState::default() };
+        frame(&mut s, [grip(-0.1, 1.3), grip(0.1, 1.3)]);
+        frame(&mut s, [grip(-0.3, 1.5), grip(0.3, 1.5)]);
+        frame(&mut s, [HandState::default(), HandState::default()]);
+        assert!(s.placement().scale > 2.0);
+        press(&mut s, Button::Recentre);
+        assert_eq!(s.placement(), recentred(scene.rig.target_m, None));
+        press(&mut s, Button::Save);
+        let saved = crate::app::load_sculpt(&path).expect("the save button wrote the sculpt");
+        let mut reader = FieldReader::new(&saved.field);
+        assert!(reader.density_at(saved.field.transform().world_to_index(front)) < 0.5, "with the stroke");
+        assert!(!s.wants_quit());
+        press(&mut s, Button::Quit);
+        assert!(s.wants_quit());
+        // A hand away from the palette points at nothing.
+        frame(&mut s, [left, HandState { grip: at(0.3, 1.0, 0.0), ..HandState::default() }]);
+        assert_eq!(s.pointed(), None);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn what_a_hand_holds_is_drawn_where_the_hand_is_located_last() {
+        let scene = ball();
+        let mut s = sculptor(&scene, false);
+        let (l, r) = (at(-0.1, 1.3, -0.2), at(0.1, 1.3, -0.2));
+        let hold = |p: Option<Pose>| HandState { grip: p, ..HandState::default() };
+        let mut out = frame(&mut s, [hold(l), hold(r)]);
+        // The right hand's tool and handle, the left hand's handle, palette and buttons.
+        assert_eq!(out.held[1].len(), 2);
+        assert_eq!(out.held[0].len(), 1 + 3 + Button::ALL.len());
+        let before = out.frame.clone();
+        let moved = Pose { position_m: Vec3::new(0.12, 1.31, -0.2), rotation: Quat::from_rotation_z(0.2) };
+        crate::xr::carry_held(&mut out.frame, &out.held, &out.placement, [l, r], [l, Some(moved)]);
+        let tool = out.frame.tools[0];
+        let centre = s.placement().to_stage(tool.model.w_axis.truncate());
+        assert!((centre - moved.position_m).length() < 1e-5, "the tool follows the late pose: {centre}");
+        // The left hand did not move: its glyphs are where they were.
+        for g in &out.held[0] {
+            let Held::Controller(i) = *g else { panic!("the left hand holds controllers only") };
+            assert_eq!(out.frame.controllers[i], before.controllers[i]);
+        }
+        // A hand lost at the late location keeps its glyphs.
+        let mut again = before.clone();
+        crate::xr::carry_held(&mut again, &out.held, &out.placement, [l, r], [None, None]);
+        assert_eq!(again, before);
     }
 
     #[test]
@@ -841,7 +1184,9 @@ mod tests {
         use super::super::glyphs::HANDLE_COLOUR;
         let (handles, palette): (Vec<ToolGlyph>, Vec<ToolGlyph>) =
             frame.controllers.iter().copied().partition(|g| g.colour == HANDLE_COLOUR);
-        (handles, palette.try_into().ok())
+        // The palette's items, then its five buttons.
+        let items = (palette.len() == 3 + Button::ALL.len()).then(|| [palette[0], palette[1], palette[2]]);
+        (handles, items)
     }
 
     /// The size bar's length, room metres.

@@ -47,13 +47,41 @@ pub struct Haptic {
     pub duration_ns: i64,
 }
 
-/// The interaction profiles Argile suggests bindings for, and for each the input paths (under
-/// `/user/hand/{left,right}`) of: grip pose, aim pose, trigger, squeeze, thumbstick,
-/// thumbstick click, primary (right, left), secondary (right, left), menu.
-pub const PROFILES: [(&str, Bindings); 4] = [
-    (
-        "/interaction_profiles/khr/simple_controller",
-        Bindings {
+/// An interaction profile Argile suggests bindings for: its path, the extension that adds it
+/// (its bindings are suggested only where the runtime offers that extension), and which input
+/// each action reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Profile {
+    /// `/interaction_profiles/...`.
+    pub path: &'static str,
+    /// The extension that adds the profile, `None` for the core ones.
+    pub extension: Option<&'static str>,
+    /// The inputs of Argile's actions.
+    pub bindings: Bindings,
+}
+
+/// Touch-like controllers: A/B on the right, X/Y and menu on the left (the right one's system
+/// button is the runtime's).
+const TOUCH_LIKE: Bindings = Bindings {
+    trigger: Some("input/trigger/value"),
+    squeeze: Some("input/squeeze/value"),
+    thumbstick: Some("input/thumbstick"),
+    thumbstick_click: Some("input/thumbstick/click"),
+    primary: (Some("input/a/click"), Some("input/x/click")),
+    secondary: (Some("input/b/click"), Some("input/y/click")),
+    menu: (None, Some("input/menu/click")),
+};
+
+/// The profiles Argile suggests bindings for, and for each the input paths (under
+/// `/user/hand/{left,right}`) of: trigger, squeeze, thumbstick, thumbstick click, primary
+/// (right, left), secondary (right, left), menu (right, left); poses and haptics are the same
+/// on every profile. The palette's buttons (undo, redo, recentre, save, quit) need only the
+/// trigger, so every action is reachable on every profile.
+pub const PROFILES: [Profile; 8] = [
+    Profile {
+        path: "/interaction_profiles/khr/simple_controller",
+        extension: None,
+        bindings: Bindings {
             trigger: Some("input/select/click"),
             squeeze: None,
             thumbstick: None,
@@ -62,35 +90,23 @@ pub const PROFILES: [(&str, Bindings); 4] = [
             secondary: (None, None),
             menu: (Some("input/menu/click"), Some("input/menu/click")),
         },
-    ),
-    (
-        "/interaction_profiles/oculus/touch_controller",
-        Bindings {
-            trigger: Some("input/trigger/value"),
-            squeeze: Some("input/squeeze/value"),
-            thumbstick: Some("input/thumbstick"),
-            thumbstick_click: Some("input/thumbstick/click"),
-            primary: (Some("input/a/click"), Some("input/x/click")),
-            secondary: (Some("input/b/click"), Some("input/y/click")),
-            // The right controller's menu (system) button is reserved by the runtime.
-            menu: (None, Some("input/menu/click")),
-        },
-    ),
-    (
-        "/interaction_profiles/valve/index_controller",
-        Bindings {
-            trigger: Some("input/trigger/value"),
-            squeeze: Some("input/squeeze/value"),
-            thumbstick: Some("input/thumbstick"),
-            thumbstick_click: Some("input/thumbstick/click"),
+    },
+    Profile { path: "/interaction_profiles/oculus/touch_controller", extension: None, bindings: TOUCH_LIKE },
+    Profile {
+        path: "/interaction_profiles/valve/index_controller",
+        extension: None,
+        bindings: Bindings {
             primary: (Some("input/a/click"), Some("input/a/click")),
             secondary: (Some("input/b/click"), Some("input/b/click")),
-            menu: (None, None),
+            // The system button is the runtime's: a firm press on the trackpad is the menu.
+            menu: (Some("input/trackpad/force"), Some("input/trackpad/force")),
+            ..TOUCH_LIKE
         },
-    ),
-    (
-        "/interaction_profiles/htc/vive_controller",
-        Bindings {
+    },
+    Profile {
+        path: "/interaction_profiles/htc/vive_controller",
+        extension: None,
+        bindings: Bindings {
             trigger: Some("input/trigger/value"),
             squeeze: Some("input/squeeze/click"),
             thumbstick: Some("input/trackpad"),
@@ -99,8 +115,54 @@ pub const PROFILES: [(&str, Bindings); 4] = [
             secondary: (None, None),
             menu: (Some("input/menu/click"), Some("input/menu/click")),
         },
-    ),
+    },
+    Profile {
+        path: "/interaction_profiles/microsoft/motion_controller",
+        extension: None,
+        bindings: Bindings {
+            trigger: Some("input/trigger/value"),
+            squeeze: Some("input/squeeze/click"),
+            thumbstick: Some("input/thumbstick"),
+            thumbstick_click: Some("input/thumbstick/click"),
+            // No face buttons: the trackpad's click undoes (redo is on the palette).
+            primary: (Some("input/trackpad/click"), Some("input/trackpad/click")),
+            secondary: (None, None),
+            menu: (Some("input/menu/click"), Some("input/menu/click")),
+        },
+    },
+    Profile {
+        path: "/interaction_profiles/hp/mixed_reality_controller",
+        extension: Some("XR_EXT_hp_mixed_reality_controller"),
+        bindings: Bindings { menu: (Some("input/menu/click"), Some("input/menu/click")), ..TOUCH_LIKE },
+    },
+    Profile {
+        path: "/interaction_profiles/bytedance/pico4_controller",
+        extension: Some("XR_BD_controller_interaction"),
+        bindings: TOUCH_LIKE,
+    },
+    Profile {
+        path: "/interaction_profiles/meta/touch_controller_plus",
+        extension: Some("XR_META_touch_controller_plus"),
+        bindings: TOUCH_LIKE,
+    },
 ];
+
+/// The extensions of [`PROFILES`] the runtime offers, enabled in `enabled`.
+pub(super) fn enable_profile_extensions(available: &xr::ExtensionSet, enabled: &mut xr::ExtensionSet) {
+    enabled.ext_hp_mixed_reality_controller = available.ext_hp_mixed_reality_controller;
+    enabled.bd_controller_interaction = available.bd_controller_interaction;
+    enabled.meta_touch_controller_plus = available.meta_touch_controller_plus;
+}
+
+/// Whether the extension `name` (one of [`PROFILES`]') is enabled in `enabled`.
+fn profile_extension_enabled(name: &str, enabled: &xr::ExtensionSet) -> bool {
+    match name {
+        "XR_EXT_hp_mixed_reality_controller" => enabled.ext_hp_mixed_reality_controller,
+        "XR_BD_controller_interaction" => enabled.bd_controller_interaction,
+        "XR_META_touch_controller_plus" => enabled.meta_touch_controller_plus,
+        _ => false,
+    }
+}
 
 /// Which input of a profile each action reads (paths under `/user/hand/<side>/`); `None`
 /// where the controller has no such input. Poses and haptics are the same on every profile.
@@ -180,8 +242,13 @@ pub(super) fn pose_of(p: xr::Posef) -> Pose {
 }
 
 impl Hands {
-    /// Creates the action set with its suggested bindings and attaches it to `session`.
-    pub(super) fn new(instance: &xr::Instance, session: &xr::Session<xr::Vulkan>) -> Result<Self, XrError> {
+    /// Creates the action set with its suggested bindings (for the profiles of extensions
+    /// `enabled` holds) and attaches it to `session`.
+    pub(super) fn new(
+        instance: &xr::Instance,
+        session: &xr::Session<xr::Vulkan>,
+        enabled: &xr::ExtensionSet,
+    ) -> Result<Self, XrError> {
         let path = |p: &str| instance.string_to_path(p).map_err(failed("xrStringToPath"));
         let paths = [path("/user/hand/left")?, path("/user/hand/right")?];
         let set =
@@ -201,9 +268,12 @@ impl Hands {
         let secondary: xr::Action<bool> = action!("secondary", "Redo");
         let menu: xr::Action<bool> = action!("menu", "Recentre");
         let haptic: xr::Action<xr::Haptic> = action!("haptic", "Contact");
-        for (profile, bindings) in PROFILES {
+        for profile in PROFILES {
+            if profile.extension.is_some_and(|e| !profile_extension_enabled(e, enabled)) {
+                continue;
+            }
             let mut suggested = Vec::new();
-            for (action, input) in bindings.paths() {
+            for (action, input) in profile.bindings.paths() {
                 let at = path(&input)?;
                 suggested.push(match action {
                     "grip_pose" => xr::Binding::new(&grip_pose, at),
@@ -219,7 +289,7 @@ impl Hands {
                 });
             }
             instance
-                .suggest_interaction_profile_bindings(path(profile)?, &suggested)
+                .suggest_interaction_profile_bindings(path(profile.path)?, &suggested)
                 .map_err(failed("xrSuggestInteractionProfileBindings"))?;
         }
         session.attach_action_sets(&[&set]).map_err(failed("xrAttachSessionActionSets"))?;
@@ -297,6 +367,23 @@ impl Hands {
         Ok(out)
     }
 
+    /// Both grips (`[left, right]`) located in `space` at `time` again, without syncing the
+    /// actions: the runtime's latest prediction of where the hands will be when the frame is
+    /// shown.
+    pub(super) fn locate_grips(
+        &self,
+        space: &xr::Space,
+        time: xr::Time,
+    ) -> Result<[Option<Pose>; 2], XrError> {
+        let mut out = [None, None];
+        for (i, grip) in out.iter_mut().enumerate() {
+            let l = self.spaces[i].0.locate(space, time).map_err(failed("xrLocateSpace"))?;
+            let valid = xr::SpaceLocationFlags::POSITION_VALID | xr::SpaceLocationFlags::ORIENTATION_VALID;
+            *grip = l.location_flags.contains(valid).then(|| pose_of(l.pose));
+        }
+        Ok(out)
+    }
+
     /// Plays `pulse` on its hand.
     pub(super) fn play(&self, session: &xr::Session<xr::Vulkan>, pulse: &Haptic) -> Result<(), XrError> {
         let sub = self.paths[usize::from(pulse.hand == Hand::Right)];
@@ -314,8 +401,18 @@ mod tests {
 
     #[test]
     fn every_profile_binds_both_hands_poses_haptics_and_a_trigger() {
-        for (profile, bindings) in PROFILES {
+        for Profile { path: profile, bindings, extension } in PROFILES {
             let paths = bindings.paths();
+            if let Some(e) = extension {
+                let mut offered = xr::ExtensionSet::default();
+                offered.ext_hp_mixed_reality_controller = true;
+                offered.bd_controller_interaction = true;
+                offered.meta_touch_controller_plus = true;
+                let mut all = xr::ExtensionSet::default();
+                enable_profile_extensions(&offered, &mut all);
+                assert!(profile_extension_enabled(e, &all), "{profile}: {e} is not enabled when offered");
+                assert!(!profile_extension_enabled(e, &xr::ExtensionSet::default()));
+            }
             for side in ["left", "right"] {
                 for needed in ["input/grip/pose", "input/aim/pose", "output/haptic"] {
                     let p = format!("/user/hand/{side}/{needed}");
@@ -340,8 +437,7 @@ mod tests {
 
     #[test]
     fn touch_buttons_follow_the_hand() {
-        let (_, touch) = PROFILES[1];
-        let paths = touch.paths();
+        let paths = PROFILES[1].bindings.paths();
         let find = |action: &str, side: &str| {
             paths
                 .iter()
@@ -355,5 +451,22 @@ mod tests {
         assert_eq!(find("squeeze", "left"), ["/user/hand/left/input/squeeze/value"]);
         assert!(find("menu", "right").is_empty());
         assert_eq!(find("menu", "left"), ["/user/hand/left/input/menu/click"]);
+    }
+
+    #[test]
+    fn every_controller_with_a_menu_button_reaches_the_menu_and_each_profile_is_named_once() {
+        for p in PROFILES {
+            assert_eq!(PROFILES.iter().filter(|q| q.path == p.path).count(), 1, "{}", p.path);
+            let simple = p.path.ends_with("simple_controller");
+            let menu = p.bindings.menu;
+            assert!(menu.0.is_some() || menu.1.is_some(), "{}: no menu binding", p.path);
+            if !simple {
+                assert!(p.bindings.squeeze.is_some() && p.bindings.thumbstick.is_some(), "{}", p.path);
+            }
+        }
+        let index = PROFILES.iter().find(|p| p.path.ends_with("valve/index_controller")).unwrap();
+        assert_eq!(index.bindings.menu.1, Some("input/trackpad/force"));
+        let wmr = PROFILES.iter().find(|p| p.path.ends_with("microsoft/motion_controller")).unwrap();
+        assert_eq!(wmr.bindings.primary.0, Some("input/trackpad/click"), "undo on the trackpad");
     }
 }

@@ -74,6 +74,8 @@ pub struct Lifecycle {
     running: bool,
     /// Argile asked to quit (`xrRequestExitSession`).
     exit_requested: bool,
+    /// The runtime has reported a state since the session was created.
+    reported: bool,
 }
 
 impl Default for Lifecycle {
@@ -85,7 +87,7 @@ impl Default for Lifecycle {
 impl Lifecycle {
     /// A session just created: IDLE, not running.
     pub fn new() -> Self {
-        Self { state: SessionState::Idle, running: false, exit_requested: false }
+        Self { state: SessionState::Idle, running: false, exit_requested: false, reported: false }
     }
 
     /// The state last reported.
@@ -129,8 +131,12 @@ impl Lifecycle {
 
     /// The runtime reports `to`: returns what Argile must do, or why the report breaks the
     /// specification's order (the state is taken all the same: the runtime is the judge).
+    /// A new session is IDLE without an event; the runtime's first event reports it IDLE
+    /// again (the specification's first transition, into IDLE), which is in order.
     pub fn on_state(&mut self, to: SessionState) -> (Command, Option<String>) {
-        let complaint = (!Self::allowed(self.state, to))
+        let first_idle = !self.reported && self.state == SessionState::Idle && to == SessionState::Idle;
+        self.reported = true;
+        let complaint = (!first_idle && !Self::allowed(self.state, to))
             .then(|| format!("the runtime went from {} to {}", self.state.name(), to.name()));
         self.state = to;
         let command = match to {
@@ -179,6 +185,11 @@ mod tests {
     fn a_session_begins_when_ready_runs_and_ends_when_stopping() {
         let mut l = Lifecycle::new();
         assert!(!l.running());
+        // Real runtimes first report the new session IDLE: that is no complaint, a second
+        // IDLE is.
+        assert_eq!(l.on_state(Idle), (Command::Nothing, None));
+        assert_eq!(l.on_state(Idle).1.as_deref(), Some("the runtime went from IDLE to IDLE"));
+        let mut l = Lifecycle::new();
         assert_eq!(l.on_state(Ready), (Command::Begin, None));
         assert!(l.running() && !l.focused());
         for s in [Synchronized, Visible, Focused] {

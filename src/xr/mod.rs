@@ -22,10 +22,10 @@ mod lifecycle;
 mod session;
 mod views;
 
-pub use actions::{Bindings, HandState, Haptic, PROFILES};
+pub use actions::{Bindings, HandState, Haptic, Profile, PROFILES};
 pub use grab::{one_hand_grab, two_hand_grab, Placement, SCALE_RANGE};
 pub use lifecycle::{Command, Lifecycle, SessionState};
-pub use session::{FrameInput, FrameOutput, FrameTimes, Turn, XrOptions, XrStation};
+pub use session::{carry_held, FrameInput, FrameOutput, FrameTimes, Held, Turn, XrOptions, XrStation};
 pub use views::{eye_view, recentred, stereo_views, Fov, XrView, FAR_M, NEAR_M, WORK_POINT_M};
 
 /// The environment variable naming the OpenXR loader library to use instead of the system's.
@@ -69,7 +69,7 @@ pub enum XrError {
         /// The call.
         call: &'static str,
         /// What it returned.
-        result: String,
+        result: openxr::sys::Result,
     },
     /// Rendering failed.
     #[error(transparent)]
@@ -77,6 +77,12 @@ pub enum XrError {
 }
 
 impl XrError {
+    /// Whether a call found the instance lost (`XR_ERROR_INSTANCE_LOST`): the runtime went
+    /// away, with or without the loss-pending event first.
+    pub fn is_instance_lost(&self) -> bool {
+        matches!(self, XrError::Call { result, .. } if *result == openxr::sys::Result::ERROR_INSTANCE_LOST)
+    }
+
     /// Whether this means "no headset here" (no loader, runtime, Vulkan support or headset),
     /// after which the station uses the desktop stereo modes.
     pub fn is_absent(&self) -> bool {

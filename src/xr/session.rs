@@ -58,6 +58,45 @@ pub struct FrameOutput {
     pub placement: Placement,
     /// Pulses to play, per hand.
     pub haptics: Vec<Haptic>,
+    /// The glyphs held by each hand (`[left, right]`), drawn where that hand's grip is
+    /// located again just before the draw (its motion since the step's input carried over).
+    pub held: [Vec<Held>; 2],
+}
+
+/// A glyph of a [`Frame`] that a hand holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Held {
+    /// `frame.tools[i]`.
+    Tool(usize),
+    /// `frame.controllers[i]`.
+    Controller(usize),
+}
+
+/// Moves the glyphs of `frame` that a hand holds by that hand's motion from `read` (the grips
+/// the step used) to `late` (located again), both in the room; `placement` takes the scene
+/// into the room. A hand not tracked at either time keeps its glyphs where they were.
+pub fn carry_held(
+    frame: &mut Frame,
+    held: &[Vec<Held>; 2],
+    placement: &Placement,
+    read: [Option<Pose>; 2],
+    late: [Option<Pose>; 2],
+) {
+    let to_room = placement.matrix();
+    let to_scene = to_room.inverse();
+    for (hand, glyphs) in held.iter().enumerate() {
+        let (Some(from), Some(to)) = (read[hand], late[hand]) else { continue };
+        let motion = to_scene * to.to_matrix() * from.to_matrix().inverse() * to_room;
+        for g in glyphs {
+            let glyph = match *g {
+                Held::Tool(i) => frame.tools.get_mut(i),
+                Held::Controller(i) => frame.controllers.get_mut(i),
+            };
+            if let Some(glyph) = glyph {
+                glyph.model = motion * glyph.model;
+            }
+        }
+    }
 }
 
 /// What one turn of the loop did.
@@ -71,8 +110,12 @@ pub enum Turn {
     Drawn,
     /// The session was lost and a new one made: save the sculpt now.
     Recreated,
-    /// The runtime ended the session for good (exit or instance loss): save and quit.
+    /// The runtime ended the session for good (it asked to quit, or Argile did): save and quit.
     Finished,
+    /// The runtime went away: the instance is lost (announced by its loss-pending event, or
+    /// found by a call answering `XR_ERROR_INSTANCE_LOST`). Every OpenXR handle of it is gone;
+    /// save, then start a new [`XrStation`] when the runtime is back, or go on without it.
+    InstanceLost,
 }
 
 /// Where the time of the last drawn frame went, from `xrWaitFrame` returning to `xrEndFrame`
@@ -85,6 +128,11 @@ pub struct FrameTimes {
     pub step_ms: f64,
     /// Locating views, drawing (waited for), releasing and `xrEndFrame`.
     pub submit_ms: f64,
+    /// The age at `xrEndFrame` of the controller poses the frame's glyphs were drawn at (they
+    /// are located again after the step, just before the draw is recorded), ms.
+    pub pose_age_ms: f64,
+    /// The age at `xrEndFrame` of the poses the step acted on (read before it), ms.
+    pub input_pose_age_ms: f64,
 }
 
 /// The renderer's instance and device, made by the runtime (XR_KHR_vulkan_enable2).
@@ -204,6 +252,8 @@ impl Default for XrOptions {
 /// Field order is drop order after `Drop::drop` has made the renderer forget the swapchain
 /// images: the session's handles, the OpenXR instance, then the renderer (Vulkan) last.
 pub struct XrStation {
+    /// The instance's extensions.
+    enabled: xr::ExtensionSet,
     live: Option<Live>,
     events: xr::EventDataBuffer,
     instance: xr::Instance,
@@ -216,6 +266,8 @@ pub struct XrStation {
     runtime: String,
     /// The runtime asked to quit, or the instance is lost.
     finished: bool,
+    /// The instance is lost.
+    lost: bool,
     times: FrameTimes,
     renderer: Renderer,
 }
@@ -245,7 +297,7 @@ fn state_of(s: xr::SessionState) -> Option<SessionState> {
 
 /// A failing OpenXR call, as an error naming it.
 pub(super) fn failed(call: &'static str) -> impl Fn(xr::sys::Result) -> XrError {
-    move |result| XrError::Call { call, result: result.to_string() }
+    move |result| XrError::Call { call, result }
 }
 
 impl XrStation {
@@ -258,6 +310,7 @@ impl XrStation {
         let mut enabled = xr::ExtensionSet::default();
         enabled.khr_vulkan_enable2 = available.khr_vulkan_enable2;
         enabled.khr_composition_layer_depth = available.khr_composition_layer_depth;
+        super::actions::enable_profile_extensions(&available, &mut enabled);
         let instance = entry
             .create_instance(&super::app_info(), &enabled, &[])
             .map_err(|e| XrError::NoRuntime(e.to_string()))?;
@@ -310,6 +363,7 @@ impl XrStation {
         let mut maker = RuntimeVulkan { instance: &instance, system };
         let renderer = Renderer::for_external(&desc, environment, intensity, &mut maker)?;
         let mut station = Self {
+            enabled,
             live: None,
             events: xr::EventDataBuffer::new(),
             depth_layers: available.khr_composition_layer_depth,
@@ -319,12 +373,18 @@ impl XrStation {
             size,
             runtime,
             finished: false,
+            lost: false,
             times: FrameTimes::default(),
             renderer,
         };
         station.live = Some(station.create_session()?);
         tracing::info!("OpenXR session on {} ({}×{} per eye)", station.runtime, size.0, size.1);
         Ok(station)
+    }
+
+    /// The size of each eye's image, pixels: the runtime's recommendation.
+    pub fn eye_size(&self) -> (u32, u32) {
+        self.size
     }
 
     /// The runtime's name and version.
@@ -383,7 +443,7 @@ impl XrStation {
         let view_space = session
             .create_reference_space(xr::ReferenceSpaceType::VIEW, xr::Posef::IDENTITY)
             .map_err(failed("xrCreateReferenceSpace"))?;
-        let hands = Some(Hands::new(&self.instance, &session)?);
+        let hands = Some(Hands::new(&self.instance, &session, &self.enabled)?);
         let formats = session.enumerate_swapchain_formats().map_err(failed("xrEnumerateSwapchainFormats"))?;
         if !formats.contains(&(COLOUR_FORMAT.as_raw() as u32)) {
             return Err(XrError::Unsupported(format!(
@@ -485,11 +545,12 @@ impl XrStation {
                     (command, Some(state))
                 }
                 xr::Event::InstanceLossPending(_) => {
-                    let command = match self.live.as_mut() {
-                        Some(live) => live.lifecycle.on_instance_loss(),
-                        None => Command::SaveAndQuit,
-                    };
-                    (command, None)
+                    tracing::warn!("OpenXR: the runtime is going away (instance loss pending)");
+                    if let Some(live) = self.live.as_mut() {
+                        live.lifecycle.on_instance_loss();
+                    }
+                    self.lose_instance();
+                    return Ok(Some(Turn::InstanceLost));
                 }
                 xr::Event::EventsLost(e) => {
                     tracing::warn!("OpenXR: the runtime lost {} events", e.lost_event_count());
@@ -524,12 +585,39 @@ impl XrStation {
         }
     }
 
+    /// The instance is lost: the session's handles go (their destruction answers nothing
+    /// useful now) and every later turn says so.
+    fn lose_instance(&mut self) {
+        self.destroy_session();
+        self.finished = true;
+        self.lost = true;
+    }
+
     /// One turn: reads the runtime's events, then, while the session runs, one frame in
-    /// which `step` simulates (given the hands) and returns what to draw.
+    /// which `step` simulates (given the hands) and returns what to draw. A call answering
+    /// `XR_ERROR_INSTANCE_LOST` (a runtime that went away without warning) ends in
+    /// [`Turn::InstanceLost`], as the loss-pending event does.
     pub fn turn(
         &mut self,
         step: impl FnOnce(&FrameInput, &mut Renderer) -> FrameOutput,
     ) -> Result<Turn, XrError> {
+        match self.turn_or_fail(step) {
+            Err(e) if e.is_instance_lost() => {
+                tracing::warn!("OpenXR: the runtime went away ({e})");
+                self.lose_instance();
+                Ok(Turn::InstanceLost)
+            }
+            other => other,
+        }
+    }
+
+    fn turn_or_fail(
+        &mut self,
+        step: impl FnOnce(&FrameInput, &mut Renderer) -> FrameOutput,
+    ) -> Result<Turn, XrError> {
+        if self.lost {
+            return Ok(Turn::InstanceLost);
+        }
         if self.finished {
             return Ok(Turn::Finished);
         }
@@ -564,6 +652,7 @@ impl XrStation {
             Some(h) => h.read(&live.session, &live.space, time, focused)?,
             None => Default::default(),
         };
+        let input_read = Instant::now();
         let head = live
             .view_space
             .locate(&live.space, time)
@@ -588,6 +677,16 @@ impl XrStation {
         let step_ms = stepped.elapsed().as_secs_f64() * 1e3;
         let submitting = Instant::now();
         let live = self.live.as_mut().expect("present above");
+        let mut frame = output.frame;
+        // The hands are located again as late as possible, just before the draw is recorded,
+        // and what they hold is drawn where they are now.
+        let late = match &live.hands {
+            Some(h) if focused => h.locate_grips(&live.space, time)?,
+            _ => [None, None],
+        };
+        let late_located = Instant::now();
+        let read = [hands[0].grip, hands[1].grip];
+        carry_held(&mut frame, &output.held, &output.placement, read, late);
         if let Some(h) = &live.hands {
             for pulse in &output.haptics {
                 h.play(&live.session, pulse)?;
@@ -611,7 +710,6 @@ impl XrStation {
                 down: v.fov.angle_down,
             },
         };
-        let mut frame = output.frame;
         frame.views = stereo_views(&[view_of(l), view_of(r)], &output.placement);
         self.renderer.draw_to_swapchain(&frame, colour_index, depth_index)?;
         live.colour.handle.release_image().map_err(failed("xrReleaseSwapchainImage"))?;
@@ -663,9 +761,17 @@ impl XrStation {
             })
             .collect();
         let layer = xr::CompositionLayerProjection::new().space(&live.space).views(&projection_views);
+        let ending = Instant::now();
         live.stream.end(time, self.blend, &[&layer]).map_err(failed("xrEndFrame"))?;
         live.frames += 1;
-        self.times = FrameTimes { before_ms, step_ms, submit_ms: submitting.elapsed().as_secs_f64() * 1e3 };
+        let age_ms = |since: Instant| (ending - since).as_secs_f64() * 1e3;
+        self.times = FrameTimes {
+            before_ms,
+            step_ms,
+            submit_ms: submitting.elapsed().as_secs_f64() * 1e3,
+            pose_age_ms: age_ms(late_located),
+            input_pose_age_ms: age_ms(input_read),
+        };
         Ok(Turn::Drawn)
     }
 }

@@ -284,6 +284,12 @@ pub(crate) unsafe extern "system" fn suggest_interaction_profile_bindings(
                 format!("interaction profile {profile_path} is not simulated"),
             );
         };
+        if profile.by_extension && !inst.profile_extensions.contains(&profile.path) {
+            return refuse(
+                xr::Result::ERROR_PATH_UNSUPPORTED,
+                format!("interaction profile {profile_path} needs its extension enabled"),
+            );
+        }
         if info.count_suggested_bindings == 0 || info.suggested_bindings.is_null() {
             return refuse(xr::Result::ERROR_VALIDATION_FAILURE, "no suggested bindings");
         }

@@ -73,7 +73,12 @@ pub struct Instance {
     pub vk_devices: Vec<gvk::Device>,
     /// Suggested bindings by interaction profile path: (action, binding path).
     pub suggested: HashMap<&'static str, Vec<(u64, String)>>,
-    /// Frames ended and waited for over the instance's life (the script's timeline).
+    /// Enabled extensions that add interaction profiles.
+    pub profile_extensions: Vec<&'static str>,
+    /// When frame 0 of this instance's pace was waited for (`pace = true`).
+    pub paced_from: Option<(std::time::Instant, u64)>,
+    /// Frames ended and waited for over the instance's life (the script's timeline; an
+    /// instance made after the runtime came back resumes it after the lost frame).
     pub frames_ended: u64,
     pub frames_waited: u64,
     pub events_fired: usize,
@@ -132,6 +137,7 @@ fn is_violation(r: xr::Result) -> bool {
             R::ERROR_LIMIT_REACHED,
             R::ERROR_FEATURE_UNSUPPORTED,
             R::ERROR_INITIALIZATION_FAILED,
+            R::ERROR_RUNTIME_UNAVAILABLE,
         ]
         .contains(&r)
 }
@@ -374,6 +380,8 @@ impl Instance {
             vk_instances: Vec::new(),
             vk_devices: Vec::new(),
             suggested: HashMap::new(),
+            profile_extensions: Vec::new(),
+            paced_from: None,
             frames_ended: 0,
             frames_waited: 0,
             events_fired: 0,
@@ -549,6 +557,21 @@ impl Instance {
         }
     }
 
+    /// The runtime goes away after the frames ended so far: until `back_after_s` has passed
+    /// (never, for `None`) new instances are refused with `XR_ERROR_RUNTIME_UNAVAILABLE`; then
+    /// they resume the timeline after this frame. Kept in the output folder, since the
+    /// loader unloads the runtime with its last instance.
+    fn leave(&mut self, back_after_s: Option<f64>) {
+        let back_at_ms = back_after_s.map(|s| unix_ms() + (s * 1e3) as u64);
+        let gone = Gone { back_at_ms, resume_frame: self.frames_ended };
+        if let Some(path) = gone_path() {
+            if let Err(e) = std::fs::write(&path, serde_json::to_string(&gone).unwrap_or_default()) {
+                self.log
+                    .write(json!({"kind": "error", "why": format!("cannot write {}: {e}", path.display())}));
+            }
+        }
+    }
+
     /// Runs the script's events due at the end of frame `frame`.
     fn fire_events(&mut self, frame: u64) {
         while let Some(e) = self.script.events.get(self.events_fired).copied() {
@@ -568,6 +591,13 @@ impl Instance {
                     self.log.write(json!({"kind": "instance_loss", "frame": self.frames_ended}));
                     self.events.push_back(Event::InstanceLoss { time });
                     self.lost = true;
+                    self.leave(e.back_after_s);
+                    Vec::new()
+                }
+                EventKind::RuntimeGone => {
+                    self.log.write(json!({"kind": "runtime_gone", "frame": self.frames_ended}));
+                    self.lost = true;
+                    self.leave(e.back_after_s);
                     Vec::new()
                 }
             };
@@ -579,12 +609,45 @@ impl Instance {
 // ---------------------------------------------------------------------------------------------
 // Global commands and the instance.
 
+/// A runtime that went away: when it comes back, and the frame its next instance resumes at.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct Gone {
+    back_at_ms: Option<u64>,
+    resume_frame: u64,
+}
+
+fn gone_path() -> Option<std::path::PathBuf> {
+    std::env::var_os("ARGILE_XR_TEST_OUT").map(|d| std::path::PathBuf::from(d).join("runtime-gone.json"))
+}
+
+fn unix_ms() -> u64 {
+    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_millis() as u64)
+}
+
+/// Whether the runtime is away (`Err`), else the frame a new instance starts at.
+fn runtime_back() -> Result<u64, Refusal> {
+    let Some(text) = gone_path().and_then(|p| std::fs::read_to_string(p).ok()) else { return Ok(0) };
+    let Ok(gone) = serde_json::from_str::<Gone>(&text) else { return Ok(0) };
+    match gone.back_at_ms {
+        Some(at) if unix_ms() >= at => Ok(gone.resume_frame),
+        _ => refuse(xr::Result::ERROR_RUNTIME_UNAVAILABLE, "the runtime went away and is not back"),
+    }
+}
+
+/// The extensions that add interaction profiles, with the profile each adds.
+pub const PROFILE_EXTENSIONS: [(&[u8], &str); 3] = [
+    (xr::EXT_HP_MIXED_REALITY_CONTROLLER_EXTENSION_NAME, "/interaction_profiles/hp/mixed_reality_controller"),
+    (xr::BD_CONTROLLER_INTERACTION_EXTENSION_NAME, "/interaction_profiles/bytedance/pico4_controller"),
+    (xr::META_TOUCH_CONTROLLER_PLUS_EXTENSION_NAME, "/interaction_profiles/meta/touch_controller_plus"),
+];
+
 fn extensions() -> Vec<(&'static [u8], u32)> {
     let mut v = Vec::new();
     if std::env::var_os("ARGILE_XR_TEST_NO_VULKAN").is_none() {
         v.push((xr::KHR_VULKAN_ENABLE2_EXTENSION_NAME, 2));
     }
     v.push((xr::KHR_COMPOSITION_LAYER_DEPTH_EXTENSION_NAME, 6));
+    v.extend(PROFILE_EXTENSIONS.iter().map(|(name, _)| (*name, 1)));
     v
 }
 
@@ -644,8 +707,10 @@ pub(crate) unsafe extern "system" fn create_instance(
         if info.enabled_api_layer_count > 0 {
             return refuse(xr::Result::ERROR_API_LAYER_NOT_PRESENT, "the runtime has no API layers");
         }
+        let resume_frame = runtime_back()?;
         let offered = extensions();
         let (mut vulkan, mut depth) = (false, false);
+        let mut profile_extensions = Vec::new();
         for i in 0..info.enabled_extension_count as usize {
             let name = CStr::from_ptr(*info.enabled_extension_names.add(i)).to_bytes_with_nul();
             if !offered.iter().any(|(e, _)| *e == name) {
@@ -656,6 +721,7 @@ pub(crate) unsafe extern "system" fn create_instance(
             }
             vulkan |= name == xr::KHR_VULKAN_ENABLE2_EXTENSION_NAME;
             depth |= name == xr::KHR_COMPOSITION_LAYER_DEPTH_EXTENSION_NAME;
+            profile_extensions.extend(PROFILE_EXTENSIONS.iter().filter(|(e, _)| *e == name).map(|(_, p)| *p));
         }
         let script = match std::env::var_os("ARGILE_XR_TEST_SCRIPT") {
             Some(p) => Script::load(std::path::Path::new(&p)),
@@ -674,7 +740,15 @@ pub(crate) unsafe extern "system" fn create_instance(
         let handle = new_handle();
         log.write(json!({"kind": "instance", "application": get_str(&info.application_info.application_name)?, "vulkan_enable2": vulkan, "depth": depth}));
         rt.orphan_log = None;
-        rt.instance = Some(Instance::new(handle, vulkan, depth, script, log));
+        let mut instance = Instance::new(handle, vulkan, depth, script, log);
+        instance.profile_extensions = profile_extensions;
+        if resume_frame > 0 {
+            instance.log.write(json!({"kind": "runtime_back", "frame": resume_frame}));
+            instance.frames_ended = resume_frame;
+            instance.frames_waited = resume_frame;
+            instance.events_fired = instance.script.events.iter().filter(|e| e.frame < resume_frame).count();
+        }
+        rt.instance = Some(instance);
         *out = xr::Instance::from_raw(handle);
         Ok(xr::Result::SUCCESS)
     })
@@ -908,7 +982,8 @@ pub(crate) unsafe extern "system" fn enumerate_view_configuration_views(
         inst.check(instance)?;
         inst.check_system(id)?;
         check_view_configuration(view)?;
-        let [w, h] = inst.script.recommended_size;
+        // The runtime's own choice wins over the script's, as a real headset's does.
+        let [w, h] = view_size_override().unwrap_or(inst.script.recommended_size);
         enumerate(capacity, count, views, 2, |p, _| {
             let p = output(p, xr::StructureType::VIEW_CONFIGURATION_VIEW, "XrViewConfigurationView")?;
             p.recommended_image_rect_width = w;
@@ -920,6 +995,14 @@ pub(crate) unsafe extern "system" fn enumerate_view_configuration_views(
             Ok(())
         })
     })
+}
+
+/// `ARGILE_XR_TEST_VIEW_SIZE=WxH`: the view size the runtime recommends whatever the script says.
+fn view_size_override() -> Option<[u32; 2]> {
+    let v = std::env::var("ARGILE_XR_TEST_VIEW_SIZE").ok()?;
+    let (w, h) = v.split_once('x')?;
+    let size = [w.parse().ok()?, h.parse().ok()?];
+    size.iter().all(|s| (1..=4096).contains(s)).then_some(size)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1643,6 +1726,13 @@ pub(crate) unsafe extern "system" fn wait_frame(
         s.frames.wait()?;
         let should_render = s.lifecycle.should_render();
         let k = inst.frames_waited;
+        if inst.script.pace {
+            // A compositor's pace: frame k is released at its wall-clock time.
+            let (start, first) = *inst.paced_from.get_or_insert((std::time::Instant::now(), k));
+            let due =
+                start + std::time::Duration::from_nanos((k - first) * inst.script.display_period_ns as u64);
+            std::thread::sleep(due.saturating_duration_since(std::time::Instant::now()));
+        }
         inst.frames_waited += 1;
         state.predicted_display_time = xr::Time::from_nanos(inst.frame_time(k as f64));
         state.predicted_display_period = xr::Duration::from_nanos(inst.script.display_period_ns);

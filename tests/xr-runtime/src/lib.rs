@@ -7,7 +7,7 @@
 //! OpenXR 1.0 subset Argile uses: instance, system, `XR_KHR_vulkan_enable2` (the runtime creates
 //! the application's Vulkan instance and device), sessions and their state machine, reference
 //! and action spaces, swapchains of Vulkan images on the application's device, frame timing,
-//! views, actions with suggested bindings for four controller profiles, and haptics. It keeps to
+//! views, actions with suggested bindings for eight controller profiles, and haptics. It keeps to
 //! the specification's rules: calls out of order, on unknown or destroyed handles, or with
 //! wrong structure types are refused with the result a conformant runtime gives, and logged.
 //!
@@ -16,10 +16,22 @@
 //!   hands hold still.
 //! - `ARGILE_XR_TEST_OUT`: a folder for `log.jsonl` (one JSON object a line, each with a
 //!   `kind`: `instance`, `state`, `end_frame`, `capture`, `haptic`, `haptic_stop`,
-//!   `interaction_profile`, `instance_loss`, `violation`, `refused`, `error`) and the captured
-//!   images `frame-NNNN-left.png` / `frame-NNNN-right.png`.
+//!   `interaction_profile`, `instance_loss`, `runtime_gone`, `runtime_back`, `violation`,
+//!   `refused`, `error`), the captured images `frame-NNNN-left.png` / `frame-NNNN-right.png`,
+//!   and `runtime-gone.json` while the scripted runtime is away (instances are refused with
+//!   `XR_ERROR_RUNTIME_UNAVAILABLE` until it is back; the loader unloads the runtime with its
+//!   last instance, so this is kept on disk).
 //! - `ARGILE_XR_TEST_NO_VULKAN=1`: offer no Vulkan extension; `ARGILE_XR_TEST_NO_HMD=1`: no
 //!   headset connected (`xrGetSystem` answers `XR_ERROR_FORM_FACTOR_UNAVAILABLE`).
+//! - `ARGILE_XR_TEST_VIEW_SIZE=WxH`: the view size the runtime recommends, over the script's
+//!   (a real runtime chooses its own, e.g. 320×240 on a headless one).
+//!
+//! Like real runtimes, it sends a new session's first state event (IDLE) before READY, falls
+//! back to `khr/simple_controller` when the application suggested nothing for the simulated
+//! controllers' own profile, offers the controller extensions `XR_EXT_hp_mixed_reality_controller`,
+//! `XR_BD_controller_interaction` and `XR_META_touch_controller_plus` (their profiles are
+//! refused unless the extension is enabled), can pace frames at the display's rate, and can go
+//! away mid-frame (`runtime_gone`: calls answer `XR_ERROR_INSTANCE_LOST` without warning).
 //!
 //! Time is virtual: the frame waited for `k`-th in the instance's life is displayed at
 //! `1 s + (k + 1) × period`, and every pose is the script's at the frame a time falls on, so

@@ -62,6 +62,8 @@ pub enum Input {
     XTouch,
     YTouch,
     Menu,
+    /// A trackpad's click (Windows Mixed Reality): the script's primary button (A or X).
+    TrackpadClick,
     GripPose,
     AimPose,
     Haptic,
@@ -107,6 +109,7 @@ impl Input {
             X | XTouch => Reading::Bool(h.x),
             Y | YTouch => Reading::Bool(h.y),
             Menu => Reading::Bool(h.menu),
+            TrackpadClick => Reading::Bool(h.a || h.x),
             GripPose => Reading::Pose(h.grip),
             AimPose => Reading::Pose(h.aim),
             Haptic => Reading::Haptic,
@@ -173,6 +176,8 @@ const TOUCH_RIGHT: Table =
 
 const INDEX_COMMON: Table = &[
     ("/input/system/click", Menu),
+    // Pressing the trackpad hard; the script's menu button stands for it.
+    ("/input/trackpad/force", Menu),
     ("/input/squeeze/value", SqueezeValue),
     ("/input/squeeze/force", SqueezeValue),
     ("/input/trigger/click", TriggerClick),
@@ -202,27 +207,93 @@ const VIVE: Table = &[
     ("/output/haptic", Haptic),
 ];
 
-/// A simulated interaction profile: its path and the component paths under
-/// `/user/hand/left` and `/user/hand/right`.
+// Windows Mixed Reality: no face buttons; a thumbstick and a trackpad.
+const MOTION: Table = &[
+    ("/input/menu/click", Menu),
+    ("/input/squeeze/click", SqueezeClick),
+    ("/input/trigger/value", TriggerValue),
+    ("/input/trackpad/x", StickX),
+    ("/input/trackpad/y", StickY),
+    ("/input/trackpad/click", TrackpadClick),
+    ("/input/trackpad/touch", TrackpadClick),
+];
+
+const SQUEEZE_TRIGGER: Table =
+    &[("/input/squeeze/value", SqueezeValue), ("/input/trigger/value", TriggerValue)];
+
+const MENU: Table = &[("/input/menu/click", Menu)];
+
+// Pico 4: the right controller's system button is reserved, as on Touch.
+const PICO4_COMMON: Table = &[
+    ("/input/squeeze/value", SqueezeValue),
+    ("/input/squeeze/click", SqueezeClick),
+    ("/input/trigger/value", TriggerValue),
+    ("/input/trigger/click", TriggerClick),
+    ("/input/trigger/touch", TriggerTouch),
+];
+
+const TOUCH_PLUS_COMMON: Table =
+    &[("/input/trigger/force", TriggerValue), ("/input/trigger/curl_meta", TriggerValue)];
+
+/// A simulated interaction profile: its path, whether an extension adds it (see
+/// `api::PROFILE_EXTENSIONS`), and the component paths under `/user/hand/left` and
+/// `/user/hand/right`.
 pub struct Profile {
     pub path: &'static str,
+    pub by_extension: bool,
     left: &'static [Table],
     right: &'static [Table],
 }
 
 const PROFILES: &[Profile] = &[
-    Profile { path: "/interaction_profiles/khr/simple_controller", left: &[SIMPLE], right: &[SIMPLE] },
+    Profile {
+        path: "/interaction_profiles/khr/simple_controller",
+        by_extension: false,
+        left: &[SIMPLE],
+        right: &[SIMPLE],
+    },
     Profile {
         path: "/interaction_profiles/oculus/touch_controller",
+        by_extension: false,
         left: &[TOUCH_COMMON, THUMBSTICK, POSES_AND_HAPTIC, TOUCH_LEFT],
         right: &[TOUCH_COMMON, THUMBSTICK, POSES_AND_HAPTIC, TOUCH_RIGHT],
     },
     Profile {
         path: "/interaction_profiles/valve/index_controller",
+        by_extension: false,
         left: &[INDEX_COMMON, THUMBSTICK, POSES_AND_HAPTIC, INDEX_LEFT],
         right: &[INDEX_COMMON, THUMBSTICK, POSES_AND_HAPTIC, INDEX_RIGHT],
     },
-    Profile { path: "/interaction_profiles/htc/vive_controller", left: &[VIVE], right: &[VIVE] },
+    Profile {
+        path: "/interaction_profiles/htc/vive_controller",
+        by_extension: false,
+        left: &[VIVE],
+        right: &[VIVE],
+    },
+    Profile {
+        path: "/interaction_profiles/microsoft/motion_controller",
+        by_extension: false,
+        left: &[MOTION, THUMBSTICK, POSES_AND_HAPTIC],
+        right: &[MOTION, THUMBSTICK, POSES_AND_HAPTIC],
+    },
+    Profile {
+        path: "/interaction_profiles/hp/mixed_reality_controller",
+        by_extension: true,
+        left: &[SQUEEZE_TRIGGER, MENU, THUMBSTICK, POSES_AND_HAPTIC, TOUCH_LEFT],
+        right: &[SQUEEZE_TRIGGER, MENU, THUMBSTICK, POSES_AND_HAPTIC, TOUCH_RIGHT],
+    },
+    Profile {
+        path: "/interaction_profiles/bytedance/pico4_controller",
+        by_extension: true,
+        left: &[PICO4_COMMON, THUMBSTICK, POSES_AND_HAPTIC, TOUCH_LEFT],
+        right: &[PICO4_COMMON, THUMBSTICK, POSES_AND_HAPTIC, TOUCH_RIGHT],
+    },
+    Profile {
+        path: "/interaction_profiles/meta/touch_controller_plus",
+        by_extension: true,
+        left: &[TOUCH_COMMON, TOUCH_PLUS_COMMON, THUMBSTICK, POSES_AND_HAPTIC, TOUCH_LEFT],
+        right: &[TOUCH_COMMON, TOUCH_PLUS_COMMON, THUMBSTICK, POSES_AND_HAPTIC, TOUCH_RIGHT],
+    },
 ];
 
 /// A resolved binding: which hand's which input.

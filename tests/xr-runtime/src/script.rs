@@ -1,5 +1,10 @@
 //! The scripted timeline: the simulated headset and hands at each frame, the frames whose
-//! layers are captured, and the runtime events (session loss, exit, focus) by frame.
+//! layers are captured, and the runtime events (session loss, exit, focus, the runtime going
+//! away) by frame.
+//!
+//! `pace = true` makes `xrWaitFrame` block until the frame's wall-clock time at `display_hz`,
+//! as a real compositor does (a headless one may pace at 20 Hz); without it frames run as
+//! fast as the application asks.
 //!
 //! Keyframes are given by frame index; fields a keyframe leaves out keep the previous
 //! keyframe's values. Between keyframes positions and analogue inputs are interpolated
@@ -110,20 +115,28 @@ pub enum EventKind {
     SessionLoss,
     Exit,
     InstanceLoss,
+    /// The runtime's service dies without a word: every call answers
+    /// `XR_ERROR_INSTANCE_LOST`, no loss-pending event is sent.
+    RuntimeGone,
     FocusLost,
     FocusGained,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Event {
     pub frame: u64,
     pub kind: EventKind,
+    /// For `instance_loss` and `runtime_gone`: after how many seconds new instances can be
+    /// made again (they resume the timeline after the lost frame); `None`: never.
+    pub back_after_s: Option<f64>,
 }
 
 /// A parsed script.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Script {
     pub display_period_ns: i64,
+    /// `xrWaitFrame` blocks until the frame's wall-clock time.
+    pub pace: bool,
     pub interaction_profile: String,
     pub recommended_size: [u32; 2],
     pub ipd_m: f32,
@@ -138,6 +151,7 @@ pub struct Script {
 #[serde(deny_unknown_fields)]
 struct RawScript {
     display_hz: Option<f64>,
+    pace: Option<bool>,
     interaction_profile: Option<String>,
     recommended_size: Option<[u32; 2]>,
     ipd_m: Option<f32>,
@@ -155,6 +169,7 @@ struct RawScript {
 struct Event2 {
     frame: u64,
     kind: EventKind,
+    back_after_s: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -308,11 +323,25 @@ impl Script {
         if keys.is_empty() {
             keys.push((0, current));
         }
-        let mut events: Vec<Event> =
-            raw.event.iter().map(|e| Event { frame: e.frame, kind: e.kind }).collect();
+        let mut events = Vec::with_capacity(raw.event.len());
+        for e in &raw.event {
+            if let Some(b) = e.back_after_s {
+                if !(b.is_finite() && (0.0..=3600.0).contains(&b)) {
+                    return Err(format!("event at frame {}: back_after_s = {b} is not 0 to 3600 s", e.frame));
+                }
+                if !matches!(e.kind, EventKind::InstanceLoss | EventKind::RuntimeGone) {
+                    return Err(format!(
+                        "event at frame {}: back_after_s is for instance_loss and runtime_gone",
+                        e.frame
+                    ));
+                }
+            }
+            events.push(Event { frame: e.frame, kind: e.kind, back_after_s: e.back_after_s });
+        }
         events.sort_by_key(|e| e.frame);
         Ok(Script {
             display_period_ns: (1e9 / hz).round() as i64,
+            pace: raw.pace.unwrap_or(false),
             interaction_profile,
             recommended_size,
             ipd_m,
@@ -387,7 +416,7 @@ kind = "focus_lost"
         assert_eq!(s.display_period_ns, 13_888_889);
         assert_eq!(s.recommended_size, [320, 200]);
         assert_eq!(s.capture.iter().copied().collect::<Vec<_>>(), vec![1, 3]);
-        assert_eq!(s.events[0], Event { frame: 4, kind: EventKind::FocusLost });
+        assert_eq!(s.events[0], Event { frame: 4, kind: EventKind::FocusLost, back_after_s: None });
         assert_eq!(s.events[1].kind, EventKind::Exit);
     }
 
