@@ -221,9 +221,14 @@ struct AutosaveArgs {
 }
 
 impl AutosaveArgs {
-    /// The autosave settings if autosave is on, after recovering unclosed sessions.
+    /// The autosave settings if autosave is on, after recovering unclosed sessions. With
+    /// autosave, SIGINT, SIGTERM and SIGHUP end the run between two steps of the timeline, as
+    /// a clean exit does (the session is closed once what was done is written).
     fn start(&self) -> Option<AutosaveConfig> {
         self.autosave.then(|| {
+            if let Err(e) = app::signals::install() {
+                tracing::warn!("{e:#}");
+            }
             app::recover_and_report();
             AutosaveConfig {
                 checkpoint_interval: std::time::Duration::from_secs_f64(self.checkpoint_s),
@@ -349,12 +354,17 @@ fn main() -> ExitCode {
                 )
             })
         }
-        Some(Command::Recover) => {
-            if app::recover_and_report() == 0 {
+        Some(Command::Recover) => match app::recover_and_report() {
+            app::RecoveryCount { recovered: 0, failed: 0 } => {
                 println!("No session is left to recover: every earlier session closed cleanly.");
+                Ok(())
             }
-            Ok(())
-        }
+            app::RecoveryCount { failed: 0, .. } => Ok(()),
+            app::RecoveryCount { recovered, failed } => Err(anyhow::anyhow!(
+                "{failed} session(s) could not be recovered (each is named above and left in place); \
+                 {recovered} recovered"
+            )),
+        },
         Some(Command::Info { sculpt: Some(path), .. }) => app::describe_sculpt(&path).map(|d| print!("{d}")),
         Some(Command::Info { input, sculpt: None }) => info(input.as_deref()),
         Some(Command::Bench { json, quick, workloads }) => run_bench(json, quick, &workloads),

@@ -399,16 +399,23 @@ fn strokes_lost_with_a_failed_journal_are_folded_before_the_journal_counts_again
     let root = temp_dir("gap");
     let disk = SwitchedDisk::default();
     let (hold, full) = (Arc::clone(&disk.hold_snapshots), Arc::clone(&disk.full));
-    hold.store(true, Ordering::SeqCst);
     let mut field = Field::new(0.001, 0.5);
-    let config = AutosaveConfig { checkpoint_interval: Duration::from_secs(3600), ..fast() };
+    // Every journal is large enough to fold: each stroke starts a checkpoint.
+    let config = AutosaveConfig {
+        checkpoint_interval: Duration::from_secs(3600),
+        checkpoint_journal_bytes: 1,
+        ..fast()
+    };
+    // The first snapshot is written by the start itself; the next ones are held.
     let mut autosave = Autosave::start(&root, &mut field, None, "test", config, Arc::new(disk)).unwrap();
+    assert_eq!(files(autosave.dir(), "snapshot-"), ["snapshot-0.argile"], "the first snapshot is on disk");
+    hold.store(true, Ordering::SeqCst);
     let dir = autosave.dir().to_path_buf();
     for i in 0..2 {
         stroke(&mut field, i);
         autosave.record(&mut field);
     }
-    // The journal fails while the first snapshot is still being written: stroke 3 is in no
+    // The journal fails while a checkpoint is still being written: stroke 3 is in no
     // journal, and the next journal cannot even be created at first.
     full.store(true, Ordering::SeqCst);
     stroke(&mut field, 2);
@@ -477,5 +484,72 @@ fn a_recovered_sculpt_keeps_the_scenes_freeform_tools() {
     let recovered = recover(&dir).unwrap();
     assert!(recovered.sculpt.field.same_samples(&field));
     assert!(recovered.sculpt.tools == tools, "the tool as the scene copied it from its first clay");
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
+/// A disk with no room left for new files: writing a whole file fails once `full` is set;
+/// appends and removals still work (a full disk frees space by removing).
+#[derive(Debug, Default)]
+struct NoRoomForNewFiles {
+    full: Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl Disk for NoRoomForNewFiles {
+    fn create_dir(&self, path: &Path) -> Result<()> {
+        LocalDisk.create_dir(path)
+    }
+
+    fn write_whole(&self, path: &Path, bytes: &[u8]) -> Result<()> {
+        injected(if self.full.load(Ordering::SeqCst) { 1 } else { 0 }, path, "write")?;
+        LocalDisk.write_whole(path, bytes)
+    }
+
+    fn create_append(&self, path: &Path) -> Result<Box<dyn AppendFile>> {
+        LocalDisk.create_append(path)
+    }
+
+    fn remove(&self, path: &Path) -> Result<()> {
+        LocalDisk.remove(path)
+    }
+}
+
+#[test]
+fn a_session_closes_on_a_full_disk_by_removing_its_files() {
+    let root = temp_dir("close-full");
+    let disk = NoRoomForNewFiles::default();
+    let full = Arc::clone(&disk.full);
+    let mut field = Field::new(0.001, 0.5);
+    let mut autosave = Autosave::start(&root, &mut field, None, "test", fast(), Arc::new(disk)).unwrap();
+    let dir = autosave.dir().to_path_buf();
+    stroke(&mut field, 0);
+    autosave.record(&mut field);
+    // The disk fills up: the session cannot be marked closed, but its files can go.
+    full.store(true, Ordering::SeqCst);
+    autosave.close().expect("closing needs no new file");
+    assert!(!dir.exists(), "the session's folder is gone");
+    assert!(unclosed_sessions(&root).is_empty(), "nothing is left to recover");
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
+#[test]
+fn a_session_folder_with_journaled_strokes_and_no_snapshot_is_kept_and_named() {
+    let root = temp_dir("no-snapshot");
+    let mut field = Field::new(0.001, 0.5);
+    let mut autosave = Autosave::start(&root, &mut field, None, "test", fast(), Arc::new(LocalDisk)).unwrap();
+    let dir = autosave.dir().to_path_buf();
+    for i in 0..3 {
+        stroke(&mut field, i);
+        autosave.record(&mut field);
+    }
+    wait_for("the strokes on disk", || autosave.durable_strokes() == 3);
+    drop(autosave);
+    // The snapshot is lost (a disk that dropped it): the journal's strokes are not thrown away.
+    for snapshot in files(&dir, "snapshot-") {
+        std::fs::remove_file(dir.join(snapshot)).unwrap();
+    }
+    let e = recover(&dir).unwrap_err();
+    assert!(!e.empty, "{e}");
+    assert!(e.to_string().contains("its journal holds 3 stroke(s)"), "{e}");
+    assert!(dir.exists());
     std::fs::remove_dir_all(&root).unwrap();
 }

@@ -1,7 +1,15 @@
 //! Crash recovery end to end: `argile save --autosave` sculpting a scripted session is killed
-//! with SIGKILL at random points; the next `argile recover` must give back exactly the clay
-//! after some completed stroke (bit for bit), never a torn stroke, and never fewer strokes
-//! than the session had reported on disk before it was killed.
+//! with SIGKILL at random points of its whole run (while it starts, before and during
+//! checkpoints, during its final save); the next `argile recover` must give back exactly the
+//! clay after some completed stroke (bit for bit), never a torn stroke, and never fewer strokes
+//! than the session had reported on disk before it was killed. A kill during the final save
+//! leaves no temporary file for long: the next save of the same file removes it.
+//!
+//! 100 kills by default (about half a minute); more with `ARGILE_CRASH_KILLS`:
+//!
+//! ```sh
+//! ARGILE_CRASH_KILLS=1000 cargo test --release --test autosave_crash
+//! ```
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -178,11 +186,15 @@ fn sigkill_at_random_points_recovers_exactly_a_completed_stroke() {
     assert!(recover(&state).is_none(), "a session that closed is not recovered");
     assert!(load_sculpt(&dir.join("clean.argile")).unwrap().field.same_samples(&states[STROKES]));
 
+    let kills: u64 = std::env::var("ARGILE_CRASH_KILLS").ok().and_then(|k| k.parse().ok()).unwrap_or(100);
     let mut recovered_strokes = Vec::new();
-    for seed in 0..14 {
+    // Every run writes the same file, as a user saving again would.
+    let out = dir.join("out.argile");
+    for seed in 0..kills {
         let state = dir.join(format!("seed-{seed}"));
-        let kill_after = whole.mul_f64(uniform(seed));
-        let out = dir.join(format!("out-{seed}.argile"));
+        // Kills spread over the whole run, its start and its final save included.
+        let kill_after = whole.mul_f64(1.05 * uniform(seed));
+        let _ = std::fs::remove_file(&out);
         let (durable, finished) = run_and_kill(&scene_path, &state, &out, kill_after);
         let recovered = recover(&state);
         eprintln!(
@@ -213,12 +225,107 @@ fn sigkill_at_random_points_recovers_exactly_a_completed_stroke() {
                 recovered_strokes.push(n);
             }
         }
+        let _ = std::fs::remove_dir_all(&state);
     }
+    // A last, whole run of the same file leaves no temporary file of the killed ones.
+    let (_, finished) = run_and_kill(&scene_path, &dir.join("last"), &out, Duration::from_secs(60));
+    assert!(finished);
+    let temporaries: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".tmp"))
+        .collect();
+    assert!(temporaries.is_empty(), "temporary files left beside the sculpt: {temporaries:?}");
     recovered_strokes.sort_unstable();
     recovered_strokes.dedup();
     assert!(
-        recovered_strokes.len() >= 4,
+        recovered_strokes.len() >= 4.min(kills as usize / 4),
         "kills landed at several points of the session: strokes {recovered_strokes:?}"
     );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Starts `argile save --autosave` of `scene` and waits until it reports a stroke on disk;
+/// returns the running child and a thread reading the rest of what it says on standard error
+/// (a closed pipe would fail its writes), which gives every line.
+fn started_with_a_stroke_on_disk(
+    scene: &Path,
+    state: &Path,
+    out: &Path,
+) -> (std::process::Child, std::thread::JoinHandle<Vec<String>>) {
+    let mut child = argile(state)
+        .args(["save", "--autosave", "--sync-s", "0.02", "--checkpoint-s", "0.15", "--force"])
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let stderr = BufReader::new(child.stderr.take().unwrap());
+    let reader = std::thread::spawn(move || {
+        let mut lines = Vec::new();
+        for line in stderr.lines().map_while(Result::ok) {
+            if line.contains("strokes up to ") && !line.contains("strokes up to 0 ") {
+                let _ = tx.send(());
+            }
+            lines.push(line);
+        }
+        lines
+    });
+    rx.recv_timeout(Duration::from_secs(60)).expect("a stroke reported on disk");
+    (child, reader)
+}
+
+#[test]
+fn a_stopping_signal_during_save_autosave_saves_what_was_done_closes_and_exits_143() {
+    let dir = std::env::temp_dir().join(format!("argile-sigterm-save-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene_path = dir.join("strokes.toml");
+    std::fs::write(&scene_path, scene_text()).unwrap();
+    let (state, out) = (dir.join("state"), dir.join("stopped.argile"));
+    let (child, reader) = started_with_a_stroke_on_disk(&scene_path, &state, &out);
+    assert!(Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap().success());
+    let output = child.wait_with_output().unwrap();
+    let said = format!("{}\n{}", reader.join().unwrap().join("\n"), String::from_utf8_lossy(&output.stdout));
+    assert_eq!(output.status.code(), Some(143), "{said}");
+    assert!(said.contains("SIGTERM received at") && said.contains("stopped by SIGTERM"), "{said}");
+    let saved =
+        load_sculpt(&out).unwrap_or_else(|e| panic!("the sculpt as far as it got is saved: {e}\n{said}"));
+    let whole = reference_states(&Scene::load(&scene_path).unwrap());
+    assert!(!saved.field.same_samples(&whole[0]), "strokes were saved");
+    assert!(recover(&state).is_none(), "the session was closed");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_recovery_that_cannot_save_says_so_fails_and_keeps_the_session() {
+    let dir = std::env::temp_dir().join(format!("argile-recover-fails-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene_path = dir.join("strokes.toml");
+    std::fs::write(&scene_path, scene_text()).unwrap();
+    let state = dir.join("state");
+    let (mut child, reader) = started_with_a_stroke_on_disk(&scene_path, &state, &dir.join("killed.argile"));
+    child.kill().unwrap();
+    child.wait().unwrap();
+    reader.join().unwrap();
+    // A file where the recovered folder should be.
+    std::fs::write(state.join("argile/recovered"), "in the way").unwrap();
+    let out = argile(&state).arg("recover").output().unwrap();
+    let said = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(!out.status.success(), "{said}");
+    assert!(
+        said.contains("cannot recover an unclosed session") && said.contains("could not be recovered"),
+        "{said}"
+    );
+    assert!(!said.contains("No session is left to recover"), "{said}");
+    // Out of the way, the session is still there to recover.
+    std::fs::remove_file(state.join("argile/recovered")).unwrap();
+    let (path, strokes) = recover(&state).expect("the session was kept");
+    assert!(strokes >= 1 && load_sculpt(&path).is_ok());
     std::fs::remove_dir_all(&dir).unwrap();
 }

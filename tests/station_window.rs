@@ -159,16 +159,32 @@ fn journals(state: &std::path::Path) -> Vec<std::path::PathBuf> {
         .collect()
 }
 
+/// `argile recover` with the state folder `state`.
+fn recover_in(state: &std::path::Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_argile"))
+        .arg("recover")
+        .env("XDG_STATE_HOME", state)
+        .output()
+        .expect("argile recover runs")
+}
+
+/// A fresh folder for a case: (the folder, the carving scene, its input script, the state
+/// folder).
+fn carving_case(
+    case: &str,
+) -> (std::path::PathBuf, std::path::PathBuf, std::path::PathBuf, std::path::PathBuf) {
+    let dir = out_dir(case);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let state = dir.join("state");
+    (dir, root().join("scenes/tests/station.toml"), root().join("tests/fixtures/station-input.toml"), state)
+}
+
 #[test]
 fn sigint_at_the_desk_saves_the_strokes_closes_the_session_and_exits_130() {
     let x = Xvfb::start();
-    let dir = out_dir("station-sigint");
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let (dir, scene, script, state) = carving_case("station-sigint");
     let saved = dir.join("sigint.argile");
-    let scene = root().join("scenes/tests/station.toml");
-    let script = root().join("tests/fixtures/station-input.toml");
-    let state = dir.join("state");
     // A scripted session that would run for an hour: the groove is carved in its first frames.
     let child = Command::new(env!("CARGO_BIN_EXE_argile"))
         .arg("run")
@@ -207,11 +223,34 @@ fn sigint_at_the_desk_saves_the_strokes_closes_the_session_and_exits_130() {
     let slab = argile::app::final_field(&argile::scene::Scene::load(&scene).unwrap());
     assert!(sculpt.field.mass() < 0.9 * slab.mass(), "the groove is saved");
     // The session closed: nothing is left to recover.
-    let recover = Command::new(env!("CARGO_BIN_EXE_argile"))
-        .arg("recover")
-        .env("XDG_STATE_HOME", &state)
-        .output()
-        .expect("argile recover runs");
+    let recover = recover_in(&state);
     let said = String::from_utf8_lossy(&recover.stdout);
     assert!(said.contains("No session is left to recover"), "{said}");
+}
+
+#[test]
+fn a_scripted_run_with_nowhere_to_save_leaves_its_strokes_to_recover() {
+    let x = Xvfb::start();
+    let (dir, scene, script, state) = carving_case("station-unsaved");
+    let out = Command::new(env!("CARGO_BIN_EXE_argile"))
+        .arg("run")
+        .arg(&scene)
+        .args(["--frames", "8", "--size", "320x240", "--input-script"])
+        .arg(&script)
+        .current_dir(&dir)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .env("XDG_STATE_HOME", &state)
+        .output()
+        .expect("the argile binary runs");
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{said}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(said.contains("stroke(s) of this run are not saved (no --save-to)"), "{said}");
+    let recover = recover_in(&state);
+    let said = String::from_utf8_lossy(&recover.stdout);
+    assert!(recover.status.success() && said.contains("its sculpt is recovered"), "{said}");
+    let path = said.split(") in ").nth(1).expect("the recovered file is named").trim();
+    let sculpt = argile::app::load_sculpt(std::path::Path::new(path)).expect("the recovered sculpt loads");
+    let slab = argile::app::final_field(&argile::scene::Scene::load(&scene).unwrap());
+    assert!(sculpt.field.mass() < 0.95 * slab.mass(), "the groove is recovered");
 }

@@ -46,6 +46,14 @@ pub fn start_autosave(
     }
 }
 
+/// Closes an autosave session once its sculpt is saved: a failure only warns (naming the
+/// folder), since the sculpt is safe; the next start then recovers the session's copy too.
+pub fn close_session(session: Autosave) {
+    if let Err(e) = session.close() {
+        tracing::warn!("{e:#}");
+    }
+}
+
 /// A sculpt recovered from a session that did not close.
 #[derive(Clone, Debug)]
 pub struct RecoveredSculpt {
@@ -106,14 +114,52 @@ pub fn recover_sessions() -> Vec<Result<RecoveredSculpt>> {
         .collect()
 }
 
+/// What [`recover_and_report`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RecoveryCount {
+    /// Sessions recovered (each saved in the recovered folder).
+    pub recovered: usize,
+    /// Sessions that could not be recovered or saved (left in place).
+    pub failed: usize,
+}
+
+/// Removes the undo spill folders (`undo/history-PID-…` in the state folder) of processes
+/// that ended without removing them (killed): nothing reads them once their process is gone.
+pub fn remove_stale_spill_folders() {
+    let Some(undo) = super::state_dir().map(|d| d.join("undo")) else { return };
+    let Ok(entries) = std::fs::read_dir(&undo) else { return };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name
+            .to_str()
+            .and_then(|n| n.strip_prefix("history-"))
+            .and_then(|rest| rest.split('-').next())
+            .and_then(|pid| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        if pid != std::process::id() && !crate::io::process_alive(pid) {
+            match std::fs::remove_dir_all(entry.path()) {
+                Ok(()) => tracing::info!(
+                    "removed {}, the undo history of a process that was killed",
+                    entry.path().display()
+                ),
+                Err(e) => tracing::warn!("cannot remove {}: {e}", entry.path().display()),
+            }
+        }
+    }
+}
+
 /// Recovers the sessions that did not close (see [`recover_sessions`]) and says so on
-/// standard output, one sentence per session. Returns how many were recovered.
-pub fn recover_and_report() -> usize {
-    let mut count = 0;
+/// standard output, one sentence per session; removes the undo spill folders of processes
+/// that were killed. Returns how many sessions were recovered and how many could not be.
+pub fn recover_and_report() -> RecoveryCount {
+    remove_stale_spill_folders();
+    let mut count = RecoveryCount::default();
     for result in recover_sessions() {
         match result {
             Ok(r) => {
-                count += 1;
+                count.recovered += 1;
                 println!(
                     "The session of process {} ({}) did not close cleanly: its sculpt is recovered to its last \
                      completed stroke (stroke {}) in {}",
@@ -126,7 +172,10 @@ pub fn recover_and_report() -> usize {
                     tracing::info!("recovery discarded the stroke cut short by the crash: {why}");
                 }
             }
-            Err(e) => eprintln!("warning: cannot recover an unclosed session: {e:#}"),
+            Err(e) => {
+                count.failed += 1;
+                eprintln!("warning: cannot recover an unclosed session: {e:#}");
+            }
         }
     }
     count

@@ -147,7 +147,18 @@ fn render_over(
     let mut mesher = Mesher::default();
     let mut written = Vec::with_capacity(scene.captures.len());
     for capture in &scene.captures {
-        playback.advance_to(capture.time_s, |t| bar.set_position((t * 1000.0) as u64));
+        let progress = |t: f32| bar.set_position((t * 1000.0) as u64);
+        // A stopping signal (handled where autosave runs) ends the run between two steps:
+        // the captures written so far stay, the session is closed.
+        if !playback.advance_until(capture.time_s, progress, || super::signals::received().is_some()) {
+            println!(
+                "{} received at {:.2} s of the timeline: stopping before the capture {}",
+                super::signals::name(super::signals::received().unwrap_or(0)),
+                playback.time_s(),
+                capture.name
+            );
+            break;
+        }
         let diff = mesher.remesh_dirty(playback.field_mut());
         renderer.apply(diff)?;
         let mut frame = build_frame(&viewed, &playback.hands(), capture.show_tools);
@@ -180,7 +191,7 @@ fn render_over(
     }
     bar.finish_and_clear();
     if let Some(session) = playback.finish_autosave() {
-        session.close()?;
+        super::autosave::close_session(session);
     }
     // Dropping the renderer first lets the layer report destruction problems (leaks) too.
     let log = renderer.validation_log();

@@ -20,7 +20,8 @@ mod xr_station;
 
 pub use crate::io::write_atomically;
 pub use autosave::{
-    autosave_root, recover_and_report, recover_sessions, recovered_dir, start_autosave, RecoveredSculpt,
+    autosave_root, close_session, recover_and_report, recover_sessions, recovered_dir,
+    remove_stale_spill_folders, start_autosave, RecoveredSculpt, RecoveryCount,
 };
 pub use calibrate::{calibrate, describe, test_pattern, CalibrateOptions, Calibrated, Marker, TestPattern};
 pub use capture::{

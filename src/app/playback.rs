@@ -190,10 +190,20 @@ impl<'s> Playback<'s> {
 
     /// Plays the timeline up to `t` in fixed steps; key times are always step boundaries, so
     /// strokes follow the keyed path exactly. Calls `progress(time)` after each step.
-    pub fn advance_to(&mut self, t: f32, mut progress: impl FnMut(f32)) {
+    pub fn advance_to(&mut self, t: f32, progress: impl FnMut(f32)) {
+        self.advance_until(t, progress, || false);
+    }
+
+    /// [`Playback::advance_to`], stopping between two steps once `stop` says so; returns
+    /// whether `t` was reached.
+    pub fn advance_until(&mut self, t: f32, mut progress: impl FnMut(f32), stop: impl Fn() -> bool) -> bool {
         while self.time_s < t {
+            if stop() {
+                return false;
+            }
             progress(self.step_towards(t));
         }
+        true
     }
 
     /// Plays one fixed step towards `t` (shorter where a key or `t` comes first), as

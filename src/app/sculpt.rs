@@ -58,7 +58,16 @@ pub fn save_scene_sculpt(
     let mut playback = Playback::new_autosaved(&scene, |field, tools| {
         autosave.and_then(|config| start_autosave(field, (Some(&text), tools), &source, config))
     });
-    playback.advance_to(end_s(&scene), |_| {});
+    let end = end_s(&scene);
+    // A stopping signal (handled where autosave runs) ends the timeline early: the sculpt as
+    // far as it got is saved, and the session closed.
+    if !playback.advance_until(end, |_| {}, || super::signals::received().is_some()) {
+        println!(
+            "{} received at {:.2} s of the timeline's {end:.2} s: saving the sculpt as far as it got",
+            super::signals::name(super::signals::received().unwrap_or(0)),
+            playback.time_s()
+        );
+    }
     let session = playback.finish_autosave();
     let tools = playback.stored_tools();
     let field = playback.into_field();
@@ -68,7 +77,7 @@ pub fn save_scene_sculpt(
         w.write_all(&bytes).with_context(|| format!("cannot write {}", out.display()))
     })?;
     if let Some(session) = session {
-        session.close()?;
+        super::autosave::close_session(session);
     }
     Ok(SavedSculpt { path: out.to_path_buf(), bricks: all_bricks(&field), bytes: bytes.len() })
 }

@@ -1483,17 +1483,29 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
     }
     let mut saved = app.station.saved.clone();
     let stats = app.station.playback.field().history_stats();
-    // Quitting saves unsaved strokes, and so does a stopping signal, scripted run or not.
-    let quitting = options.frames.is_none() || super::signals::received().is_some();
+    // Quitting saves unsaved strokes, and so do a stopping signal and a scripted run given a
+    // place to save (`--save-to`).
+    let quitting =
+        options.frames.is_none() || super::signals::received().is_some() || options.save_to.is_some();
     // Strokes made after a save are saved again.
     let changed = stats.undo_in_memory + stats.undo_on_disk > 0 && saved.is_none();
     if quitting && (changed || app.station.unsaved_strokes > 0) {
         saved = Some(app.station.save()?);
     }
-    // The sculpt is safe (saved when it changed): the session closes cleanly, so nothing is
-    // recovered at the next start.
-    if let Some(session) = app.station.playback.finish_autosave() {
-        session.close()?;
+    let session = app.station.playback.finish_autosave();
+    match (session, app.station.unsaved_strokes) {
+        // The sculpt is safe (saved when it changed): the session closes cleanly, so nothing
+        // is recovered at the next start.
+        (Some(session), 0) => super::autosave::close_session(session),
+        // A scripted run with nowhere to save leaves its strokes in the journal, unclosed.
+        (Some(session), n) => {
+            println!(
+                "{n} stroke(s) of this run are not saved (no --save-to): the autosave journal in {} keeps \
+                 them, and `argile recover` gives them back",
+                session.dir().display()
+            );
+        }
+        (None, _) => {}
     }
     Ok(StationReport { frames: app.frames, screenshot: app.screenshot, saved })
 }

@@ -700,7 +700,7 @@ pub fn run_xr(
         return Err(match sculptor.save() {
             Ok(p) => {
                 if let Some(session) = sculptor.playback.finish_autosave() {
-                    session.close()?;
+                    super::autosave::close_session(session);
                 }
                 e.context(format!("the headset session failed (the sculpt is saved in {})", p.display()))
             }
@@ -714,7 +714,7 @@ pub fn run_xr(
     }
     report.saved = Some(sculptor.save()?);
     if let Some(session) = sculptor.playback.finish_autosave() {
-        session.close()?;
+        super::autosave::close_session(session);
     }
     // OpenXR and then Vulkan go (XrStation's drop order) before the report is returned, so
     // what the validation layer says of the teardown is read too.

@@ -134,7 +134,7 @@ pub mod autosave;
 mod journal;
 mod lazy;
 
-pub use atomic::write_atomically;
+pub use atomic::{process_alive, write_atomically};
 pub use lazy::{ChunkInfo, LazySculpt};
 
 /// The format version this build writes.
@@ -851,7 +851,8 @@ fn read_chunk_from(
     let raw_len = u32_at(header, 4) as usize;
     let stored_len = u32_at(header, 8) as usize;
     let crc = u32_at(header, 12);
-    let name = String::from_utf8_lossy(&tag).into_owned();
+    // Quoted as the file has it, escaped: a tag is never sent raw to the terminal.
+    let name = tag.escape_ascii().to_string();
     if raw_len > MAX_CHUNK_BYTES {
         return Err(format!(
             "chunk {index} ({name}) claims {raw_len} bytes, over the {MAX_CHUNK_BYTES} limit"
@@ -951,7 +952,7 @@ fn read_brick_chunk(
         }
         (level, &raw[1..])
     };
-    let name = String::from_utf8_lossy(tag);
+    let name = tag.escape_ascii().to_string();
     if records.len() % BRICK_RECORD != 0 {
         return Err(format!("chunk {index} ({name}) holds a partial brick"));
     }
@@ -1233,6 +1234,24 @@ mod tests {
         assert_eq!(back.field.transform(), f.transform());
         assert_eq!(back.scene_toml.as_deref(), Some("[camera]\nfov_y_deg = 30.0\n"));
         assert!(bytes.len() < f.brick_count() * BRICK_RECORD, "compressed: {} bytes", bytes.len());
+    }
+
+    #[test]
+    fn a_chunks_tag_is_quoted_escaped_never_raw() {
+        // A sculpt whose only chunk is tagged with a terminal escape sequence and claims more
+        // than the limit.
+        let mut bytes = Vec::new();
+        bytes.extend_from_slice(MAGIC);
+        bytes.extend_from_slice(&VERSION.to_le_bytes());
+        bytes.extend_from_slice(&1u32.to_le_bytes());
+        bytes.extend_from_slice(b"\x1b[2J");
+        bytes.extend_from_slice(&0xFFFF_FFF0u32.to_le_bytes());
+        bytes.extend_from_slice(&0u32.to_le_bytes());
+        bytes.extend_from_slice(&crc32fast::hash(&[]).to_le_bytes());
+        let e = decode(&bytes, "hostile.argile", &mut |_| {}).unwrap_err().to_string();
+        assert!(!e.contains('\x1b'), "{e:?}");
+        assert!(e.contains("\\x1b[2J") && e.contains("hostile.argile"), "{e}");
+        assert!(e.contains("over the"), "a claimed size is refused before any allocation: {e}");
     }
 
     #[test]
