@@ -425,7 +425,7 @@ fn station(
             (scene, text)
         }
         Some(p) => {
-            let text = std::fs::read_to_string(p)
+            let text = argile::io::text::read_text(p, argile::io::text::SCENE_LIMIT)
                 .with_context(|| format!("cannot read scene file {}", p.display()))?;
             (Scene::parse(&text, &p.display().to_string(), p.parent())?, Some(text))
         }
@@ -543,7 +543,7 @@ fn render(
         print_written(&app::render_sculpt(&scene, sculpt.field, &options)?);
         return Ok(());
     }
-    let text = std::fs::read_to_string(scene)
+    let text = argile::io::text::read_text(scene, argile::io::text::SCENE_LIMIT)
         .with_context(|| format!("cannot read scene file {}", scene.display()))?;
     let scene = Scene::parse(&text, &scene.display().to_string(), scene.parent())?;
     let written = app::render_scene_autosaved(&scene, &options, autosave.start(), Some(&text))?;

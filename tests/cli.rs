@@ -332,3 +332,57 @@ fn without_a_headset_run_xr_goes_on_with_the_sculpt_it_was_given() {
     assert!(png("argile-out") == png("ref"), "the sculpt's clay, not the empty scene: {said}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn devices_fifos_folders_and_oversized_files_are_refused_by_name_at_once() {
+    let dir = temp_dir("hostile-paths");
+    let fifo = dir.join("pipe.argile");
+    let scene_fifo = dir.join("pipe.toml");
+    for f in [&fifo, &scene_fifo] {
+        assert!(Command::new("mkfifo").arg(f).status().unwrap().success());
+    }
+    let huge = dir.join("huge.toml");
+    std::fs::write(&huge, vec![b'#'; (16 << 20) + 1]).unwrap();
+    let calibration = dir.join("screen.toml");
+    std::fs::write(&calibration, vec![b'#'; (1 << 20) + 1]).unwrap();
+    let cases: [(Vec<std::ffi::OsString>, &str); 6] = [
+        (
+            vec!["save".into(), "/dev/zero".into(), "--out".into(), dir.join("a.argile").into()],
+            "it is a device",
+        ),
+        (vec!["save".into(), fifo.clone().into(), "--out".into(), dir.join("b.argile").into()], "FIFO"),
+        (vec!["info".into(), fifo.clone().into()], "FIFO"),
+        (vec!["render".into(), scene_fifo.clone().into(), "--out".into(), dir.join("r").into()], "FIFO"),
+        (
+            vec!["save".into(), dir.clone().join(".").into(), "--out".into(), dir.join("c.argile").into()],
+            "folder",
+        ),
+        (
+            vec!["save".into(), huge.clone().into(), "--out".into(), dir.join("d.argile").into()],
+            "over the 16777216-byte limit",
+        ),
+    ];
+    for (args, expected) in cases {
+        let started = std::time::Instant::now();
+        let out = argile().args(&args).env("XDG_STATE_HOME", dir.join("state")).output().unwrap();
+        let said = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?}: {said}");
+        assert!(said.contains(expected), "{args:?}: {said}");
+        assert!(
+            started.elapsed() < std::time::Duration::from_secs(20),
+            "{args:?} took {:?}",
+            started.elapsed()
+        );
+    }
+    let out = argile()
+        .args(["calibrate", "--calibration"])
+        .arg(&calibration)
+        .arg("--out")
+        .arg(dir.join("cal"))
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && said.contains("over the 1048576-byte limit"), "{said}");
+    assert!(said.contains(&calibration.display().to_string()), "the file is named: {said}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

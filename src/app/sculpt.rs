@@ -51,7 +51,7 @@ pub fn save_scene_sculpt(
         bail!("{} already exists; pass --force to replace it", out.display());
     }
     // Read once: the same text is parsed and stored.
-    let text = std::fs::read_to_string(scene_path)
+    let text = crate::io::text::read_text(scene_path, crate::io::text::SCENE_LIMIT)
         .with_context(|| format!("cannot read scene file {}", scene_path.display()))?;
     let scene = Scene::parse(&text, &scene_path.display().to_string(), scene_path.parent())?;
     let source = scene_path.display().to_string();
@@ -148,7 +148,7 @@ pub fn convert_sculpt(
     let sculpt = if is_sculpt(input) {
         load_sculpt_with_progress(input, true)?
     } else {
-        let text = std::fs::read_to_string(input)
+        let text = crate::io::text::read_text(input, crate::io::text::SCENE_LIMIT)
             .with_context(|| format!("cannot read scene file {}", input.display()))?;
         let scene = Scene::parse(&text, &input.display().to_string(), input.parent())?;
         let mut playback = Playback::new(&scene);

@@ -262,11 +262,8 @@ impl InputScript {
 
     /// Reads and parses a script file.
     pub fn load(path: &Path) -> Result<Self, FileError> {
-        let text = std::fs::read_to_string(path).map_err(|source| FileError::Read {
-            kind: "input script",
-            path: path.to_owned(),
-            source,
-        })?;
+        let text = crate::io::text::read_text(path, crate::io::text::SCENE_LIMIT)
+            .map_err(|source| FileError::Read { kind: "input script", path: path.to_owned(), source })?;
         Self::parse(&text, &path.display().to_string())
     }
 }

@@ -262,11 +262,8 @@ impl KeyBindings {
             None => dirs::config_dir().map(|d| d.join("argile").join("keys.toml")).filter(|p| p.is_file()),
         };
         let Some(path) = path else { return Ok((shipped, None)) };
-        let text = std::fs::read_to_string(&path).map_err(|source| FileError::Read {
-            kind: "key bindings",
-            path: path.clone(),
-            source,
-        })?;
+        let text = crate::io::text::read_text(&path, crate::io::text::SETTINGS_LIMIT)
+            .map_err(|source| FileError::Read { kind: "key bindings", path: path.clone(), source })?;
         let bindings = Self::parse_over(&text, &path.display().to_string(), Some(&shipped))?;
         Ok((bindings, Some(path)))
     }

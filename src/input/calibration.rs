@@ -89,11 +89,8 @@ impl Layer<'_> {
 
 /// Reads a device file's text; the error names the file and says what it is (`kind`).
 pub(crate) fn read_text(path: &Path, kind: &'static str) -> Result<String, CalibrationError> {
-    std::fs::read_to_string(path).map_err(|source| CalibrationError::Read {
-        kind,
-        path: path.to_owned(),
-        source,
-    })
+    crate::io::text::read_text(path, crate::io::text::SETTINGS_LIMIT)
+        .map_err(|source| CalibrationError::Read { kind, path: path.to_owned(), source })
 }
 
 /// One of the device's raw axes, in report order.

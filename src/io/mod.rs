@@ -133,6 +133,7 @@ mod atomic;
 pub mod autosave;
 mod journal;
 mod lazy;
+pub mod text;
 
 pub use atomic::{process_alive, write_atomically};
 pub use lazy::{ChunkInfo, LazySculpt};
@@ -790,6 +791,8 @@ impl FileSource {
     /// The file at `path`, read through a buffer of `buffer` bytes (0: each read goes to the
     /// file, for reading a few chunks here and there).
     fn open(path: &std::path::Path, buffer: usize) -> Result<Self, String> {
+        // A FIFO or a device would block or never end: only regular files are opened.
+        text::regular_file(path).map_err(|e| format!("cannot read it: {e}"))?;
         let file = std::fs::File::open(path).map_err(|e| format!("cannot open it: {e}"))?;
         let len = file.metadata().map_err(|e| format!("cannot read it: {e}"))?.len();
         Ok(Self { reader: std::io::BufReader::with_capacity(buffer, file), len, at: 0 })

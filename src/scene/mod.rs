@@ -276,11 +276,8 @@ pub struct VirtualClaySettings {
 impl Scene {
     /// Loads and validates a scene file.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
-            kind: "scene",
-            path: path.to_owned(),
-            source,
-        })?;
+        let text = crate::io::text::read_text(path, crate::io::text::SCENE_LIMIT)
+            .map_err(|source| SceneError::Read { kind: "scene", path: path.to_owned(), source })?;
         Scene::parse(&text, &path.display().to_string(), path.parent())
     }
 
