@@ -50,12 +50,18 @@ fn scene_text() -> String {
 /// The clay after 0, 1, 2, … completed strokes (strokes that changed something, as the
 /// journal counts them).
 fn reference_states(scene: &Scene) -> Vec<Field> {
-    let mut playback = Playback::new(scene);
+    // The clay before any stroke is what the session's first snapshot holds: the scene's clay
+    // as autosave starts on it, before the keys at time 0 begin their strokes.
+    let mut initial = None;
+    let mut playback = Playback::new_autosaved(scene, |field, _| {
+        initial = Some(field.clone());
+        None
+    });
     let steps = |f: &Field| {
         let s = f.history_stats();
         s.undo_in_memory + s.undo_on_disk + s.dropped
     };
-    let mut states = vec![playback.field().clone()];
+    let mut states = vec![initial.expect("autosave is started on the scene's clay")];
     assert_eq!(steps(playback.field()), 0, "the first key starts a stroke, none has ended");
     // Step by step exactly as `argile save` plays to the end of the timeline.
     let end = scene.timeline.duration_s();
