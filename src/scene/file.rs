@@ -290,7 +290,7 @@ fn default_stage_colour() -> SceneColour {
 #[serde(deny_unknown_fields)]
 pub(super) struct TimelineSpec {
     #[serde(default = "default_step")]
-    pub step_s: f32,
+    pub step_s: Spanned<f32>,
 }
 
 impl Default for TimelineSpec {
@@ -299,8 +299,8 @@ impl Default for TimelineSpec {
     }
 }
 
-fn default_step() -> f32 {
-    1.0 / 90.0
+fn default_step() -> Spanned<f32> {
+    Spanned::new(0..0, 1.0 / 90.0)
 }
 
 #[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]

@@ -312,6 +312,15 @@ impl Scene {
     }
 }
 
+/// The shortest timeline step, seconds.
+pub const MIN_STEP_S: f32 = 1e-4;
+/// The most steps a timeline may take (its last key or capture over its step).
+pub const MAX_STEPS: u32 = 1 << 20;
+/// The latest time a key or capture may have, seconds (a day).
+pub const MAX_TIME_S: f32 = 86_400.0;
+/// The farthest a key may place a tool from the origin on each axis, metres.
+pub const MAX_POSITION_M: f32 = 100.0;
+
 /// 1-based line and column of a byte offset.
 pub(crate) fn line_column(text: &str, offset: usize) -> (usize, usize) {
     let before = &text[..offset.min(text.len())];
@@ -633,8 +642,20 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
             let known: Vec<&str> = tools.iter().map(|t| t.name.as_str()).collect();
             return Err(at(Some(span), format!("no tool named `{}` (tools: {})", k.tool, known.join(", "))));
         };
-        if !(k.time_s.is_finite() && k.time_s >= 0.0) {
-            return Err(at(Some(span), format!("time_s must be zero or positive, not {}", k.time_s)));
+        if !(k.time_s.is_finite() && (0.0..=MAX_TIME_S).contains(&k.time_s)) {
+            return Err(at(Some(span), format!("time_s must be 0 to {MAX_TIME_S} s, not {}", k.time_s)));
+        }
+        if !k.position_m.iter().all(|c| c.is_finite() && c.abs() <= MAX_POSITION_M) {
+            return Err(at(
+                Some(span),
+                format!("position_m must be within ±{MAX_POSITION_M} m on each axis, not {:?}", k.position_m),
+            ));
+        }
+        if !k.rotation_deg.iter().all(|a| a.is_finite() && a.abs() <= 3600.0) {
+            return Err(at(
+                Some(span),
+                format!("rotation_deg must be finite angles within ±3600°, not {:?}", k.rotation_deg),
+            ));
         }
         let hand = match k.hand {
             file::HandSpec::Left => Hand::Left,
@@ -648,9 +669,15 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
             active: k.active,
         });
     }
-    let step_s = file.timeline.step_s;
-    if !(step_s > 0.0 && step_s <= 1.0) {
-        return Err(at(None, format!("[timeline] step_s must be in (0, 1] seconds, not {step_s}")));
+    let step = &file.timeline.step_s;
+    let step_s = *step.get_ref();
+    // A step shorter than a tenth of a millisecond would only make the work endless.
+    let step_at = (!step.span().is_empty()).then(|| step.span());
+    if !(step_s.is_finite() && (MIN_STEP_S..=1.0).contains(&step_s)) {
+        return Err(at(
+            step_at,
+            format!("[timeline] step_s must be {MIN_STEP_S} to 1 seconds, not {step_s}"),
+        ));
     }
     let timeline = Timeline::new(keys, step_s).map_err(|(i, msg)| at(Some(file.key[i].span()), msg))?;
 
@@ -669,8 +696,8 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
         if captures.iter().any(|o| o.name == c.name) {
             return Err(at(Some(span), format!("two captures are named `{}`", c.name)));
         }
-        if !(c.time_s.is_finite() && c.time_s >= 0.0) {
-            return Err(at(Some(span), format!("time_s must be zero or positive, not {}", c.time_s)));
+        if !(c.time_s.is_finite() && (0.0..=MAX_TIME_S).contains(&c.time_s)) {
+            return Err(at(Some(span), format!("time_s must be 0 to {MAX_TIME_S} s, not {}", c.time_s)));
         }
         captures.push(Capture { name: c.name.clone(), time_s: c.time_s, show_tools: c.show_tools });
     }
@@ -678,6 +705,19 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
         captures.push(Capture { name: "final".to_owned(), time_s: timeline.duration_s(), show_tools: true });
     }
     captures.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+    // The timeline is played in steps of f32 seconds: at most MAX_STEPS of them, which also
+    // keeps each step at least eight units of the last place of the time it advances.
+    let last = captures.last().map_or(0.0, |c| c.time_s).max(timeline.duration_s());
+    if f64::from(last) / f64::from(step_s) > MAX_STEPS as f64 {
+        return Err(at(
+            step_at,
+            format!(
+                "the timeline runs to {last} s in steps of {step_s} s: over {MAX_STEPS} steps; \
+                 lengthen [timeline] step_s to at least {} s or shorten the timeline",
+                last / MAX_STEPS as f32
+            ),
+        ));
+    }
     let head = file.head.as_ref().map(|h| head::resolve_head(h, base_dir, at)).transpose()?;
 
     let fallback = match &file.display.fallback {

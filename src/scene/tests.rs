@@ -242,3 +242,37 @@ fn the_input_table_names_a_settings_file_beside_the_scene() {
     assert_eq!(line, 2);
     assert!(message.contains("setings"), "{message}");
 }
+
+#[test]
+fn timelines_that_would_never_end_and_keys_out_of_reach_are_refused_at_their_line() {
+    let tool = "[[tool]]\nname = \"t\"\nradius_m = 0.01\naction = \"add\"\n";
+    // A step too short for any work to end, at the key's own line.
+    let (line, _, message) = err(&format!("{tool}[timeline]\nstep_s = 1e-12\n"));
+    assert_eq!(line, 6, "{message}");
+    assert!(message.contains("step_s must be 0.0001 to 1 seconds"), "{message}");
+    // A key far in time, or at a position or rotation that is no number.
+    let key = |time: &str, position: &str, rotation: &str| {
+        format!(
+            "{tool}[[key]]\ntime_s = {time}\ntool = \"t\"\nposition_m = {position}\nrotation_deg = {rotation}\n"
+        )
+    };
+    for (text, expected) in [
+        (key("1e12", "[0.0, 0.0, 0.0]", "[0.0, 0.0, 0.0]"), "time_s must be 0 to 86400 s"),
+        (key("1.0", "[1e30, 0.0, 0.0]", "[0.0, 0.0, 0.0]"), "position_m must be within ±100 m"),
+        (key("1.0", "[nan, 0.0, 0.0]", "[0.0, 0.0, 0.0]"), "position_m must be within ±100 m"),
+        (key("1.0", "[0.0, 0.0, 0.0]", "[0.0, inf, 0.0]"), "rotation_deg must be finite"),
+    ] {
+        let (line, _, message) = err(&text);
+        assert_eq!(line, 5, "the key's table: {message}");
+        assert!(message.contains(expected), "{message}");
+    }
+    // A capture late enough that the f32 time would stop advancing (262,144 s at the default
+    // step) is over the step count.
+    let (_, _, message) = err(&format!("{tool}[[capture]]\nname = \"late\"\ntime_s = 80000.0\n"));
+    assert!(
+        message.contains("over 1048576 steps") && message.contains("lengthen [timeline] step_s"),
+        "{message}"
+    );
+    // Within bounds, the same scene loads.
+    Scene::parse(&format!("{tool}[[capture]]\nname = \"late\"\ntime_s = 10000.0\n"), "t.toml", None).unwrap();
+}
