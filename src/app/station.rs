@@ -207,7 +207,7 @@ impl InputScript {
             FileError::Invalid { path: name.to_owned(), line, column, message }
         };
         let file: ScriptFile =
-            toml::from_str(text).map_err(|e| at(e.span().unwrap_or(0..0), e.message().to_owned()))?;
+            crate::scene::parse_toml(text).map_err(|(span, message)| at(span.unwrap_or(0..0), message))?;
         let mut events = Vec::new();
         for spanned in &file.event {
             let e = spanned.get_ref();

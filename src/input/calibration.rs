@@ -259,7 +259,7 @@ impl SpaceMouseCalibration {
     pub fn parse_layer(text: &str, name: &str, base: Option<&Self>) -> Result<Self, CalibrationError> {
         let layer = Layer { text, name, what: "calibration" };
         let file: CalibrationFile =
-            toml::from_str(text).map_err(|e| layer.at(e.span(), e.message().to_owned()))?;
+            crate::scene::parse_toml(text).map_err(|(span, message)| layer.at(span, message))?;
         let full_scale =
             layer.number(file.full_scale, "full_scale", 1.0..=32767.0, base.map(|b| b.full_scale))?;
         let dead_zone = layer.number(file.dead_zone, "dead_zone", 0.0..=0.95, base.map(|b| b.dead_zone))?;

@@ -187,7 +187,7 @@ impl GamepadCalibration {
     pub fn parse_layer(text: &str, name: &str, base: Option<&Self>) -> Result<Self, CalibrationError> {
         let layer = Layer { text, name, what: "mapping" };
         let file: GamepadFile =
-            toml::from_str(text).map_err(|e| layer.at(e.span(), e.message().to_owned()))?;
+            crate::scene::parse_toml(text).map_err(|(span, message)| layer.at(span, message))?;
         let dead_zone = layer.number(file.dead_zone, "dead_zone", 0.0..=0.95, base.map(|b| b.dead_zone))?;
         let curve_exponent =
             layer.number(file.curve_exponent, "curve_exponent", 0.2..=5.0, base.map(|b| b.curve_exponent))?;

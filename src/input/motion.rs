@@ -153,9 +153,9 @@ impl MappingTable {
     /// Reads a `[targets]` table (for example `spacemouse = "scene"`) layered over `self`;
     /// `name` is used in messages, which give line and column.
     pub fn parse(&self, text: &str, name: &str) -> Result<Self, CalibrationError> {
-        let file: TargetsFile = toml::from_str(text).map_err(|e| {
-            let (line, column) = e.span().map_or((1, 1), |s| line_column(text, s.start));
-            CalibrationError::Invalid { path: name.to_owned(), line, column, message: e.message().to_owned() }
+        let file: TargetsFile = crate::scene::parse_toml(text).map_err(|(span, message)| {
+            let (line, column) = span.map_or((1, 1), |s| line_column(text, s.start));
+            CalibrationError::Invalid { path: name.to_owned(), line, column, message }
         })?;
         Ok(file.over(*self))
     }

@@ -259,7 +259,8 @@ impl MouseSettings {
     /// used in messages.
     pub fn parse_layer(text: &str, name: &str, base: Option<&Self>) -> Result<Self, CalibrationError> {
         let layer = Layer { text, name, what: "mouse settings file" };
-        let file: MouseFile = toml::from_str(text).map_err(|e| layer.at(e.span(), e.message().to_owned()))?;
+        let file: MouseFile =
+            crate::scene::parse_toml(text).map_err(|(span, message)| layer.at(span, message))?;
         let trackball = layer.value(file.trackball, "trackball", base.map(|b| b.trackball))?;
         let cursor_plane = layer.value(file.cursor_plane, "cursor_plane", base.map(|b| b.cursor_plane))?;
         let trackball_speed = layer.number(

@@ -142,7 +142,8 @@ impl InputSettings {
         folder: Option<&Path>,
     ) -> Result<SettingsLayer, CalibrationError> {
         let layer = Layer { text, name, what: "input settings file" };
-        let file: InputFile = toml::from_str(text).map_err(|e| layer.at(e.span(), e.message().to_owned()))?;
+        let file: InputFile =
+            crate::scene::parse_toml(text).map_err(|(span, message)| layer.at(span, message))?;
         let place = |p: Option<PathBuf>| match (p, folder) {
             (Some(p), Some(dir)) if p.is_relative() => Some(dir.join(p)),
             (p, _) => p,

@@ -8,6 +8,7 @@
 
 mod colour;
 mod file;
+mod finite;
 mod head;
 mod screen;
 mod timeline;
@@ -307,9 +308,21 @@ impl Scene {
             let (line, column) = span.map_or((1, 1), |s| line_column(text, s.start));
             SceneError::Invalid { path: name.to_owned(), line, column, message }
         };
-        let file: SceneFile = toml::from_str(text).map_err(|e| at(e.span(), e.message().to_owned()))?;
+        let file: SceneFile = parse_toml(text).map_err(|(span, message)| at(span, message))?;
         resolve(file, name, base_dir, &at)
     }
+}
+
+/// Parses TOML `text` into `T`, first refusing any value that is not a finite number
+/// (`nan`, `inf`, or too large for an `f32`); an error gives the byte range it is at, when
+/// known, and a sentence.
+pub fn parse_toml<T: serde::de::DeserializeOwned>(
+    text: &str,
+) -> Result<T, (Option<std::ops::Range<usize>>, String)> {
+    if let Err((span, key)) = finite::check_finite(text) {
+        return Err((Some(span), format!("`{key}` must be a finite number")));
+    }
+    toml::from_str(text).map_err(|e| (e.span(), e.message().to_owned()))
 }
 
 /// The shortest timeline step, seconds.

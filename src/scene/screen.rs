@@ -112,7 +112,7 @@ impl ScreenCalibration {
         };
         let missing =
             |key: &str| at(None, format!("`{key}` is missing (a complete screen calibration needs it)"));
-        let file: File = toml::from_str(text).map_err(|e| at(e.span(), e.message().to_owned()))?;
+        let file: File = super::parse_toml(text).map_err(|(span, message)| at(span, message))?;
         let number = |v: Option<Spanned<f32>>, key: &str, range: Range<f32>, fallback: Option<f32>| match v {
             Some(v) if range.contains(v.get_ref()) => Ok(*v.get_ref()),
             Some(v) => Err(at(

@@ -244,6 +244,29 @@ fn the_input_table_names_a_settings_file_beside_the_scene() {
 }
 
 #[test]
+fn nan_and_infinities_are_refused_where_they_are_written_in_every_table() {
+    for (text, key, line) in [
+        ("[camera]\nup = [0.0, nan, 0.0]\n", "camera.up[1]", 2),
+        ("[environment]\nintensity = inf\n", "environment.intensity", 2),
+        (
+            "[[clay]]\nshape = \"sphere\"\nradius_m = 0.05\nrotation_deg = [0.0, -inf, 0.0]\n",
+            "clay[1].rotation_deg[1]",
+            4,
+        ),
+        (
+            "[[tool]]\nname = \"t\"\nradius_m = 0.01\naction = \"add\"\nglyph_opacity = nan\n",
+            "tool[1].glyph_opacity",
+            5,
+        ),
+        ("[material]\nspecular = 1e39\n", "material.specular", 2),
+    ] {
+        let (l, _, message) = err(text);
+        assert_eq!(l, line, "{message}");
+        assert_eq!(message, format!("`{key}` must be a finite number"));
+    }
+}
+
+#[test]
 fn timelines_that_would_never_end_and_keys_out_of_reach_are_refused_at_their_line() {
     let tool = "[[tool]]\nname = \"t\"\nradius_m = 0.01\naction = \"add\"\n";
     // A step too short for any work to end, at the key's own line.
@@ -256,14 +279,23 @@ fn timelines_that_would_never_end_and_keys_out_of_reach_are_refused_at_their_lin
             "{tool}[[key]]\ntime_s = {time}\ntool = \"t\"\nposition_m = {position}\nrotation_deg = {rotation}\n"
         )
     };
-    for (text, expected) in [
-        (key("1e12", "[0.0, 0.0, 0.0]", "[0.0, 0.0, 0.0]"), "time_s must be 0 to 86400 s"),
-        (key("1.0", "[1e30, 0.0, 0.0]", "[0.0, 0.0, 0.0]"), "position_m must be within ±100 m"),
-        (key("1.0", "[nan, 0.0, 0.0]", "[0.0, 0.0, 0.0]"), "position_m must be within ±100 m"),
-        (key("1.0", "[0.0, 0.0, 0.0]", "[0.0, inf, 0.0]"), "rotation_deg must be finite"),
+    // Out of range: at the key's table; no number at all: at the value itself.
+    for (text, expected, at) in [
+        (key("1e12", "[0.0, 0.0, 0.0]", "[0.0, 0.0, 0.0]"), "time_s must be 0 to 86400 s", (5, 1)),
+        (key("1.0", "[1e30, 0.0, 0.0]", "[0.0, 0.0, 0.0]"), "position_m must be within ±100 m", (5, 1)),
+        (
+            key("1.0", "[nan, 0.0, 0.0]", "[0.0, 0.0, 0.0]"),
+            "`key[1].position_m[0]` must be a finite number",
+            (8, 15),
+        ),
+        (
+            key("1.0", "[0.0, 0.0, 0.0]", "[0.0, inf, 0.0]"),
+            "`key[1].rotation_deg[1]` must be a finite number",
+            (9, 22),
+        ),
     ] {
-        let (line, _, message) = err(&text);
-        assert_eq!(line, 5, "the key's table: {message}");
+        let (line, column, message) = err(&text);
+        assert_eq!((line, column), at, "{message}");
         assert!(message.contains(expected), "{message}");
     }
     // A capture late enough that the f32 time would stop advancing (262,144 s at the default
@@ -275,4 +307,10 @@ fn timelines_that_would_never_end_and_keys_out_of_reach_are_refused_at_their_lin
     );
     // Within bounds, the same scene loads.
     Scene::parse(&format!("{tool}[[capture]]\nname = \"late\"\ntime_s = 10000.0\n"), "t.toml", None).unwrap();
+}
+
+#[test]
+fn a_calibration_with_nan_is_refused_at_the_value() {
+    let e = ScreenCalibration::parse("[screen]\nwidth_m = nan\n", "s.toml").unwrap_err().to_string();
+    assert_eq!(e, "s.toml:2:11: `screen.width_m` must be a finite number");
 }
