@@ -30,4 +30,9 @@ pub use brick::{
 pub use history::{HistoryConfig, HistoryError, HistoryStats, BRICK_BYTES};
 pub use levels::{COLOUR_DETAIL_TOLERANCE, DETAIL_TOLERANCE};
 pub use sample::FieldReader;
+
+/// The finest voxel sizes a field may have, metres: from 0.1 mm (a 20 cm figure is then 2 000
+/// voxels across) to 5 cm. Scenes and sculpt files outside it are refused, so that no file
+/// sets the clay at a scale whose work never ends.
+pub const VOXEL_SIZE_RANGE_M: std::ops::RangeInclusive<f32> = 1e-4..=0.05;
 pub use tree::{bricks_reading, whole_rows, DirtySet, Field, HistoryStep, Ranges};

@@ -925,8 +925,12 @@ fn read_meta(raw: &[u8]) -> Result<(Meta, Field), String> {
     if m.format != "argile sculpt" || m.brick_size != BRICK_SIZE {
         return Err(format!("its META chunk describes `{}` with bricks of {}", m.format, m.brick_size));
     }
-    if !(m.voxel_size_m.is_finite() && m.voxel_size_m > 0.0 && m.voxel_size_m < 1.0) {
-        return Err(format!("its voxel size {} m is not a usable size", m.voxel_size_m));
+    if !(m.voxel_size_m.is_finite() && crate::field::VOXEL_SIZE_RANGE_M.contains(&m.voxel_size_m)) {
+        let (lo, hi) = (crate::field::VOXEL_SIZE_RANGE_M.start(), crate::field::VOXEL_SIZE_RANGE_M.end());
+        return Err(format!(
+            "its voxel size {} m is not a usable size (Argile works from {lo} to {hi} m)",
+            m.voxel_size_m
+        ));
     }
     if !(m.iso > 0.0 && m.iso < 1.0) {
         return Err(format!("its iso-level {} is outside (0, 1)", m.iso));
@@ -1237,6 +1241,17 @@ mod tests {
         assert_eq!(back.field.transform(), f.transform());
         assert_eq!(back.scene_toml.as_deref(), Some("[camera]\nfov_y_deg = 30.0\n"));
         assert!(bytes.len() < f.brick_count() * BRICK_RECORD, "compressed: {} bytes", bytes.len());
+    }
+
+    #[test]
+    fn voxel_sizes_no_scene_allows_are_refused_in_files_too() {
+        for voxel in [1e-30, 5e-5, 0.2] {
+            let bytes = encode(&Field::new(voxel, 0.5), None, &mut |_| {});
+            let e = decode(&bytes, "tiny.argile", &mut |_| {}).unwrap_err().to_string();
+            assert!(e.contains("is not a usable size (Argile works from 0.0001 to 0.05 m)"), "{e}");
+        }
+        let bytes = encode(&Field::new(1e-4, 0.5), None, &mut |_| {});
+        assert!(decode(&bytes, "fine.argile", &mut |_| {}).is_ok());
     }
 
     #[test]

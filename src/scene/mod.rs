@@ -306,7 +306,7 @@ impl Scene {
     pub fn parse(text: &str, name: &str, base_dir: Option<&Path>) -> Result<Scene, SceneError> {
         let at = |span: Option<std::ops::Range<usize>>, message: String| {
             let (line, column) = span.map_or((1, 1), |s| line_column(text, s.start));
-            SceneError::Invalid { path: name.to_owned(), line, column, message }
+            SceneError::Invalid { path: name.to_owned(), line, column, message: tidy(&message) }
         };
         let file: SceneFile = parse_toml(text).map_err(|(span, message)| at(span, message))?;
         resolve(file, name, base_dir, &at)
@@ -322,7 +322,30 @@ pub fn parse_toml<T: serde::de::DeserializeOwned>(
     if let Err((span, key)) = finite::check_finite(text) {
         return Err((Some(span), format!("`{key}` must be a finite number")));
     }
-    toml::from_str(text).map_err(|e| (e.span(), e.message().to_owned()))
+    toml::from_str(text).map_err(|e| (e.span(), tidy(e.message())))
+}
+
+/// The longest message about a file's content, in characters: what a file says is quoted in
+/// errors cut to this.
+pub const MESSAGE_LIMIT: usize = 300;
+
+/// A message that quotes a file's text, fit for a terminal: control characters escaped
+/// (no escape sequence reaches it) and cut to [`MESSAGE_LIMIT`] characters.
+pub fn tidy(message: &str) -> String {
+    let mut out = String::with_capacity(message.len().min(4 * MESSAGE_LIMIT));
+    let mut chars = message.chars();
+    for c in chars.by_ref().take(MESSAGE_LIMIT) {
+        if c.is_control() && c != '\n' {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    let rest = chars.count();
+    if rest > 0 {
+        out.push_str(&format!("… ({rest} more characters)"));
+    }
+    out
 }
 
 /// The shortest timeline step, seconds.
@@ -447,7 +470,7 @@ fn solid_of(spec: &ClaySpec, span: &std::ops::Range<usize>, at: &At<'_>) -> Resu
 fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) -> Result<Scene, SceneError> {
     let whole = 0..0;
     let field_voxel = file.field.voxel_size_m;
-    if !(field_voxel.is_finite() && (1e-4..=0.05).contains(&field_voxel)) {
+    if !(field_voxel.is_finite() && crate::field::VOXEL_SIZE_RANGE_M.contains(&field_voxel)) {
         return Err(at(
             None,
             format!("[field] voxel_size_m must be between 0.0001 and 0.05 metres, not {field_voxel}"),

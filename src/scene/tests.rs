@@ -314,3 +314,14 @@ fn a_calibration_with_nan_is_refused_at_the_value() {
     let e = ScreenCalibration::parse("[screen]\nwidth_m = nan\n", "s.toml").unwrap_err().to_string();
     assert_eq!(e, "s.toml:2:11: `screen.width_m` must be a finite number");
 }
+
+#[test]
+fn what_a_file_says_is_quoted_cut_and_escaped() {
+    let long = "x".repeat(10_000);
+    let (_, _, message) =
+        err(&format!("[[key]]\ntime_s = 0.0\ntool = \"{long}\"\nposition_m = [0.0, 0.0, 0.0]\n"));
+    assert!(message.chars().count() < MESSAGE_LIMIT + 40, "{} characters", message.len());
+    assert!(message.contains("more characters)"), "{message}");
+    let (_, _, message) = err("[[key]]\ntime_s = 0.0\ntool = \"\\u001b[2J\"\nposition_m = [0.0, 0.0, 0.0]\n");
+    assert!(!message.contains('\u{1b}') && message.contains("\\u{1b}[2J"), "{message:?}");
+}
