@@ -348,6 +348,13 @@ pub fn tidy(message: &str) -> String {
     out
 }
 
+/// The largest length a scene gives (a radius, a size, a falloff), metres.
+pub const MAX_LENGTH_M: f32 = 10.0;
+/// The largest scale factor of a clay primitive or a tool.
+pub const MAX_SCALE: f32 = 10.0;
+/// The most finest-level samples a freeform tool's region may copy.
+pub const MAX_FREEFORM_SAMPLES: u32 = 1 << 24;
+
 /// The shortest timeline step, seconds.
 pub const MIN_STEP_S: f32 = 1e-4;
 /// The most steps a timeline may take (its last key or capture over its step).
@@ -373,10 +380,13 @@ pub(super) fn positive(
     span: &std::ops::Range<usize>,
     at: &At<'_>,
 ) -> Result<f32, SceneError> {
-    if value.is_finite() && value > 0.0 {
+    if value.is_finite() && value > 0.0 && value <= MAX_LENGTH_M {
         Ok(value)
     } else {
-        Err(at(Some(span.clone()), format!("{what} must be a positive number of metres, not {value}")))
+        Err(at(
+            Some(span.clone()),
+            format!("{what} must be a positive number of metres up to {MAX_LENGTH_M}, not {value}"),
+        ))
     }
 }
 
@@ -535,7 +545,12 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
         let span = spanned.span();
         let spec = spanned.get_ref();
         let solid = solid_of(spec, &span, at)?;
-        positive(spec.scale, "scale", &span, at)?;
+        if !(spec.scale.is_finite() && spec.scale > 0.0 && spec.scale <= MAX_SCALE) {
+            return Err(at(
+                Some(span),
+                format!("scale must be a factor more than 0 and at most {MAX_SCALE}, not {}", spec.scale),
+            ));
+        }
         let colour = spec.colour.unwrap_or(SceneColour([0.6, 0.6, 0.6])).with_alpha(1.0);
         let op = match spec.op {
             OpSpec::Union => CsgOp::Union,
@@ -633,12 +648,30 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
             return Err(at(Some(span), format!("a tool named `{}` is already defined", t.name)));
         }
         let shape = tool::shape_of(t, &span, at)?;
-        let scale = Vec3::from(t.scale);
-        for c in t.scale {
-            if !(c.is_finite() && c > 0.0) {
+        if let SceneToolShape::Freeform { min_m, max_m } = &shape {
+            // The region's clay is copied into a dense grid of the finest voxels.
+            let samples = ((*max_m - *min_m) / field_voxel).ceil().max(Vec3::ONE);
+            let count = f64::from(samples.x) * f64::from(samples.y) * f64::from(samples.z);
+            if count > f64::from(MAX_FREEFORM_SAMPLES) {
                 return Err(at(
                     Some(span),
-                    format!("scale must be three positive numbers, not {:?}", t.scale),
+                    format!(
+                        "the freeform region spans {} × {} × {} voxels of {field_voxel} m: over the \
+                         {MAX_FREEFORM_SAMPLES} samples a tool may copy; choose a smaller region",
+                        samples.x, samples.y, samples.z
+                    ),
+                ));
+            }
+        }
+        let scale = Vec3::from(t.scale);
+        for c in t.scale {
+            if !(c.is_finite() && c > 0.0 && c <= MAX_SCALE) {
+                return Err(at(
+                    Some(span),
+                    format!(
+                        "scale must be three factors more than 0 and at most {MAX_SCALE}, not {:?}",
+                        t.scale
+                    ),
                 ));
             }
         }

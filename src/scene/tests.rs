@@ -174,7 +174,7 @@ fn tool_errors_name_the_line_and_what_to_change() {
     let (_, _, message) = err(&format!("{TOOL}shape = \"torus\"\nmajor_radius_m = 0.01\naction = \"add\"\n"));
     assert!(message.contains("needs `minor_radius_m`"), "{message}");
     let (_, _, message) = err(&format!("{TOOL}radius_m = 0.01\nscale = [1.0, 0.0, 1.0]\naction = \"add\"\n"));
-    assert!(message.contains("scale must be three positive numbers"), "{message}");
+    assert!(message.contains("scale must be three factors more than 0"), "{message}");
     let (line, _, message) = err(&format!("{TOOL}radius_m = 0.01\naction = \"polish\"\n"));
     assert_eq!(line, 4);
     assert!(message.contains("unknown variant `polish`"), "{message}");
@@ -324,4 +324,33 @@ fn what_a_file_says_is_quoted_cut_and_escaped() {
     assert!(message.contains("more characters)"), "{message}");
     let (_, _, message) = err("[[key]]\ntime_s = 0.0\ntool = \"\\u001b[2J\"\nposition_m = [0.0, 0.0, 0.0]\n");
     assert!(!message.contains('\u{1b}') && message.contains("\\u{1b}[2J"), "{message:?}");
+}
+
+#[test]
+fn lengths_scales_and_freeform_regions_that_would_run_away_are_refused() {
+    let clay = |extra: &str| format!("[[clay]]\nshape = \"sphere\"\nradius_m = 0.05\n{extra}");
+    let (line, _, message) = err("[[clay]]\nshape = \"sphere\"\nradius_m = 1e6\n");
+    assert_eq!(line, 1);
+    assert!(
+        message.contains("radius_m must be a positive number of metres up to 10, not 1000000"),
+        "{message}"
+    );
+    let (_, _, message) = err(&clay("scale = 1e9\n"));
+    assert!(message.contains("scale must be a factor more than 0 and at most 10"), "{message}");
+    let tool = |extra: &str| format!("[[tool]]\nname = \"t\"\naction = \"add\"\n{extra}");
+    let (_, _, message) = err(&tool("radius_m = 0.01\nscale = [1e9, 1.0, 1.0]\n"));
+    assert!(message.contains("scale must be three factors"), "{message}");
+    let (_, _, message) = err(&tool("shape = \"freeform\"\nregion_min_m = [-100.0, -100.0, -100.0]\nregion_max_m = [100.0, 100.0, 100.0]\n"));
+    assert!(
+        message.contains("the freeform region spans") && message.contains("choose a smaller region"),
+        "{message}"
+    );
+    let (_, _, message) =
+        err("[[tool]]\nname = \"s\"\naction = \"stamp\"\nradius_m = 0.01\nfalloff_m = 1e9\n");
+    assert!(message.contains("falloff_m must be a positive number of metres up to 10"), "{message}");
+    // A region of 10 cm at the default voxel copies 1e6 samples: fine.
+    let text = tool(
+        "shape = \"freeform\"\nregion_min_m = [-0.05, -0.05, -0.05]\nregion_max_m = [0.05, 0.05, 0.05]\n",
+    );
+    Scene::parse(&format!("{}{text}", clay("")), "t.toml", None).unwrap();
 }
