@@ -5,8 +5,11 @@ use std::path::Path;
 use crate::render::Environment;
 use crate::scene::EnvironmentChoice;
 
-/// Largest environment image accepted, in texels per side (a 16k × 8k panorama).
-const MAX_SIDE: u32 = 16384;
+/// Largest environment image accepted, in texels per side.
+const MAX_SIDE: u32 = 8192;
+/// Most texels an environment image may have (an 8k × 4k panorama): decoding and converting
+/// one takes about 0.9 GB at its peak.
+const MAX_TEXELS: u64 = 8192 * 4096;
 
 /// A problem with an environment image; names the file.
 #[derive(Debug, thiserror::Error)]
@@ -38,6 +41,8 @@ pub fn load_environment(choice: &EnvironmentChoice) -> Result<Environment, Envir
 
 fn load_equirect(path: &Path) -> Result<Environment, EnvironmentError> {
     let fail = |reason: String| EnvironmentError { path: path.display().to_string(), reason };
+    // A FIFO or a device would block or never end: only regular files are opened.
+    crate::io::text::regular_file(path).map_err(|e| fail(format!("cannot open it: {e}")))?;
     let reader = image::ImageReader::open(path)
         .map_err(|e| fail(format!("cannot open it: {e}")))?
         .with_guessed_format()
@@ -47,6 +52,12 @@ fn load_equirect(path: &Path) -> Result<Environment, EnvironmentError> {
         reader.into_dimensions().map_err(|e| fail(format!("not a PNG or HDR image: {e}")))?;
     if width > MAX_SIDE || height > MAX_SIDE || width < 4 || height < 2 {
         return Err(fail(format!("{width}x{height} texels is outside 4x2 ..= {MAX_SIDE}x{MAX_SIDE}")));
+    }
+    if u64::from(width) * u64::from(height) > MAX_TEXELS {
+        return Err(fail(format!(
+            "{width}x{height} texels is more than the {MAX_TEXELS} an environment may have (8192x4096); \
+             scale it down"
+        )));
     }
     if width != 2 * height {
         tracing::warn!("environment image {} is {width}x{height}, not 2:1; it is stretched", path.display());
@@ -96,5 +107,20 @@ mod tests {
     fn bad_images_are_named() {
         let e = load_environment(&EnvironmentChoice::Image("no/such.hdr".into())).unwrap_err();
         assert!(e.to_string().starts_with("environment image no/such.hdr: cannot open it"), "{e}");
+    }
+
+    #[test]
+    fn images_too_large_to_hold_and_fifos_are_refused_before_decoding() {
+        let dir = std::env::temp_dir().join(format!("argile-env-limits-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let big = dir.join("big.png");
+        image::GrayImage::new(8192, 4097).save(&big).unwrap();
+        let e = load_environment(&EnvironmentChoice::Image(big.clone())).unwrap_err().to_string();
+        assert!(e.contains("8192x4097 texels is more than") && e.contains("scale it down"), "{e}");
+        let fifo = dir.join("pipe.png");
+        assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+        let e = load_environment(&EnvironmentChoice::Image(fifo)).unwrap_err().to_string();
+        assert!(e.contains("FIFO"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
