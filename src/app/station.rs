@@ -224,8 +224,9 @@ impl InputScript {
                 parsed.push(ScriptEvent::Release(key(k)?.key));
             }
             if let Some(w) = e.wheel {
-                if !w.is_finite() {
-                    return Err(at(span, "`wheel` must be a finite number of steps".into()));
+                // A wheel turn is zoomed step by step: a hundred steps is far beyond any use.
+                if !(w.is_finite() && w.abs() <= 100.0) {
+                    return Err(at(span, format!("`wheel` must be -100 to 100 steps, not {w}")));
                 }
                 parsed.push(ScriptEvent::Wheel(w));
             }
@@ -1762,6 +1763,16 @@ impl ApplicationHandler for WindowApp<'_, '_> {
 mod tests {
     use super::*;
     use crate::mesh::remesh_dirty;
+
+    #[test]
+    fn a_wheel_turned_without_end_is_refused() {
+        let e = InputScript::parse("[[event]]\nframe = 1\nwheel = 1e30\n", "s.toml").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "s.toml:1:1: `wheel` must be -100 to 100 steps, not 1000000000000000000000000000000"
+        );
+        assert!(InputScript::parse("[[event]]\nframe = 1\nwheel = -100.0\n", "s.toml").is_ok());
+    }
 
     #[test]
     fn scripts_parse_every_event_and_name_the_line_of_a_mistake() {
