@@ -254,3 +254,34 @@ fn a_scripted_run_with_nowhere_to_save_leaves_its_strokes_to_recover() {
     let slab = argile::app::final_field(&argile::scene::Scene::load(&scene).unwrap());
     assert!(sculpt.field.mass() < 0.95 * slab.mass(), "the groove is recovered");
 }
+
+#[test]
+fn a_scripted_run_that_can_save_nowhere_fails_and_its_journal_keeps_the_strokes() {
+    let x = Xvfb::start();
+    let (dir, scene, script, state) = carving_case("station-save-nowhere");
+    // Neither the place asked for (under a file) nor the fallback folder can be written; the
+    // autosave journal can.
+    std::fs::write(dir.join("a-file"), "in the way").unwrap();
+    std::fs::create_dir_all(state.join("argile")).unwrap();
+    std::fs::write(state.join("argile/saved"), "in the way").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_argile"))
+        .arg("run")
+        .arg(&scene)
+        .args(["--frames", "8", "--size", "320x240", "--input-script"])
+        .arg(&script)
+        .arg("--save-to")
+        .arg(dir.join("a-file/sculpt.argile"))
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .env("XDG_STATE_HOME", &state)
+        .output()
+        .expect("the argile binary runs");
+    let said = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(!out.status.success(), "{said}");
+    assert!(said.contains("nothing could be saved as the station closed"), "{said}");
+    assert!(!said.contains("stays in memory"), "the process ends: {said}");
+    std::fs::remove_file(state.join("argile/saved")).unwrap();
+    let recover = recover_in(&state);
+    let said = String::from_utf8_lossy(&recover.stdout);
+    assert!(recover.status.success() && said.contains("its sculpt is recovered"), "{said}");
+}

@@ -1009,13 +1009,26 @@ impl<'s> Station<'s> {
     /// save key writes from then on, and a message says so; without one, or when that fails
     /// too, the error says the sculpt stays in memory.
     pub fn save(&mut self) -> Result<PathBuf> {
+        self.save_keeping("the sculpt stays in memory; `argile run --save-to FILE` saves it elsewhere")
+    }
+
+    /// [`Station::save`] as the station closes: where no file can be written, the error says
+    /// the strokes stay in the autosave journal (the session is then left unclosed).
+    fn save_at_exit(&mut self) -> Result<PathBuf> {
+        self.save_keeping(
+            "nothing could be saved as the station closed; its strokes stay in the autosave journal, \
+             which `argile recover` gives back",
+        )
+    }
+
+    /// Saves (see [`Station::save`]); `kept` says where the sculpt is when nothing can be written.
+    fn save_keeping(&mut self, kept: &'static str) -> Result<PathBuf> {
         let view = self.stored_view();
         let scene = self.scene_toml.as_deref();
         let write = |path: &Path| super::sculpt::save_playback(&self.playback, scene, Some(&view), path);
         let path = match write(&self.save_to) {
             Ok(()) => self.save_to.clone(),
             Err(e) => {
-                let kept = "the sculpt stays in memory; `argile run --save-to FILE` saves it elsewhere";
                 let Some(dir) = &self.fallback_dir else { return Err(e.context(kept)) };
                 let stem = self.save_to.file_stem().map_or("sculpt".into(), |s| s.to_string_lossy());
                 let stamp = std::time::SystemTime::now()
@@ -1488,7 +1501,7 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
     // Strokes made after a save are saved again.
     let changed = stats.undo_in_memory + stats.undo_on_disk > 0 && saved.is_none();
     if quitting && (changed || app.station.unsaved_strokes > 0) {
-        saved = Some(app.station.save()?);
+        saved = Some(app.station.save_at_exit()?);
     }
     let session = app.station.playback.finish_autosave();
     match (session, app.station.unsaved_strokes) {
