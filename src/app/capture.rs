@@ -153,7 +153,7 @@ fn render_over(
         if !playback.advance_until(capture.time_s, progress, || super::signals::received().is_some()) {
             println!(
                 "{} received at {:.2} s of the timeline: stopping before the capture {}",
-                super::signals::name(super::signals::received().unwrap_or(0)),
+                super::signals::received().map_or("a signal", super::signals::name),
                 playback.time_s(),
                 capture.name
             );

@@ -64,7 +64,7 @@ pub fn save_scene_sculpt(
     if !playback.advance_until(end, |_| {}, || super::signals::received().is_some()) {
         println!(
             "{} received at {:.2} s of the timeline's {end:.2} s: saving the sculpt as far as it got",
-            super::signals::name(super::signals::received().unwrap_or(0)),
+            super::signals::received().map_or("a signal", super::signals::name),
             playback.time_s()
         );
     }

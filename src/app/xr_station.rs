@@ -712,7 +712,11 @@ pub fn run_xr(
     for m in sculptor.messages.drain(..) {
         tracing::info!("{m}");
     }
-    report.saved = Some(sculptor.save()?);
+    // A run that ends with its instance lost saved the sculpt as it went, and nothing
+    // happened since; one that ends with a session saves it now.
+    if station.is_some() {
+        report.saved = Some(sculptor.save()?);
+    }
     if let Some(session) = sculptor.playback.finish_autosave() {
         super::autosave::close_session(session);
     }
@@ -760,7 +764,7 @@ fn wait_for_runtime(
 impl XrReport {
     /// The medians of the frame's stages and of the poses' ages, one line.
     pub fn stage_summary(&self) -> String {
-        let median = |v: Vec<f64>| super::bench::median(v);
+        let median = super::bench::median;
         let stage = |i: usize| median(self.stage_ms.iter().map(|s| s[i]).collect());
         let age = |i: usize| median(self.pose_age_ms.iter().map(|s| s[i]).collect());
         format!(

@@ -6,20 +6,7 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 
-/// Whether the process `pid` is alive (not a zombie): read from `/proc`. Where there is no
-/// `/proc`, every process counts as alive, so nothing of another process is ever removed.
-pub fn process_alive(pid: u32) -> bool {
-    if !Path::new("/proc/self").exists() {
-        return true;
-    }
-    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
-        // The state follows the command name, which may hold spaces and parentheses.
-        Ok(stat) => stat
-            .rfind(')')
-            .is_some_and(|i| !matches!(stat[i + 1..].split_whitespace().next(), Some("Z" | "X" | "x"))),
-        Err(_) => false,
-    }
-}
+use super::process::process_alive;
 
 /// Removes the temporary files that writes of `name` in `dir` by processes now dead left
 /// behind (a process killed while writing), so they never pile up beside the file.

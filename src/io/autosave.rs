@@ -41,6 +41,7 @@ use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 
 use super::journal::{self, Reader};
+use super::process::start_token;
 use super::{decode, encode_bricks, write_atomically, SceneParts, Sculpt, StoredTool};
 use crate::field::{Brick, Field, LevelKey};
 
@@ -178,19 +179,6 @@ impl SessionInfo {
     }
 }
 
-/// The start time field of `/proc/PID/stat` (after the command name, which may hold spaces)
-/// of a live process.
-fn start_token(pid: u32) -> Option<String> {
-    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
-    let mut fields = stat[stat.rfind(')')? + 1..].split_whitespace();
-    // Fields after the name start at field 3, the state: a dead process (a zombie not yet
-    // reaped) owns nothing. The start time is field 22.
-    if matches!(fields.next(), Some("Z" | "X" | "x")) {
-        return None;
-    }
-    fields.nth(18).map(str::to_owned)
-}
-
 const SESSION_FILE: &str = "session.json";
 const CLOSED_FILE: &str = "closed";
 
@@ -293,13 +281,8 @@ impl Autosave {
         let tools: Arc<[StoredTool]> = Arc::from(tools);
         let first = snapshot_path(&dir, 0);
         let encoding = Instant::now();
-        let bytes = encode_bricks(
-            field.transform().voxel_size_m,
-            field.iso(),
-            mirror.iter().map(|(k, b)| (*k, &**b)).collect(),
-            SceneParts { toml: scene_toml, tools: &tools, view: None },
-            &mut |_| {},
-        );
+        let (voxel_size_m, iso) = (field.transform().voxel_size_m, field.iso());
+        let bytes = snapshot_bytes((voxel_size_m, iso), mirror.iter(), scene_toml, &tools);
         let first_written = disk.write_whole(&first, &bytes).map_err(|e| format!("{e:#}"));
         tracing::debug!(
             "autosave: the first snapshot ({} bytes) took {:.1} ms",
@@ -315,8 +298,8 @@ impl Autosave {
             config,
             shared: Arc::clone(&shared),
             mirror,
-            voxel_size_m: field.transform().voxel_size_m,
-            iso: field.iso(),
+            voxel_size_m,
+            iso,
             scene_toml: scene_toml.map(Arc::from),
             tools,
             journal: None,
@@ -602,9 +585,8 @@ impl Writer {
             (self.voxel_size_m, self.iso, self.scene_toml.clone(), Arc::clone(&self.tools));
         let n = job.stroke;
         let spawned = std::thread::Builder::new().name("autosave-checkpoint".into()).spawn(move || {
-            let bricks = job.bricks.iter().map(|(k, b)| (*k, &**b)).collect();
-            let parts = SceneParts { toml: scene.as_deref(), tools: &tools, view: None };
-            let bytes = encode_bricks(voxel, iso, bricks, parts, &mut |_| {});
+            let bricks = job.bricks.iter().map(|(k, b)| (k, b));
+            let bytes = snapshot_bytes((voxel, iso), bricks, scene.as_deref(), &tools);
             let result =
                 disk.write_whole(&snapshot_path(&dir, job.stroke), &bytes).map_err(|e| format!("{e:#}"));
             let _ = tx.send(Msg::Checkpointed(job.stroke, result));
@@ -699,7 +681,8 @@ impl Writer {
                 left.push(format!("{e:#}"));
             }
         }
-        if marked.is_ok() {
+        // The mark stays with files that could not be removed, so no start recovers them.
+        if marked.is_ok() && left.is_empty() {
             let _ = self.disk.remove(&self.dir.join(CLOSED_FILE));
         }
         let _ = std::fs::remove_dir(&self.dir);
@@ -716,6 +699,18 @@ impl Writer {
             ))),
         }
     }
+}
+
+/// A snapshot of the sculpt: `bricks` in a field of `(voxel size, iso-level)`, with the scene's
+/// text and tools.
+fn snapshot_bytes<'b>(
+    (voxel_size_m, iso): (f32, f32),
+    bricks: impl Iterator<Item = (&'b LevelKey, &'b Arc<Brick>)>,
+    scene_toml: Option<&str>,
+    tools: &[StoredTool],
+) -> Vec<u8> {
+    let bricks = bricks.map(|(k, b)| (*k, &**b)).collect();
+    encode_bricks(voxel_size_m, iso, bricks, SceneParts { toml: scene_toml, tools, view: None }, &mut |_| {})
 }
 
 /// A session folder found at start.

@@ -133,10 +133,12 @@ mod atomic;
 pub mod autosave;
 mod journal;
 mod lazy;
+mod process;
 pub mod text;
 
-pub use atomic::{process_alive, write_atomically};
+pub use atomic::write_atomically;
 pub use lazy::{ChunkInfo, LazySculpt};
+pub use process::process_alive;
 
 /// The format version this build writes.
 pub const VERSION: u32 = 4;

@@ -232,6 +232,13 @@ pub(super) struct Hands {
     paths: [xr::Path; 2],
 }
 
+/// Where `s` is in `base` at `time`, when the runtime tracks both its position and orientation.
+fn located(s: &xr::Space, base: &xr::Space, time: xr::Time) -> Result<Option<Pose>, XrError> {
+    let l = s.locate(base, time).map_err(failed("xrLocateSpace"))?;
+    let valid = xr::SpaceLocationFlags::POSITION_VALID | xr::SpaceLocationFlags::ORIENTATION_VALID;
+    Ok(l.location_flags.contains(valid).then(|| pose_of(l.pose)))
+}
+
 /// A pose as OpenXR gives it, in Argile's types.
 pub(super) fn pose_of(p: xr::Posef) -> Pose {
     let o = p.orientation;
@@ -335,12 +342,6 @@ impl Hands {
         let mut out = [HandState::default(); 2];
         for (i, hand) in out.iter_mut().enumerate() {
             let sub = self.paths[i];
-            let locate = |s: &xr::Space| -> Result<Option<Pose>, XrError> {
-                let l = s.locate(space, time).map_err(failed("xrLocateSpace"))?;
-                let valid =
-                    xr::SpaceLocationFlags::POSITION_VALID | xr::SpaceLocationFlags::ORIENTATION_VALID;
-                Ok(l.location_flags.contains(valid).then(|| pose_of(l.pose)))
-            };
             let float = |a: &xr::Action<f32>| {
                 a.state(session, sub).map(|s| s.current_state).map_err(failed("xrGetActionStateFloat"))
             };
@@ -353,8 +354,8 @@ impl Hands {
                 .map_err(failed("xrGetActionStateVector2f"))?
                 .current_state;
             *hand = HandState {
-                grip: locate(&self.spaces[i].0)?,
-                aim: locate(&self.spaces[i].1)?,
+                grip: located(&self.spaces[i].0, space, time)?,
+                aim: located(&self.spaces[i].1, space, time)?,
                 trigger: float(&self.trigger)?,
                 squeeze: float(&self.squeeze)?,
                 thumbstick: Vec2::new(stick.x, stick.y),
@@ -375,13 +376,7 @@ impl Hands {
         space: &xr::Space,
         time: xr::Time,
     ) -> Result<[Option<Pose>; 2], XrError> {
-        let mut out = [None, None];
-        for (i, grip) in out.iter_mut().enumerate() {
-            let l = self.spaces[i].0.locate(space, time).map_err(failed("xrLocateSpace"))?;
-            let valid = xr::SpaceLocationFlags::POSITION_VALID | xr::SpaceLocationFlags::ORIENTATION_VALID;
-            *grip = l.location_flags.contains(valid).then(|| pose_of(l.pose));
-        }
-        Ok(out)
+        Ok([located(&self.spaces[0].0, space, time)?, located(&self.spaces[1].0, space, time)?])
     }
 
     /// Plays `pulse` on its hand.

@@ -5,7 +5,7 @@
 //!            ┌──────────────── (loss) ───────────────┐
 //!  IDLE ─► READY ─► SYNCHRONIZED ⇄ VISIBLE ⇄ FOCUSED  ▼
 //!   ▲  begin ▲           │                        LOSS_PENDING ─► save, destroy, recreate
-//!   │        └ xrBeginSession                        (instance loss: save, quit)
+//!   │        └ xrBeginSession       (instance loss ends every session: `XrStation` owns it)
 //!   │                    ▼
 //!   └──── end ◄──── STOPPING        IDLE ─► EXITING ─► save, destroy, quit
 //! ```
@@ -162,12 +162,6 @@ impl Lifecycle {
         (command, complaint)
     }
 
-    /// The instance is about to be lost: nothing can be recreated on it.
-    pub fn on_instance_loss(&mut self) -> Command {
-        self.running = false;
-        Command::SaveAndQuit
-    }
-
     /// Argile wants to quit: while frames run, `xrRequestExitSession` (returns true) and the
     /// runtime walks the session down to EXITING; otherwise there is nothing to wait for.
     pub fn request_exit(&mut self) -> bool {
@@ -222,7 +216,7 @@ mod tests {
     }
 
     #[test]
-    fn loss_saves_and_recreates_unless_quitting_or_the_instance_is_lost() {
+    fn loss_saves_and_recreates_unless_quitting() {
         let mut l = Lifecycle::new();
         l.on_state(Ready);
         l.on_state(Synchronized);
@@ -234,10 +228,6 @@ mod tests {
         l.on_state(Ready);
         l.request_exit();
         assert_eq!(l.on_state(LossPending).0, Command::SaveAndQuit);
-        let mut l = Lifecycle::new();
-        l.on_state(Ready);
-        assert_eq!(l.on_instance_loss(), Command::SaveAndQuit);
-        assert!(!l.running());
     }
 
     #[test]

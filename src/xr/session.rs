@@ -264,7 +264,7 @@ pub struct XrStation {
     /// The runtime offers XR_KHR_composition_layer_depth.
     depth_layers: bool,
     runtime: String,
-    /// The runtime asked to quit, or the instance is lost.
+    /// The session ended for good (the runtime or Argile asked to quit).
     finished: bool,
     /// The instance is lost.
     lost: bool,
@@ -546,9 +546,6 @@ impl XrStation {
                 }
                 xr::Event::InstanceLossPending(_) => {
                     tracing::warn!("OpenXR: the runtime is going away (instance loss pending)");
-                    if let Some(live) = self.live.as_mut() {
-                        live.lifecycle.on_instance_loss();
-                    }
                     self.lose_instance();
                     return Ok(Some(Turn::InstanceLost));
                 }
@@ -589,7 +586,6 @@ impl XrStation {
     /// useful now) and every later turn says so.
     fn lose_instance(&mut self) {
         self.destroy_session();
-        self.finished = true;
         self.lost = true;
     }
 
