@@ -22,6 +22,11 @@ use clap::{Parser, Subcommand};
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
+    /// The most memory the clay a command builds or opens, its mesh and its images may need,
+    /// e.g. 8G or 512M (default: half of this machine's memory). Work whose estimate is over it
+    /// is refused before it starts, with the estimate.
+    #[arg(long, global = true, value_parser = argile::app::budget::parse_size)]
+    memory_budget: Option<u64>,
 }
 
 #[derive(Subcommand)]
@@ -274,6 +279,9 @@ fn main() -> ExitCode {
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
     let cli = Cli::parse();
+    if let Some(bytes) = cli.memory_budget {
+        app::budget::set(bytes);
+    }
     let result = match cli.command {
         // A headset when one is ready, else the desktop station.
         None => {
@@ -416,6 +424,18 @@ fn station(
 ) -> Result<()> {
     // SIGINT, SIGTERM and SIGHUP stop the desk or the headset as a clean exit does.
     app::signals::install()?;
+    // Every file named is checked before anything runs: headless, none of them is read, and a
+    // mistyped name would go unnoticed.
+    let named = [
+        ("input script", &options.script),
+        ("key bindings", &options.keys),
+        ("screen calibration", &options.calibration),
+        ("desk input settings", &options.input),
+    ];
+    for (kind, path) in named.iter().filter_map(|(k, p)| p.as_ref().map(|p| (k, p))) {
+        argile::io::text::regular_file(path)
+            .with_context(|| format!("cannot read {kind} file {}", path.display()))?;
+    }
     let mut sculpt = None;
     let (scene, scene_text) = match &scene_path {
         Some(p) if app::is_sculpt(p) => {
@@ -490,12 +510,26 @@ fn station(
     }
     if let Some(reason) = app::no_display_reason() {
         println!("No window can open here: {reason}. Rendering the {name} scene headless.");
+        let unused: Vec<&str> = [
+            ("--frames", options.frames.is_some()),
+            ("--input-script", options.script.is_some()),
+            ("--keys", options.keys.is_some()),
+            ("--calibration", options.calibration.is_some()),
+            ("--input", options.input.is_some()),
+            ("--opentrack", options.opentrack.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(flag, given)| given.then_some(flag))
+        .collect();
+        if !unused.is_empty() {
+            println!("Headless, these drive only the window and are not used: {}.", unused.join(", "));
+        }
         let options = RenderOptions {
             out_dir: PathBuf::from("argile-out"),
-            display_modes: vec![DisplayMode::Anaglyph],
+            display_modes: vec![options.display_mode.unwrap_or(DisplayMode::Anaglyph)],
             progress: true,
             validation: options.validation,
-            size_px: None,
+            size_px: options.window_px,
         };
         let written = match sculpt {
             Some(s) => app::render_sculpt(&scene, s.field, &options)?,

@@ -470,7 +470,8 @@ fn a_recovered_sculpt_keeps_the_scenes_freeform_tools() {
     let mut playback = argile::app::Playback::new_autosaved(&scene, |field, tools| {
         let disk = Arc::new(LocalDisk);
         Some(Autosave::start_with_tools(&root, field, (Some(&text), tools), "test", fast(), disk).unwrap())
-    });
+    })
+    .unwrap();
     let dir = playback.autosave().unwrap().dir().to_path_buf();
     playback.advance_to(10.0, |_| {});
     let strokes = playback.autosave().unwrap().strokes();

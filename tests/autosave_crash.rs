@@ -56,7 +56,8 @@ fn reference_states(scene: &Scene) -> Vec<Field> {
     let mut playback = Playback::new_autosaved(scene, |field, _| {
         initial = Some(field.clone());
         None
-    });
+    })
+    .unwrap();
     let steps = |f: &Field| {
         let s = f.history_stats();
         s.undo_in_memory + s.undo_on_disk + s.dropped

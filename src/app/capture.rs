@@ -66,6 +66,7 @@ pub fn renderer_for(
 ) -> Result<Renderer> {
     let environment = load_environment(&scene.environment.choice)?;
     let (width, height) = size_px.unwrap_or((scene.output.width_px, scene.output.height_px));
+    super::budget::admit_render(&scene.source, width, height, scene.output.samples)?;
     let desc = RendererDesc { width, height, samples: scene.output.samples, validation, view_passes };
     Ok(Renderer::new(&desc, &environment, scene.environment.intensity)?)
 }
@@ -130,7 +131,7 @@ fn render_over(
     };
     let mut playback = match field {
         Some(field) => Playback::on_field(&scene, field, &[], start),
-        None => Playback::new_autosaved(&scene, start),
+        None => Playback::new_autosaved(&scene, start)?,
     };
     let initial = mesh_all(playback.field());
     playback.field_mut().take_dirty();

@@ -32,8 +32,12 @@ pub(super) fn end_s(scene: &Scene) -> f32 {
 
 /// `scene`'s clay at the end of its timeline (after its last key and capture).
 pub fn final_field(scene: &Scene) -> Field {
-    let mut playback = Playback::new(scene);
-    playback.advance_to(end_s(scene), |_| {});
+    played_to_end(Playback::new(scene))
+}
+
+/// The clay of `playback` at the end of its scene's timeline.
+fn played_to_end(mut playback: Playback<'_>) -> Field {
+    playback.advance_to(end_s(playback.scene()), |_| {});
     playback.into_field()
 }
 
@@ -67,7 +71,8 @@ pub fn export(
     let mesh = if is_sculpt(input) {
         welded_surface(&load_sculpt(input)?.field)
     } else {
-        final_mesh(&Scene::load(input)?)
+        let scene = Scene::load(input)?;
+        welded_surface(&played_to_end(Playback::build(&scene)?))
     };
     if mesh.indices.is_empty() {
         bail!(

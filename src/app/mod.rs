@@ -5,6 +5,7 @@
 mod autosave;
 pub mod bench;
 mod bench_io;
+pub mod budget;
 mod calibrate;
 mod capture;
 mod comfort;

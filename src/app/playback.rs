@@ -1,6 +1,8 @@
 //! Playing a scene's timeline on the CPU side: the initial clay, then the scripted hands
 //! sculpting it, step by step at the scene's fixed step rate.
 
+use anyhow::{bail, Result};
+
 use crate::field::Field;
 use crate::io::autosave::Autosave;
 use crate::io::StoredTool;
@@ -10,7 +12,9 @@ use std::sync::Arc;
 use crate::clay::{window_around, Clay, ClayParams, ClayTool};
 use crate::math::{Aabb, Vec3};
 use crate::scene::{Hand, HandState, Key, Scene, SceneTool, SceneToolShape};
-use crate::tool::{rasterize_solid, Action, Freeform, Stroke, Tool, ToolFrame, ToolShape};
+use crate::tool::{
+    rasterize_solid, rasterize_solid_in_slabs, Action, Freeform, Stroke, Tool, ToolFrame, ToolShape,
+};
 
 /// Lattice points of room the virtual clay's window keeps around the tools' paths and the
 /// clay they touch.
@@ -55,8 +59,19 @@ fn slot(hand: Hand) -> usize {
 }
 
 impl<'s> Playback<'s> {
-    /// The scene at time 0: its initial clay, rasterised into a new field.
+    /// The scene at time 0: its initial clay, rasterised into a new field, whatever it costs
+    /// (for scenes known to be small; a user's scene goes through [`Playback::build`]).
     pub fn new(scene: &'s Scene) -> Self {
+        let mut field = empty_field(scene);
+        for primitive in &scene.clay {
+            rasterize_solid(&mut field, &primitive.solid, primitive.op, primitive.colour);
+        }
+        Self::on_field(scene, field, &[], |_, _| None)
+    }
+
+    /// The scene at time 0, its initial clay built by [`initial_clay`]: refused over the
+    /// memory budget, with progress, and broken off by a stopping signal.
+    pub fn build(scene: &'s Scene) -> Result<Self> {
         Self::new_autosaved(scene, |_, _| None)
     }
 
@@ -73,18 +88,13 @@ impl<'s> Playback<'s> {
         restore_tools(&mut self.tools, stored)
     }
 
-    /// The scene at time 0, with autosave started by `start` on the initial clay, before the
-    /// first stroke; every stroke that ends is then journaled.
+    /// The scene at time 0, its initial clay built by [`initial_clay`], with autosave started
+    /// by `start` on it, before the first stroke; every stroke that ends is then journaled.
     pub fn new_autosaved(
         scene: &'s Scene,
         start: impl FnOnce(&mut Field, &[StoredTool]) -> Option<Autosave>,
-    ) -> Self {
-        let mut field = Field::new(scene.voxel_size_m, scene.iso);
-        field.set_history_config(super::history_config());
-        for primitive in &scene.clay {
-            rasterize_solid(&mut field, &primitive.solid, primitive.op, primitive.colour);
-        }
-        Self::on_field(scene, field, &[], start)
+    ) -> Result<Self> {
+        Ok(Self::on_field(scene, initial_clay(scene)?, &[], start))
     }
 
     /// The scene at time 0 over `field` (a sculpt opened from a file) instead of its initial
@@ -137,6 +147,11 @@ impl<'s> Playback<'s> {
         let old = self.autosave.take();
         self.autosave = start(&mut self.field, &stored_tools(&self.tools));
         old
+    }
+
+    /// The scene it plays.
+    pub fn scene(&self) -> &'s Scene {
+        self.scene
     }
 
     /// The clay.
@@ -455,6 +470,70 @@ impl<'s> Playback<'s> {
         });
         Some((state.tool, put.unwrap_or(state.pose)))
     }
+}
+
+/// An empty field of the scene's voxel size and iso-level, with the station's history.
+fn empty_field(scene: &Scene) -> Field {
+    let mut field = Field::new(scene.voxel_size_m, scene.iso);
+    field.set_history_config(super::history_config());
+    field
+}
+
+/// Points of initial clay past which its build says what it builds and shows its progress:
+/// about a second's work.
+const LONG_BUILD_POINTS: f64 = 5e7;
+
+/// The scene's initial clay, rasterised into a new field: refused before any of it is built
+/// when its estimate is over the memory budget (see [`super::budget`]); a long build says what
+/// it builds and shows its progress on the terminal; a stopping signal (SIGINT, SIGTERM or
+/// SIGHUP, where the station handles them) breaks it off between two slabs of bricks, with an
+/// error that says so (nothing has been sculpted yet: nothing is lost).
+pub fn initial_clay(scene: &Scene) -> Result<Field> {
+    super::budget::admit_scene(scene)?;
+    let cost = super::budget::scene_clay_cost(scene);
+    let mut field = empty_field(scene);
+    let long = cost.points > LONG_BUILD_POINTS;
+    if long {
+        eprintln!(
+            "building the initial clay of {}: about {:.3e} bricks, {} of memory",
+            scene.source,
+            cost.keys,
+            super::budget::size_text(super::budget::clay_bytes(&cost))
+        );
+    }
+    let bar = if long { indicatif::ProgressBar::new(1000) } else { indicatif::ProgressBar::hidden() };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {percent}%")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar.set_message("building the clay");
+    let count = scene.clay.len() as f64;
+    for (i, primitive) in scene.clay.iter().enumerate() {
+        let mut progress = |f: f64| {
+            bar.set_position(((i as f64 + f) / count * 1000.0) as u64);
+            match super::signals::received() {
+                Some(_) => std::ops::ControlFlow::Break(()),
+                None => std::ops::ControlFlow::Continue(()),
+            }
+        };
+        let whole = rasterize_solid_in_slabs(
+            &mut field,
+            &primitive.solid,
+            primitive.op,
+            primitive.colour,
+            &mut progress,
+        );
+        if !whole || super::signals::received().is_some() {
+            bar.abandon();
+            let signal = super::signals::received().map_or("a signal", super::signals::name);
+            bail!(
+                "{signal} received while building the initial clay of {}: stopped before any sculpting",
+                scene.source
+            );
+        }
+    }
+    bar.finish_and_clear();
+    Ok(field)
 }
 
 /// The freeform tools among `tools`, as a sculpt stores them (each with its index).

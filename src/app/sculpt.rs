@@ -12,7 +12,7 @@ use crate::field::{BRICK_SIZE, LEVELS};
 use crate::io::autosave::AutosaveConfig;
 use crate::io::write_atomically;
 use crate::io::{
-    encode_sculpt, read_file, EncodeOptions, LazySculpt, SceneParts, Sculpt, StoredView, VERSION,
+    encode_sculpt, read_file_within, EncodeOptions, LazySculpt, SceneParts, Sculpt, StoredView, VERSION,
 };
 use crate::math::{IVec3, Vec3};
 use crate::scene::Scene;
@@ -57,7 +57,7 @@ pub fn save_scene_sculpt(
     let source = scene_path.display().to_string();
     let mut playback = Playback::new_autosaved(&scene, |field, tools| {
         autosave.and_then(|config| start_autosave(field, (Some(&text), tools), &source, config))
-    });
+    })?;
     let end = end_s(&scene);
     // A stopping signal (handled where autosave runs) ends the timeline early: the sculpt as
     // far as it got is saved, and the session closed.
@@ -102,7 +102,8 @@ pub fn load_sculpt_with_progress(path: &Path, progress: bool) -> Result<Sculpt> 
     );
     bar.set_message(format!("loading {}", path.display()));
     // Read chunk by chunk: a large sculpt is never in memory twice.
-    let sculpt = read_file(path, &mut |f| bar.set_position((f * 1000.0) as u64));
+    let limit = super::budget::sculpt_limit();
+    let sculpt = read_file_within(path, &limit, &mut |f| bar.set_position((f * 1000.0) as u64));
     bar.finish_and_clear();
     Ok(sculpt?)
 }
@@ -151,7 +152,7 @@ pub fn convert_sculpt(
         let text = crate::io::text::read_text(input, crate::io::text::SCENE_LIMIT)
             .with_context(|| format!("cannot read scene file {}", input.display()))?;
         let scene = Scene::parse(&text, &input.display().to_string(), input.parent())?;
-        let mut playback = Playback::new(&scene);
+        let mut playback = Playback::build(&scene)?;
         playback.advance_to(end_s(&scene), |_| {});
         let tools = playback.stored_tools();
         Sculpt { field: playback.into_field(), scene_toml: Some(text), tools, view: None }

@@ -264,7 +264,7 @@ impl InputScript {
     /// Reads and parses a script file.
     pub fn load(path: &Path) -> Result<Self, FileError> {
         let text = crate::io::text::read_text(path, crate::io::text::SCENE_LIMIT)
-            .map_err(|source| FileError::Read { kind: "input script", path: path.to_owned(), source })?;
+            .map_err(|reason| FileError::Read { kind: "input script", path: path.to_owned(), reason })?;
         Self::parse(&text, &path.display().to_string())
     }
 }
@@ -475,19 +475,32 @@ pub struct Station<'s> {
 impl<'s> Station<'s> {
     /// The station on `scene` at time 0, for a window of `window_px`.
     pub fn new(scene: &'s Scene, bindings: KeyBindings, window_px: (u32, u32), save_to: PathBuf) -> Self {
-        Self::new_autosaved(scene, bindings, window_px, save_to, |_, _| None)
+        Self::on_playback(scene, Playback::new(scene), bindings, window_px, save_to)
     }
 
-    /// As [`Station::new`], journaling every finished stroke with the autosave session `start`
-    /// opens on the initial clay (given the scene's freeform tools).
+    /// As [`Station::new`], its initial clay built as [`Playback::new_autosaved`] builds it
+    /// (within the memory budget, with progress, stopped by a signal), journaling every
+    /// finished stroke with the autosave session `start` opens on it (given the scene's
+    /// freeform tools).
     pub fn new_autosaved(
         scene: &'s Scene,
         bindings: KeyBindings,
         window_px: (u32, u32),
         save_to: PathBuf,
         start: impl FnOnce(&mut crate::field::Field, &[crate::io::StoredTool]) -> Option<Autosave>,
+    ) -> anyhow::Result<Self> {
+        let playback = Playback::new_autosaved(scene, start)?;
+        Ok(Self::on_playback(scene, playback, bindings, window_px, save_to))
+    }
+
+    /// The station on `playback` of `scene`, for a window of `window_px`.
+    fn on_playback(
+        scene: &'s Scene,
+        playback: Playback<'s>,
+        bindings: KeyBindings,
+        window_px: (u32, u32),
+        save_to: PathBuf,
     ) -> Self {
-        let playback = Playback::new_autosaved(scene, start);
         let rig = scene.rig;
         let distance = (rig.eye_m - rig.target_m).length();
         let settings = InputSettings::shipped();
@@ -1139,7 +1152,7 @@ impl<'s> Station<'s> {
     /// start when it holds unsaved strokes. A file that cannot be read changes nothing and the
     /// error names it.
     pub fn open(&mut self, path: &Path) -> Result<()> {
-        let sculpt = crate::io::read_file(path, &mut |_| {})?;
+        let sculpt = crate::io::read_file_within(path, &super::budget::sculpt_limit(), &mut |_| {})?;
         let same_scene = sculpt.scene_toml.is_some() && sculpt.scene_toml == self.scene_toml;
         self.stroke = None;
         // The tools first: the autosave session started on the new clay stores them.
@@ -1424,7 +1437,7 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
     };
     let mut app = WindowApp {
         station: {
-            let mut station = Station::new_autosaved(scene, bindings, window_px, save_to, start);
+            let mut station = Station::new_autosaved(scene, bindings, window_px, save_to, start)?;
             if let Some(c) = calibration {
                 station.set_calibration(c);
             }
@@ -1563,6 +1576,7 @@ impl WindowApp<'_, '_> {
             validation: self.options.validation,
             view_passes: None,
         };
+        super::budget::admit_render(&scene.source, desc.width, desc.height, desc.samples)?;
         let renderer = Renderer::for_window(
             &desc,
             &environment,

@@ -571,7 +571,7 @@ pub fn run_xr(
     };
     let playback = match opened {
         Some(sculpt) => Playback::on_field(scene, sculpt.field, &sculpt.tools, start),
-        None => Playback::new_autosaved(scene, start),
+        None => Playback::new_autosaved(scene, start)?,
     };
     let mut sculptor = XrSculptor::new(scene, playback, save_to, options.left_handed);
     sculptor.set_scene_toml(options.scene_toml.clone());

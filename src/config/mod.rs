@@ -263,7 +263,7 @@ impl KeyBindings {
         };
         let Some(path) = path else { return Ok((shipped, None)) };
         let text = crate::io::text::read_text(&path, crate::io::text::SETTINGS_LIMIT)
-            .map_err(|source| FileError::Read { kind: "key bindings", path: path.clone(), source })?;
+            .map_err(|reason| FileError::Read { kind: "key bindings", path: path.clone(), reason })?;
         let bindings = Self::parse_over(&text, &path.display().to_string(), Some(&shipped))?;
         Ok((bindings, Some(path)))
     }

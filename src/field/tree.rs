@@ -351,6 +351,20 @@ impl Field {
         keys * per_key + self.tiles.len() * (per_key + 4) + samples
     }
 
+    /// Bytes a field of `keys` stored bricks, `own` of which hold samples of their own (of one
+    /// colour; the others share constant tiles), takes in memory: what
+    /// [`Field::memory_bytes`] counts for them, plus the spare room of its maps and of the
+    /// dirty set, which holds each key until the mesher drains it. For estimates of a build
+    /// before it starts.
+    pub fn estimated_bytes(keys: f64, own: f64) -> f64 {
+        use std::mem::size_of;
+        let per_key =
+            size_of::<(BrickKey, Arc<Brick>)>() + size_of::<(BrickKey, Ranges)>() + size_of::<BrickKey>() + 3; // a control byte in each of the three tables
+                                                                                                               // The tables are at most 7/8 full and double as they grow: about 1.6 slots a key.
+        let per_brick = size_of::<Brick>() + 2 * size_of::<usize>() + BRICK_VOLUME * size_of::<Quantum>();
+        keys * per_key as f64 * 1.6 + own * per_brick as f64
+    }
+
     /// Number of stored keys, on every level, that share a constant tile.
     pub fn tile_count(&self) -> usize {
         self.levels

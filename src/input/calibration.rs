@@ -90,7 +90,7 @@ impl Layer<'_> {
 /// Reads a device file's text; the error names the file and says what it is (`kind`).
 pub(crate) fn read_text(path: &Path, kind: &'static str) -> Result<String, CalibrationError> {
     crate::io::text::read_text(path, crate::io::text::SETTINGS_LIMIT)
-        .map_err(|source| CalibrationError::Read { kind, path: path.to_owned(), source })
+        .map_err(|reason| CalibrationError::Read { kind, path: path.to_owned(), reason })
 }
 
 /// One of the device's raw axes, in report order.

@@ -147,7 +147,8 @@ impl LazySculpt {
             }
             None => {
                 sculpt.source.seek(0).map_err(fail)?;
-                let whole = decode_from(&mut *sculpt.source, &mut |_| {}).map_err(fail)?;
+                let whole =
+                    decode_from(&mut *sculpt.source, &super::MemoryLimit::NONE, &mut |_| {}).map_err(fail)?;
                 sculpt.bytes_read = sculpt.source.len();
                 sculpt.field = whole.field;
                 sculpt.tools = whole.tools;

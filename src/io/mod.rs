@@ -882,16 +882,51 @@ fn read_chunk_from(
 /// Decodes a sculpt, refusing anything not written whole by [`encode`] (see the module docs);
 /// `file` names the file in errors, `progress` gets the fraction of the bytes read.
 pub fn decode(bytes: &[u8], file: &str, progress: &mut dyn FnMut(f32)) -> Result<Sculpt, SculptError> {
-    decode_from(&mut Slice { bytes, at: 0 }, progress)
+    decode_from(&mut Slice { bytes, at: 0 }, &MemoryLimit::NONE, progress)
         .map_err(|reason| SculptError { file: file.to_owned(), reason })
 }
 
 /// Reads the sculpt file `path` chunk by chunk (a chunk at a time in memory besides the
 /// sculpt), as [`decode`] checks it; `progress` gets the fraction of the file read.
 pub fn read_file(path: &std::path::Path, progress: &mut dyn FnMut(f32)) -> Result<Sculpt, SculptError> {
+    read_file_within(path, &MemoryLimit::NONE, progress)
+}
+
+/// The most memory a sculpt's clay may take as it is read.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MemoryLimit {
+    /// Bytes, as [`Field::estimated_bytes`] counts them.
+    pub bytes: u64,
+    /// What the limit is, for the refusal ("the memory budget of 4 GiB (…)").
+    pub what: String,
+}
+
+impl MemoryLimit {
+    /// No limit.
+    pub const NONE: MemoryLimit = MemoryLimit { bytes: u64::MAX, what: String::new() };
+}
+
+/// [`read_file`] within `limit`: a file whose bricks alone (each key's bookkeeping, before any
+/// sample) would take more is refused before a brick is read, and one whose clay grows past it
+/// as it is read (bricks of samples of their own, which a file cannot announce) is refused
+/// there, with what was read so far given back to the allocator.
+pub fn read_file_within(
+    path: &std::path::Path,
+    limit: &MemoryLimit,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Sculpt, SculptError> {
     let fail = |reason: String| SculptError { file: path.display().to_string(), reason };
     let mut source = FileSource::open(path, 1 << 20).map_err(fail)?;
-    decode_from(&mut source, progress).map_err(fail)
+    decode_from(&mut source, limit, progress).map_err(fail)
+}
+
+/// The refusal of a sculpt whose clay needs `bytes` (at least) of memory, over `limit`.
+fn over_limit(limit: &MemoryLimit, bytes: f64, read: u64, bricks: u64) -> String {
+    format!(
+        "its clay would need more than {:.0} MB of memory ({read} of its {bricks} bricks read), over {}",
+        bytes / 1e6,
+        limit.what
+    )
 }
 
 /// Reads and checks the 12-byte header: the version and the chunk count.
@@ -943,7 +978,8 @@ fn read_meta(raw: &[u8]) -> Result<(Meta, Field), String> {
 
 /// Reads the bricks of a BRKS or BRKL chunk (chunk number `index`) into `field`, refusing a
 /// brick `keys` already holds; with `block`, refusing a chunk that is not the bricks of that
-/// block (level, block, count) as its index entry says. Returns the bricks read.
+/// block (level, block, count) as its index entry says. Returns how many of the bricks read
+/// hold samples of their own (not one density throughout).
 fn read_brick_chunk(
     tag: &[u8; 4],
     raw: &[u8],
@@ -974,6 +1010,7 @@ fn read_brick_chunk(
             ));
         }
     }
+    let mut own = 0;
     for record in records.chunks_exact(BRICK_RECORD) {
         let (key, brick) = read_brick(record)?;
         if let Some(e) = block.filter(|e| block_of(key) != e.block) {
@@ -984,8 +1021,9 @@ fn read_brick_chunk(
             return Err(format!("brick {key} is stored twice"));
         }
         field.insert_brick(key, brick);
+        own += usize::from(field.level_density_range(key).is_some_and(|(lo, hi)| lo != hi));
     }
-    Ok(count)
+    Ok(own)
 }
 
 /// The undo history as HIST chunks give it, step by step.
@@ -1147,7 +1185,11 @@ fn read_head(
     Ok(head)
 }
 
-fn decode_from(source: &mut dyn Source, progress: &mut dyn FnMut(f32)) -> Result<Sculpt, String> {
+fn decode_from(
+    source: &mut dyn Source,
+    limit: &MemoryLimit,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Sculpt, String> {
     let (mut buf, mut raw) = (Vec::new(), Vec::new());
     let mut pending = None;
     let Head {
@@ -1163,6 +1205,12 @@ fn decode_from(source: &mut dyn Source, progress: &mut dyn FnMut(f32)) -> Result
         chunks_read,
     } = read_head(source, &mut raw, &mut buf, &mut pending)?;
     let mut keys: HashSet<LevelKey> = HashSet::new();
+    let lowest = Field::estimated_bytes(meta.bricks as f64, 0.0);
+    if lowest > limit.bytes as f64 {
+        return Err(over_limit(limit, lowest, 0, meta.bricks));
+    }
+    // Bricks read that hold samples of their own (not one density throughout).
+    let mut own = 0u64;
     let mut history = HistoryReader::default();
     // Version 4: the index entry the next brick chunk must match.
     let mut next_entry = 0;
@@ -1188,7 +1236,12 @@ fn decode_from(source: &mut dyn Source, progress: &mut dyn FnMut(f32)) -> Result
                 if !history.is_empty() {
                     return Err(format!("chunk {index} ({name}) follows the history"));
                 }
-                read_brick_chunk(&tag, &raw, index, entry.as_ref(), &mut keys, &mut field)?;
+                let read = read_brick_chunk(&tag, &raw, index, entry.as_ref(), &mut keys, &mut field)?;
+                own += read as u64;
+                let bytes = Field::estimated_bytes(meta.bricks as f64, own as f64);
+                if bytes > limit.bytes as f64 {
+                    return Err(over_limit(limit, bytes, keys.len() as u64, meta.bricks));
+                }
             }
             b"HIST" if version >= 2 => {
                 if let Some((entries, history_at)) = &directory {

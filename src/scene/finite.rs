@@ -66,6 +66,28 @@ fn value(v: &Value, path: &mut Vec<String>) -> Result<(), (Range<usize>, String)
     }
 }
 
+/// The byte range of the value at the dotted key `path` of TOML `text` (`camera.fov_y_deg`),
+/// else of the deepest table on the path that the text writes (its header), else `None`: where
+/// an error about a value belongs when the value is defaulted.
+pub fn span_of(text: &str, path: &str) -> Option<Range<usize>> {
+    let doc = toml_edit::ImDocument::parse(text).ok()?;
+    let mut table = doc.as_table();
+    let mut found = None;
+    let mut parts = path.split('.').peekable();
+    while let Some(part) = parts.next() {
+        let Some(item) = table.get(part) else { return found };
+        match item {
+            Item::Table(t) if parts.peek().is_some() => {
+                found = t.span().or(found);
+                table = t;
+            }
+            Item::Value(v) if parts.peek().is_none() => return v.span().or(found),
+            _ => return found,
+        }
+    }
+    found
+}
+
 fn name(path: &[String]) -> String {
     path.iter().fold(String::new(), |mut s, p| {
         if !s.is_empty() && !p.starts_with('[') {

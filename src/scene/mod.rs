@@ -37,14 +37,15 @@ pub const DEFAULT_SCENE_TOML: &str = include_str!("../../scenes/default.toml");
 #[derive(Debug, thiserror::Error)]
 pub enum FileError {
     /// The file cannot be read.
-    #[error("cannot read {kind} file {path}: {source}")]
+    #[error("cannot read {kind} file {path}: {reason}")]
     Read {
         /// What the file is ("scene", "calibration", ...).
         kind: &'static str,
         /// The file.
         path: PathBuf,
-        /// Why.
-        source: std::io::Error,
+        /// Why, said in the message (not an error source, whose text a chain of causes would
+        /// repeat).
+        reason: std::io::Error,
     },
     /// The file is not valid for its format (syntax, unknown key, bad value).
     #[error("{path}:{line}:{column}: {message}")]
@@ -278,7 +279,7 @@ impl Scene {
     /// Loads and validates a scene file.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
         let text = crate::io::text::read_text(path, crate::io::text::SCENE_LIMIT)
-            .map_err(|source| SceneError::Read { kind: "scene", path: path.to_owned(), source })?;
+            .map_err(|reason| SceneError::Read { kind: "scene", path: path.to_owned(), reason })?;
         Scene::parse(&text, &path.display().to_string(), path.parent())
     }
 
@@ -309,7 +310,8 @@ impl Scene {
             SceneError::Invalid { path: name.to_owned(), line, column, message: tidy(&message) }
         };
         let file: SceneFile = parse_toml(text).map_err(|(span, message)| at(span, message))?;
-        resolve(file, name, base_dir, &at)
+        let key = |path: &str| finite::span_of(text, path);
+        resolve(file, name, base_dir, &at, &key)
     }
 }
 
@@ -354,6 +356,9 @@ pub const MAX_LENGTH_M: f32 = 10.0;
 pub const MAX_SCALE: f32 = 10.0;
 /// The most finest-level samples a freeform tool's region may copy.
 pub const MAX_FREEFORM_SAMPLES: u32 = 1 << 24;
+
+/// The largest intensity of a light or of the environment.
+pub const MAX_INTENSITY: f32 = 1000.0;
 
 /// The shortest timeline step, seconds.
 pub const MIN_STEP_S: f32 = 1e-4;
@@ -477,25 +482,55 @@ fn solid_of(spec: &ClaySpec, span: &std::ops::Range<usize>, at: &At<'_>) -> Resu
     })
 }
 
-fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) -> Result<Scene, SceneError> {
-    let whole = 0..0;
+/// Where a table's key is written (see [`finite::span_of`]): the place an error about its
+/// value points at.
+type KeyAt<'a> = dyn Fn(&str) -> Option<std::ops::Range<usize>> + 'a;
+
+/// Whether every coordinate of `p` lies within ±[`MAX_POSITION_M`].
+fn within_reach(p: [f32; 3]) -> bool {
+    p.iter().all(|c| c.is_finite() && c.abs() <= MAX_POSITION_M)
+}
+
+/// Refuses a number outside `range` at `span`: "`what` must be from … to …, not …".
+fn in_range(
+    value: f32,
+    range: std::ops::RangeInclusive<f32>,
+    what: &str,
+    span: Option<std::ops::Range<usize>>,
+    at: &At<'_>,
+) -> Result<f32, SceneError> {
+    if value.is_finite() && range.contains(&value) {
+        Ok(value)
+    } else {
+        Err(at(span, format!("{what} must be from {} to {}, not {value}", range.start(), range.end())))
+    }
+}
+
+fn resolve(
+    file: SceneFile,
+    name: &str,
+    base_dir: Option<&Path>,
+    at: &At<'_>,
+    key: &KeyAt<'_>,
+) -> Result<Scene, SceneError> {
     let field_voxel = file.field.voxel_size_m;
     if !(field_voxel.is_finite() && crate::field::VOXEL_SIZE_RANGE_M.contains(&field_voxel)) {
         return Err(at(
-            None,
+            key("field.voxel_size_m"),
             format!("[field] voxel_size_m must be between 0.0001 and 0.05 metres, not {field_voxel}"),
         ));
     }
     if !(file.field.iso > 0.0 && file.field.iso < 1.0) {
         return Err(at(
-            None,
+            key("field.iso"),
             format!("[field] iso must lie strictly between 0 and 1, not {}", file.field.iso),
         ));
     }
     let o = &file.output;
     if !(16..=8192).contains(&o.width_px) || !(16..=8192).contains(&o.height_px) {
+        let wrong = if (16..=8192).contains(&o.width_px) { "output.height_px" } else { "output.width_px" };
         return Err(at(
-            None,
+            key(wrong),
             format!(
                 "[output] image size must be 16..8192 pixels per side, not {}x{}",
                 o.width_px, o.height_px
@@ -503,31 +538,54 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
         ));
     }
     if !matches!(o.samples, 1 | 2 | 4 | 8) {
-        return Err(at(None, format!("[output] samples must be 1, 2, 4 or 8, not {}", o.samples)));
+        return Err(at(
+            key("output.samples"),
+            format!("[output] samples must be 1, 2, 4 or 8, not {}", o.samples),
+        ));
     }
     let c = &file.camera;
+    for (k, p) in [("camera.eye_m", c.eye_m), ("camera.target_m", c.target_m)] {
+        if !within_reach(p) {
+            return Err(at(
+                key(k),
+                format!("[camera] {} must be within ±{MAX_POSITION_M} m on each axis, not {p:?}", &k[7..]),
+            ));
+        }
+    }
     let eye = Vec3::from(c.eye_m);
     let target = Vec3::from(c.target_m);
     let distance = (target - eye).length();
     if distance < 1e-4 {
-        return Err(at(None, "[camera] eye_m and target_m must differ".to_owned()));
+        return Err(at(key("camera.target_m"), "[camera] eye_m and target_m must differ".to_owned()));
     }
     if Vec3::from(c.up).cross(target - eye).length_squared() < 1e-12 {
-        return Err(at(None, "[camera] up must not be parallel to the viewing direction".to_owned()));
+        return Err(at(
+            key("camera.up"),
+            "[camera] up must not be parallel to the viewing direction".to_owned(),
+        ));
     }
     if !(1.0..=170.0).contains(&c.fov_y_deg) {
-        return Err(at(None, format!("[camera] fov_y_deg must be between 1 and 170, not {}", c.fov_y_deg)));
+        return Err(at(
+            key("camera.fov_y_deg"),
+            format!("[camera] fov_y_deg must be between 1 and 170, not {}", c.fov_y_deg),
+        ));
     }
     if !(c.interaxial_m >= 0.0 && c.interaxial_m < 1.0) {
         return Err(at(
-            None,
+            key("camera.interaxial_m"),
             format!("[camera] interaxial_m must be between 0 and 1 metre, not {}", c.interaxial_m),
         ));
     }
     let convergence_m = c.convergence_m.unwrap_or(distance);
-    positive(convergence_m, "[camera] convergence_m", &whole, at)?;
-    if !(c.near_m > 0.0 && c.far_m > c.near_m) {
-        return Err(at(None, format!("[camera] need 0 < near_m < far_m, got {} and {}", c.near_m, c.far_m)));
+    let convergence_at = key("camera.convergence_m").or_else(|| key("camera.target_m")).unwrap_or(0..0);
+    positive(convergence_m, "[camera] convergence_m", &convergence_at, at)?;
+    in_range(c.near_m, 1e-4..=10.0, "[camera] near_m", key("camera.near_m"), at)?;
+    in_range(c.far_m, 0.01..=10_000.0, "[camera] far_m", key("camera.far_m"), at)?;
+    if c.far_m <= c.near_m {
+        return Err(at(
+            key("camera.far_m"),
+            format!("[camera] need near_m < far_m, got {} and {}", c.near_m, c.far_m),
+        ));
     }
     let rig = StereoRig {
         eye_m: eye,
@@ -551,6 +609,21 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
                 format!("scale must be a factor more than 0 and at most {MAX_SCALE}, not {}", spec.scale),
             ));
         }
+        if !within_reach(spec.position_m) {
+            return Err(at(
+                Some(span),
+                format!(
+                    "position_m must be within ±{MAX_POSITION_M} m on each axis, not {:?}",
+                    spec.position_m
+                ),
+            ));
+        }
+        if !spec.rotation_deg.iter().all(|a| a.is_finite() && a.abs() <= 3600.0) {
+            return Err(at(
+                Some(span),
+                format!("rotation_deg must be finite angles within ±3600°, not {:?}", spec.rotation_deg),
+            ));
+        }
         let colour = spec.colour.unwrap_or(SceneColour([0.6, 0.6, 0.6])).with_alpha(1.0);
         let op = match spec.op {
             OpSpec::Union => CsgOp::Union,
@@ -564,11 +637,15 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
     for spanned in &file.light {
         let span = spanned.span();
         let l = spanned.get_ref();
-        let radiance = Vec3::from(l.colour.0) * l.intensity;
-        if !(l.intensity >= 0.0 && l.intensity.is_finite()) {
+        let radiance = Vec3::from(l.colour.0)
+            * in_range(l.intensity, 0.0..=MAX_INTENSITY, "a light's intensity", Some(span.clone()), at)?;
+        if !l.position_m.is_none_or(within_reach) {
             return Err(at(
                 Some(span),
-                format!("light intensity must be zero or positive, not {}", l.intensity),
+                format!(
+                    "a light's position_m must be within ±{MAX_POSITION_M} m on each axis, not {:?}",
+                    l.position_m
+                ),
             ));
         }
         let attached_to = match l.attached_to {
@@ -605,35 +682,55 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
             })
         }
         (EnvironmentKind::Studio, Some(_)) => {
-            return Err(at(None, "[environment] `path` is only for kind = \"image\"".to_owned()))
+            return Err(at(
+                key("environment.path"),
+                "[environment] `path` is only for kind = \"image\"".to_owned(),
+            ))
         }
         (EnvironmentKind::Image, None) => {
             return Err(at(
-                None,
+                key("environment.kind"),
                 "[environment] kind = \"image\" needs `path` (an equirectangular .png or .hdr)".to_owned(),
             ))
         }
     };
     let environment = EnvironmentSettings {
         choice,
-        intensity: e.intensity.max(0.0),
+        intensity: in_range(
+            e.intensity,
+            0.0..=MAX_INTENSITY,
+            "[environment] intensity",
+            key("environment.intensity"),
+            at,
+        )?,
         show: e.show,
         background: Vec3::from(e.background.0),
     };
 
     let m = &file.material;
+    let of = |name: &str, value: f32, range| {
+        in_range(value, range, &format!("[material] {name}"), key(&format!("material.{name}")), at)
+    };
     let material = MaterialSettings {
-        shininess: m.shininess.clamp(1.0, 1024.0),
-        specular: m.specular.clamp(0.0, 1.0),
-        reflectivity: m.reflectivity.clamp(0.0, 1.0),
-        ambient: m.ambient.clamp(0.0, 4.0),
+        shininess: of("shininess", m.shininess, 1.0..=1024.0)?,
+        specular: of("specular", m.specular, 0.0..=1.0)?,
+        reflectivity: of("reflectivity", m.reflectivity, 0.0..=1.0)?,
+        ambient: of("ambient", m.ambient, 0.0..=4.0)?,
     };
 
     let s = &file.stage;
     let stage = if s.show {
+        for (k, p) in [("stage.min_m", s.min_m), ("stage.max_m", s.max_m)] {
+            if !within_reach(p) {
+                return Err(at(
+                    key(k),
+                    format!("[stage] {} must be within ±{MAX_POSITION_M} m on each axis, not {p:?}", &k[6..]),
+                ));
+            }
+        }
         let (min_m, max_m) = (Vec3::from(s.min_m), Vec3::from(s.max_m));
         if min_m.cmpge(max_m).any() {
-            return Err(at(None, "[stage] min_m must be below max_m on every axis".to_owned()));
+            return Err(at(key("stage.max_m"), "[stage] min_m must be below max_m on every axis".to_owned()));
         }
         Some(StageSettings { min_m, max_m, colour: Vec3::from(s.colour.0) })
     } else {
@@ -699,7 +796,7 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
             colour: t.colour.with_alpha(1.0),
             spacing: t.spacing,
             level_samples: t.level_samples,
-            glyph_opacity: t.glyph_opacity.clamp(0.0, 1.0),
+            glyph_opacity: in_range(t.glyph_opacity, 0.0..=1.0, "glyph_opacity", Some(span.clone()), at)?,
         });
     }
 
@@ -811,10 +908,29 @@ fn resolve(file: SceneFile, name: &str, base_dir: Option<&Path>, at: &At<'_>) ->
 
     let vc = &file.virtual_clay;
     if !(0.0..=1.0).contains(&vc.fluidity) {
-        return Err(at(None, format!("[virtual_clay] fluidity must be in [0, 1], not {}", vc.fluidity)));
+        return Err(at(
+            key("virtual_clay.fluidity"),
+            format!("[virtual_clay] fluidity must be in [0, 1], not {}", vc.fluidity),
+        ));
     }
     if !(vc.step_s > 0.0 && vc.step_s <= 1.0) {
-        return Err(at(None, format!("[virtual_clay] step_s must be in (0, 1] seconds, not {}", vc.step_s)));
+        return Err(at(
+            key("virtual_clay.step_s"),
+            format!("[virtual_clay] step_s must be in (0, 1] seconds, not {}", vc.step_s),
+        ));
+    }
+    if !vc.table_y_m.is_none_or(|y| y.is_finite() && y.abs() <= MAX_POSITION_M)
+        || !vc.fixed_boxes_m.iter().flatten().all(|p| within_reach(*p))
+    {
+        let k = if vc.table_y_m.is_some_and(|y| y.abs() > MAX_POSITION_M) {
+            "table_y_m"
+        } else {
+            "fixed_boxes_m"
+        };
+        return Err(at(
+            key(&format!("virtual_clay.{k}")),
+            format!("[virtual_clay] {k} must lie within ±{MAX_POSITION_M} m"),
+        ));
     }
     let virtual_clay = VirtualClaySettings {
         fluidity: vc.fluidity,

@@ -79,8 +79,8 @@ impl ScreenCalibration {
 
     /// Loads a calibration file, layered over the shipped one.
     pub fn load(path: &Path) -> Result<Self, FileError> {
-        let text = crate::io::text::read_text(path, crate::io::text::SETTINGS_LIMIT).map_err(|source| {
-            FileError::Read { kind: "screen calibration", path: path.to_owned(), source }
+        let text = crate::io::text::read_text(path, crate::io::text::SETTINGS_LIMIT).map_err(|reason| {
+            FileError::Read { kind: "screen calibration", path: path.to_owned(), reason }
         })?;
         Self::parse(&text, &path.display().to_string())
     }

@@ -23,7 +23,10 @@ pub use apply::{apply_tool, edit_level_for, StampCounters, HAND_SIZE_SAMPLES, MA
 pub use deform::{DeformError, Deformation, FIELD_VALUE_RANGE};
 pub use shape::{PlacedSolid, Solid};
 pub use shapes::{wyvill, Ellipsoid, Falloff, Freeform, ToolFrame, ToolShape};
-pub use stamp::{rasterize_solid, solid_density, stamp_sphere, CsgOp, SOLID_BAND_VOXELS};
+pub use stamp::{
+    rasterize_cost, rasterize_solid, rasterize_solid_in_slabs, solid_density, stamp_sphere, CsgOp,
+    RasterCost, SOLID_BAND_VOXELS,
+};
 pub use stroke::{Stroke, Tool, TICK_S};
 
 #[cfg(test)]

@@ -74,6 +74,35 @@ impl Solid {
         }
     }
 
+    /// The solid's volume and surface area, m³ and m² (a rounded box's are its sharp box's, a
+    /// little more). For estimates of what rasterising it costs.
+    pub fn volume_and_area(&self) -> (f64, f64) {
+        use std::f64::consts::PI;
+        match *self {
+            Solid::Sphere { radius_m } => {
+                let r = f64::from(radius_m);
+                (4.0 / 3.0 * PI * r.powi(3), 4.0 * PI * r * r)
+            }
+            Solid::Box { half_m } | Solid::RoundedBox { half_m, .. } => {
+                let [a, b, c] = half_m.to_array().map(f64::from);
+                (8.0 * a * b * c, 8.0 * (a * b + b * c + c * a))
+            }
+            Solid::Cylinder { radius_m, half_height_m } => {
+                let (r, h) = (f64::from(radius_m), 2.0 * f64::from(half_height_m));
+                (PI * r * r * h, 2.0 * PI * r * (r + h))
+            }
+            Solid::Torus { major_m, minor_m } => {
+                let (big, r) = (f64::from(major_m), f64::from(minor_m));
+                (2.0 * PI * PI * big * r * r, 4.0 * PI * PI * big * r)
+            }
+            Solid::Bar { half_length_m, radius_m } => {
+                let r = f64::from(radius_m);
+                let l = 2.0 * (f64::from(half_length_m) - r).max(0.0);
+                (PI * r * r * (l + 4.0 / 3.0 * r), 2.0 * PI * r * (l + 2.0 * r))
+            }
+        }
+    }
+
     /// A box containing the solid, in its local frame.
     pub fn local_bounds(&self) -> Aabb {
         let half = match *self {

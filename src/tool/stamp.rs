@@ -34,7 +34,9 @@
 
 use super::action::Action;
 use super::shape::PlacedSolid;
-use crate::field::{whole_rows, Colour, Field};
+use std::ops::ControlFlow;
+
+use crate::field::{whole_rows, Colour, Field, BRICK_SIZE, BRICK_VOLUME};
 use crate::math::{IVec3, Vec2, Vec3};
 
 /// Mixes the colour of `added` new matter into a sample that held `old_density` of matter.
@@ -208,30 +210,107 @@ pub fn solid_density(distance_voxels: f32) -> f32 {
 
 /// Rasterises a placed solid into the field with a CSG operation and a colour.
 pub fn rasterize_solid(field: &mut Field, solid: &PlacedSolid, op: CsgOp, colour: Colour) {
+    rasterize_solid_in_slabs(field, solid, op, colour, &mut |_| ControlFlow::Continue(()));
+}
+
+/// [`rasterize_solid`] one slab of bricks at a time (bricks of one z, lowest first), calling
+/// `progress` with the fraction of the solid's box done after each slab: it may break off,
+/// leaving the slabs done written and the rest untouched (returns `false`). Bricks that the
+/// solid's band does not reach are skipped (adding `max` and removing `min` with the
+/// complement leave them as they are): the field is the one a single walk over the box gives,
+/// bit for bit.
+pub fn rasterize_solid_in_slabs(
+    field: &mut Field,
+    solid: &PlacedSolid,
+    op: CsgOp,
+    colour: Colour,
+    progress: &mut dyn FnMut(f64) -> ControlFlow<()>,
+) -> bool {
     let transform = *field.transform();
-    let bounds = solid.bounds().expanded(transform.voxel_size_m * SOLID_BAND_VOXELS);
+    let h = transform.voxel_size_m;
+    let bounds = solid.bounds().expanded(h * SOLID_BAND_VOXELS);
     let lo = transform.world_to_index(bounds.min).floor().as_ivec3();
     let hi = transform.world_to_index(bounds.max).ceil().as_ivec3();
-    let inv_h = 1.0 / transform.voxel_size_m;
-    match op {
-        CsgOp::Union => field.edit_box(lo, hi, true, |p, d, c| {
-            let world = transform.index_to_world(p.as_vec3());
-            let s = solid_density(solid.signed_distance(world) * inv_h);
-            let new = d.max(s);
-            mix_in(c, *d, new, colour);
-            *d = new;
-        }),
-        CsgOp::Difference => field.edit_density(
-            lo,
-            hi,
-            |_, _| true,
-            whole_rows,
-            |p, d| {
+    let inv_h = 1.0 / h;
+    // A box of lattice points is out of the solid's reach (its density 0 there) when its
+    // centre lies farther from the surface than its half diagonal and half the band: signed
+    // distances are exact or underestimates, so none of its points is nearer.
+    let reach = 0.5 * SOLID_BAND_VOXELS * h;
+    let reaches = |a: IVec3, b: IVec3| {
+        let centre = transform.index_to_world((a + b).as_vec3() * 0.5);
+        let half_diagonal = (b - a).as_vec3().length() * 0.5 * h;
+        solid.signed_distance(centre) <= half_diagonal + reach
+    };
+    let size = BRICK_SIZE;
+    let (first, last) = (lo.z.div_euclid(size), hi.z.div_euclid(size));
+    for slab in first..=last {
+        let z0 = (slab * size).max(lo.z);
+        let z1 = (slab * size + size - 1).min(hi.z);
+        let (a, b) = (IVec3::new(lo.x, lo.y, z0), IVec3::new(hi.x, hi.y, z1));
+        match op {
+            CsgOp::Union => field.edit_region(a, b, true, reaches, |p, d, c| {
+                let world = transform.index_to_world(p.as_vec3());
+                let s = solid_density(solid.signed_distance(world) * inv_h);
+                let new = d.max(s);
+                mix_in(c, *d, new, colour);
+                *d = new;
+            }),
+            CsgOp::Difference => field.edit_density(a, b, reaches, whole_rows, |p, d| {
                 let world = transform.index_to_world(p.as_vec3());
                 let s = solid_density(solid.signed_distance(world) * inv_h);
                 *d = d.min(1.0 - s);
-            },
-        ),
+            }),
+        }
+        let done = f64::from(slab - first + 1) / f64::from(last - first + 1);
+        if progress(done).is_break() && slab < last {
+            return false;
+        }
+    }
+    true
+}
+
+/// What rasterising a solid of the initial clay into the finest level of voxels `voxel_m`
+/// costs, estimated from its volume and area before any of it is done.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RasterCost {
+    /// Bricks it stores: every brick its band reaches (those wholly inside share one
+    /// constant tile).
+    pub keys: f64,
+    /// Of those, the bricks its surface crosses, each with samples of its own.
+    pub surface_bricks: f64,
+    /// Its surface in voxel faces (area over the voxel's square): a mesh has about two
+    /// triangles for each.
+    pub surface_voxels: f64,
+    /// Lattice points its walk visits (those of the bricks within reach of its band).
+    pub points: f64,
+}
+
+impl std::ops::AddAssign for RasterCost {
+    fn add_assign(&mut self, o: Self) {
+        self.keys += o.keys;
+        self.surface_bricks += o.surface_bricks;
+        self.surface_voxels += o.surface_voxels;
+        self.points += o.points;
+    }
+}
+
+/// [`RasterCost`] of `solid` on a lattice of voxels `voxel_m`: bricks of side `b` meet a
+/// surface of area `A` in a shell about `1.5 b` thick (the mean width of a cube across a plane
+/// of any direction) plus the band, and a solid of volume `V` fills `V / b³` more.
+pub fn rasterize_cost(solid: &PlacedSolid, voxel_m: f32) -> RasterCost {
+    let (volume, area) = solid.solid.volume_and_area();
+    let scale = f64::from(solid.scale);
+    let (volume, area) = (volume * scale.powi(3), area * scale * scale);
+    let h = f64::from(voxel_m);
+    let b = h * f64::from(BRICK_SIZE);
+    let band = f64::from(SOLID_BAND_VOXELS) * h;
+    let shell = area * (1.5 * b + band) / b.powi(3);
+    let keys = volume / b.powi(3) + 0.5 * shell;
+    RasterCost {
+        keys,
+        surface_bricks: shell,
+        surface_voxels: area / (h * h),
+        points: (keys + 0.5 * shell) * f64::from(BRICK_VOLUME as u32),
     }
 }
 
