@@ -148,6 +148,49 @@ fn quad_buffer_stereo_falls_back_with_a_notice_where_the_surface_has_one_layer()
     );
 }
 
+#[test]
+fn a_station_that_cannot_start_says_why_exits_1_and_closes_its_session() {
+    let x = Xvfb::start();
+    let dir = out_dir("station-cannot-start");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    // Quad-buffer asked of a one-layer surface, with no fallback.
+    let scene = dir.join("no-fallback.toml");
+    let plain = root().join("scenes/tests/station.toml");
+    let station = std::fs::read_to_string(&plain).unwrap();
+    std::fs::write(&scene, format!("{station}\n[display]\nfallback = \"none\"\n")).unwrap();
+    // A UDP port already taken.
+    let taken = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let port = taken.local_addr().unwrap().to_string();
+    let cases: [(Vec<&str>, &str); 2] = [
+        (
+            vec![scene.to_str().unwrap(), "--display-mode", "quad-buffer"],
+            "quad-buffer stereo cannot be shown",
+        ),
+        (vec![plain.to_str().unwrap(), "--opentrack", &port], "cannot listen for opentrack datagrams"),
+    ];
+    for (i, (args, says)) in cases.iter().enumerate() {
+        let state = dir.join(format!("state-{i}"));
+        let out = Command::new(env!("CARGO_BIN_EXE_argile"))
+            .arg("run")
+            .args(args)
+            .args(["--frames", "2", "--size", "64x48"])
+            .env("DISPLAY", &x.display)
+            .env_remove("WAYLAND_DISPLAY")
+            .env("XDG_STATE_HOME", &state)
+            .output()
+            .expect("the argile binary runs");
+        let said =
+            format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {said}");
+        assert!(said.contains(says) && !said.contains("panicked"), "{args:?}: {said}");
+        let recover = recover_in(&state);
+        let told = String::from_utf8_lossy(&recover.stdout);
+        assert!(told.contains("No session is left to recover"), "{args:?}: the session was closed: {told}");
+    }
+    drop(taken);
+}
+
 /// The journal files of the autosave sessions under `state`.
 fn journals(state: &std::path::Path) -> Vec<std::path::PathBuf> {
     let Ok(sessions) = std::fs::read_dir(state.join("argile/autosave")) else { return Vec::new() };

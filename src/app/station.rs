@@ -1478,6 +1478,18 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
     drop(app.renderer.take());
     drop(app.window.take());
     if let Some(e) = app.error.take() {
+        // A station that failed (to open its window, its head tracker, ...) before any stroke
+        // closes its autosave session; strokes it did make stay in the journal.
+        if let Some(session) = app.station.playback.finish_autosave() {
+            match app.station.unsaved_strokes {
+                0 => super::autosave::close_session(session),
+                n => eprintln!(
+                    "{n} stroke(s) of this run are not saved: the autosave journal in {} keeps them, \
+                     and `argile recover` gives them back",
+                    session.dir().display()
+                ),
+            }
+        }
         return Err(e);
     }
     if let Some(log) = &app.validation {
@@ -1654,7 +1666,8 @@ impl WindowApp<'_, '_> {
             motions.extend(g.motions().map(|(_, m)| m));
         }
         self.station.devices(dt, &motions, device_actions);
-        let renderer = self.renderer.as_mut().expect("the window is open");
+        // Events may still arrive for a window whose opening failed: nothing is drawn then.
+        let Some(renderer) = self.renderer.as_mut() else { return Ok(false) };
         let mut failed = None;
         let frame = self.station.step(dt, |diff| {
             if let Err(e) = renderer.apply(diff) {
@@ -1770,6 +1783,7 @@ impl ApplicationHandler for WindowApp<'_, '_> {
                 };
                 self.station.mouse(MouseEvent::Wheel(steps));
             }
+            WindowEvent::RedrawRequested if self.error.is_some() => {}
             WindowEvent::RedrawRequested => match self.frame() {
                 Ok(true) => event_loop.exit(),
                 Ok(false) => {}
