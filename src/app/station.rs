@@ -49,7 +49,7 @@ use crate::scene::ScreenCalibration;
 use crate::scene::{line_column, FileError, Scene};
 use crate::stereo::comfort::AutoConvergence;
 use crate::stereo::display::{choose_mode, DisplayMode, Parity};
-use crate::stereo::{HeadTrackedRig, Placement};
+use crate::stereo::{HeadTrackedRig, Placement, StereoRig};
 use crate::tool::{
     edit_level_for, Action, Ellipsoid, Falloff, Solid, Stroke, Tool, ToolShape, HAND_SIZE_SAMPLES,
 };
@@ -849,10 +849,10 @@ impl<'s> Station<'s> {
             }
             StationAction::Bigger => self.desk_tool.scale *= SIZE_STEP,
             StationAction::Smaller => self.desk_tool.scale /= SIZE_STEP,
-            StationAction::ConvergenceFarther => self.convergence_factor *= STEREO_STEP,
-            StationAction::ConvergenceNearer => self.convergence_factor /= STEREO_STEP,
-            StationAction::InteraxialWider => self.view.rig.interaxial_m *= STEREO_STEP,
-            StationAction::InteraxialNarrower => self.view.rig.interaxial_m /= STEREO_STEP,
+            StationAction::ConvergenceFarther => self.step_convergence(STEREO_STEP),
+            StationAction::ConvergenceNearer => self.step_convergence(1.0 / STEREO_STEP),
+            StationAction::InteraxialWider => self.step_interaxial(STEREO_STEP),
+            StationAction::InteraxialNarrower => self.step_interaxial(1.0 / STEREO_STEP),
             StationAction::ToggleMouseMode => {
                 self.cursor_clutch = None;
                 self.mouse.mode = match self.mouse.mode {
@@ -898,6 +898,41 @@ impl<'s> Station<'s> {
             | StationAction::PointerDown
             | StationAction::PointerAway
             | StationAction::PointerToward => {}
+        }
+    }
+
+    /// The convergence plane's range: from twice the near plane to half the far one, so that
+    /// the zero-parallax plane never lies where nothing is drawn.
+    fn convergence_range(&self) -> (f32, f32) {
+        let rig = &self.view.rig;
+        (rig.near_m * 2.0, (rig.far_m * 0.5).max(rig.near_m * 2.0))
+    }
+
+    /// Moves the convergence plane by `factor`, within [`Station::convergence_range`]; says so
+    /// at either end.
+    fn step_convergence(&mut self, factor: f32) {
+        let (lo, hi) = self.convergence_range();
+        let distance = self.mouse.distance_m.max(1e-6);
+        let wanted = self.convergence_factor * factor * distance;
+        let kept = wanted.clamp(lo, hi);
+        self.convergence_factor = kept / distance;
+        if kept != wanted {
+            let end =
+                if kept == lo { "nearest, twice the near plane" } else { "farthest, half the far plane" };
+            self.messages.push(format!("convergence {kept:.2} m: at its {end}"));
+        }
+    }
+
+    /// Scales the interaxial distance by `factor`, up to [`StereoRig::MAX_INTERAXIAL_M`]; says
+    /// so at the end.
+    fn step_interaxial(&mut self, factor: f32) {
+        let wanted = self.view.rig.interaxial_m * factor;
+        self.view.rig.interaxial_m = wanted.min(StereoRig::MAX_INTERAXIAL_M);
+        if wanted > StereoRig::MAX_INTERAXIAL_M {
+            self.messages.push(format!(
+                "eyes {:.0} mm apart: at the most the station allows",
+                StereoRig::MAX_INTERAXIAL_M * 1000.0
+            ));
         }
     }
 
@@ -1247,6 +1282,7 @@ impl<'s> Station<'s> {
     pub fn step(&mut self, dt_s: f32, mut apply: impl FnMut(&crate::mesh::MeshDiff)) -> crate::render::Frame {
         let started = Instant::now();
         // The view first: the pointer moves in it.
+        let (lo, hi) = self.convergence_range();
         let rig = &mut self.view.rig;
         let base = self.scene.rig;
         let scene_pose = self.desk.poses.get(Target::Scene);
@@ -1254,7 +1290,8 @@ impl<'s> Station<'s> {
         let offset = (base.eye_m - base.target_m).normalize_or(Vec3::Z) * self.mouse.distance_m;
         rig.eye_m = base.target_m + rotation * offset;
         rig.up = rotation * base.up;
-        rig.convergence_m = self.mouse.distance_m * self.convergence_factor;
+        // Zooming moves the plane with the clay, within the same range as the keys.
+        rig.convergence_m = (self.mouse.distance_m * self.convergence_factor).clamp(lo, hi);
         if let Some(auto) = &mut self.auto_convergence {
             // The desk tool's depth along the view, smoothly.
             let depth = (self.mouse.tool_position_m - rig.eye_m).dot(rig.forward());
@@ -1847,6 +1884,43 @@ mod tests {
 
     fn small_station(scene: &Scene) -> Station<'_> {
         Station::new(scene, KeyBindings::shipped(), (64, 64), PathBuf::from("unused.argile"))
+    }
+
+    #[test]
+    fn the_stereo_keys_stop_at_their_limits_and_say_so() {
+        let scene = ball_scene();
+        let mut station = small_station(&scene);
+        for _ in 0..20 {
+            station.act(StationAction::InteraxialWider);
+        }
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert_eq!(station.view.rig.interaxial_m, StereoRig::MAX_INTERAXIAL_M, "250 mm at most, not 437");
+        assert!(
+            station.messages.iter().any(|m| m.contains("250 mm apart: at the most")),
+            "{:?}",
+            station.messages
+        );
+        station.messages.clear();
+        for _ in 0..40 {
+            station.act(StationAction::ConvergenceNearer);
+        }
+        station.step(SCRIPTED_STEP_S, |_| {});
+        let rig = station.view.rig;
+        assert!(
+            (rig.convergence_m - 2.0 * rig.near_m).abs() < 1e-6,
+            "{} m, outside the near plane",
+            rig.convergence_m
+        );
+        assert!(station.messages.iter().any(|m| m.contains("at its nearest")), "{:?}", station.messages);
+        // One press back moves it at once: the keys did not pile up beyond the limit.
+        station.act(StationAction::ConvergenceFarther);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert!(station.view.rig.convergence_m > 2.0 * rig.near_m * 1.05);
+        for _ in 0..80 {
+            station.act(StationAction::ConvergenceFarther);
+        }
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert!((station.view.rig.convergence_m - 0.5 * rig.far_m).abs() < 1e-4);
     }
 
     #[test]
