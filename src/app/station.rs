@@ -447,6 +447,8 @@ pub struct Station<'s> {
     quad_buffer: bool,
     /// The window's top-left corner on the screen, pixels (interlace parity follows it).
     window_origin: (i32, i32),
+    /// Where the pointer was last seen, window pixels.
+    pointer_px: Vec2,
     window_px: (u32, u32),
     save_to: PathBuf,
     saved: Option<PathBuf>,
@@ -553,6 +555,7 @@ impl<'s> Station<'s> {
             display_mode: DisplayMode::Anaglyph,
             quad_buffer: false,
             window_origin: (0, 0),
+            pointer_px: Vec2::ZERO,
             window_px,
             open_dir: save_to
                 .parent()
@@ -663,16 +666,17 @@ impl<'s> Station<'s> {
     /// The window changed size.
     pub fn resize(&mut self, window_px: (u32, u32)) {
         self.window_px = window_px;
-        self.mouse.resize(Vec2::new(window_px.0 as f32, window_px.1 as f32));
         self.fit_views();
     }
 
     /// The frame's views take their aspect from the output size: each eye's part of the window
-    /// in the display mode.
+    /// in the display mode; the mouse reads the pointer in that eye's picture.
     fn fit_views(&mut self) {
         let (w, h) = self.display_mode.eye_size_for_output(self.window_px);
         self.view.output.width_px = w.max(1);
         self.view.output.height_px = h.max(1);
+        let (_, picture) = self.display_mode.pointer_in_eye(Vec2::ZERO, self.window_px);
+        self.mouse.resize(picture);
     }
 
     /// The modifiers held now.
@@ -694,8 +698,17 @@ impl<'s> Station<'s> {
         }
     }
 
-    /// A mouse event, in window pixels.
+    /// A mouse event, in window pixels: read in the picture of the eye the pointer is over.
     pub fn mouse(&mut self, event: MouseEvent) {
+        if let MouseEvent::Move(at) = event {
+            self.pointer_px = at;
+        }
+        let in_eye = |p: Vec2| self.display_mode.pointer_in_eye(p, self.window_px).0;
+        let event = match event {
+            MouseEvent::Press(button, at) => MouseEvent::Press(button, in_eye(at)),
+            MouseEvent::Move(at) => MouseEvent::Move(in_eye(at)),
+            other => other,
+        };
         let aspect = self.view.output.width_px as f32 / self.view.output.height_px as f32;
         let views = self.view.rig.views(aspect);
         let eye = &views.eyes[0];
@@ -720,6 +733,11 @@ impl<'s> Station<'s> {
             self.mouse_turn = (view * turn * view.inverse() * self.mouse_turn).normalize();
         }
         self.desk.poses.get_mut(Target::Tool).position_m = self.mouse.tool_position_m;
+    }
+
+    /// Where the pointer was last seen, window pixels.
+    pub fn pointer_px(&self) -> Vec2 {
+        self.pointer_px
     }
 
     /// Tracks the viewer's head with `head` (opentrack): the views become head-tracked
@@ -1808,7 +1826,7 @@ impl ApplicationHandler for WindowApp<'_, '_> {
                     _ => return,
                 };
                 let event = match state {
-                    ElementState::Pressed => MouseEvent::Press(button, self.station.mouse.last_position()),
+                    ElementState::Pressed => MouseEvent::Press(button, self.station.pointer_px()),
                     ElementState::Released => MouseEvent::Release(button),
                 };
                 self.station.mouse(event);
@@ -1884,6 +1902,32 @@ mod tests {
 
     fn small_station(scene: &Scene) -> Station<'_> {
         Station::new(scene, KeyBindings::shipped(), (64, 64), PathBuf::from("unused.argile"))
+    }
+
+    #[test]
+    fn the_mouse_places_the_tool_in_the_eye_it_points_at_in_half_modes() {
+        let scene = ball_scene();
+        let place = |mode: DisplayMode, at: Vec2| {
+            let mut station =
+                Station::new(&scene, KeyBindings::shipped(), (480, 200), PathBuf::from("u.argile"));
+            station.display_mode = mode;
+            station.fit_views();
+            station.act(StationAction::ToggleMouseMode);
+            station.mouse(MouseEvent::Move(at));
+            station.mouse(MouseEvent::Press(MouseButton::Left, station.pointer_px()));
+            station.mouse(MouseEvent::Release(MouseButton::Left));
+            station.mouse.tool_position_m
+        };
+        // Pixel (280, 120) of each eye's 480 × 200 picture, off its centre.
+        let mono = place(DisplayMode::Mono, Vec2::new(280.0, 120.0));
+        for (mode, window_px) in [
+            (DisplayMode::SideBySideHalf, Vec2::new(380.0, 120.0)),
+            (DisplayMode::SideBySideHalf, Vec2::new(140.0, 120.0)),
+            (DisplayMode::TopBottomHalf, Vec2::new(280.0, 160.0)),
+        ] {
+            let tool = place(mode, window_px);
+            assert!(tool.distance(mono) < 1e-4, "{mode} at {window_px}: {tool}, where mono puts {mono}");
+        }
     }
 
     #[test]

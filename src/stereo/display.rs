@@ -41,6 +41,8 @@
 use std::fmt;
 use std::str::FromStr;
 
+use crate::math::Vec2;
+
 /// How a stereo pair is shown.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Deserialize)]
 #[serde(try_from = "String")]
@@ -136,6 +138,27 @@ impl DisplayMode {
             DisplayMode::SideBySide => (w / 2, h),
             DisplayMode::TopBottom => (w, h / 2),
             _ => (w, h),
+        }
+    }
+
+    /// Where a window pixel (origin top left) falls in the picture of the eye it lies over,
+    /// and the size of that picture in the same units, for a window of `window_px`: the pointer
+    /// is read in the eye's own picture, whichever half of a side-by-side or top-bottom window
+    /// it is over (a squeezed half read at the full width or height it stands for). Modes that
+    /// show both eyes over the whole window leave the pixel as it is.
+    pub fn pointer_in_eye(self, pixel: Vec2, window_px: (u32, u32)) -> (Vec2, Vec2) {
+        let size = Vec2::new(window_px.0.max(1) as f32, window_px.1.max(1) as f32);
+        let half = size * 0.5;
+        match self {
+            DisplayMode::SideBySide => {
+                (Vec2::new(pixel.x.rem_euclid(half.x), pixel.y), Vec2::new(half.x, size.y))
+            }
+            DisplayMode::SideBySideHalf => (Vec2::new(pixel.x.rem_euclid(half.x) * 2.0, pixel.y), size),
+            DisplayMode::TopBottom => {
+                (Vec2::new(pixel.x, pixel.y.rem_euclid(half.y)), Vec2::new(size.x, half.y))
+            }
+            DisplayMode::TopBottomHalf => (Vec2::new(pixel.x, pixel.y.rem_euclid(half.y) * 2.0), size),
+            _ => (pixel, size),
         }
     }
 }
@@ -304,6 +327,34 @@ pub fn choose_mode(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_pointer_is_read_in_the_picture_of_the_eye_it_is_over() {
+        let window = (480, 200);
+        let at = |m: DisplayMode, x: f32, y: f32| m.pointer_in_eye(Vec2::new(x, y), window);
+        // A click at x = 240 in side-by-side-half is the left edge of the right eye's picture,
+        // not x = 119 of a picture as wide as the window.
+        assert_eq!(
+            at(DisplayMode::SideBySideHalf, 240.0, 50.0),
+            (Vec2::new(0.0, 50.0), Vec2::new(480.0, 200.0))
+        );
+        assert_eq!(
+            at(DisplayMode::SideBySideHalf, 120.0, 50.0).0,
+            Vec2::new(240.0, 50.0),
+            "the left eye's centre"
+        );
+        assert_eq!(
+            at(DisplayMode::SideBySide, 360.0, 50.0),
+            (Vec2::new(120.0, 50.0), Vec2::new(240.0, 200.0))
+        );
+        assert_eq!(at(DisplayMode::TopBottom, 10.0, 150.0), (Vec2::new(10.0, 50.0), Vec2::new(480.0, 100.0)));
+        assert_eq!(at(DisplayMode::TopBottomHalf, 10.0, 150.0).0, Vec2::new(10.0, 100.0));
+        for m in
+            [DisplayMode::Anaglyph, DisplayMode::RowInterlaced, DisplayMode::Mono, DisplayMode::QuadBuffer]
+        {
+            assert_eq!(at(m, 300.0, 70.0), (Vec2::new(300.0, 70.0), Vec2::new(480.0, 200.0)));
+        }
+    }
 
     #[test]
     fn names_round_trip_and_bad_names_list_the_modes() {
