@@ -113,6 +113,11 @@ enum Command {
         /// Per-eye image size, WIDTHxHEIGHT, instead of the scene's.
         #[arg(long, value_parser = parse_size)]
         size: Option<(u32, u32)>,
+        /// The screen calibration (see calibration/README.md) the images are judged on for the
+        /// parallax budget: its screen, viewing distance and [comfort] (default: the scene's
+        /// [head] calibration, else the shipped calibration/screen.toml).
+        #[arg(long)]
+        calibration: Option<PathBuf>,
         /// Turn the Vulkan validation layer on (fails on any validation message).
         #[arg(long)]
         validation: bool,
@@ -329,8 +334,8 @@ fn main() -> ExitCode {
                 edit_finest,
             },
         ),
-        Some(Command::Render { scene, out, display_mode, size, validation, autosave }) => {
-            render(&scene, out, display_mode, size, validation, &autosave)
+        Some(Command::Render { scene, out, display_mode, size, calibration, validation, autosave }) => {
+            render(&scene, out, display_mode, size, calibration.as_deref(), validation, &autosave)
         }
         Some(Command::Export { input, format, out, force }) => app::export(&input, format, &out, force, true)
             .map(|s| {
@@ -530,6 +535,11 @@ fn station(
             progress: true,
             validation: options.validation,
             size_px: options.window_px,
+            calibration: options
+                .calibration
+                .as_deref()
+                .map(argile::scene::ScreenCalibration::load)
+                .transpose()?,
         };
         let written = match sculpt {
             Some(s) => app::render_sculpt(&scene, s.field, &options)?,
@@ -567,10 +577,13 @@ fn render(
     out: PathBuf,
     display_modes: Vec<DisplayMode>,
     size: Option<(u32, u32)>,
+    calibration: Option<&std::path::Path>,
     validation: bool,
     autosave: &AutosaveArgs,
 ) -> Result<()> {
-    let options = RenderOptions { out_dir: out, display_modes, progress: true, validation, size_px: size };
+    let calibration = calibration.map(argile::scene::ScreenCalibration::load).transpose()?;
+    let options =
+        RenderOptions { out_dir: out, display_modes, progress: true, validation, size_px: size, calibration };
     if app::is_sculpt(scene) {
         // Nothing is sculpted while rendering a sculpt: there is nothing to autosave.
         let (scene, sculpt) = app::open_sculpt(scene)?;

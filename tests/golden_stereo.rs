@@ -45,6 +45,7 @@ fn render_composed(
         progress: false,
         validation: true,
         size_px: size,
+        calibration: None,
     };
     // A missing Vulkan device or any validation message fails here, loudly.
     let written = render_scene(&scene, &options).unwrap_or_else(|e| panic!("rendering {case} failed: {e:#}"));
@@ -450,6 +451,7 @@ fn golden_timeline_case(scene_path: &str) {
         progress: false,
         validation: true,
         size_px: Some((256, 256)),
+        calibration: None,
     };
     let written = render_scene(&scene, &options).unwrap_or_else(|e| panic!("rendering {case} failed: {e:#}"));
     assert!(written.len() >= 2, "{case}: several times of the timeline");

@@ -277,6 +277,7 @@ pub fn calibrate(options: &CalibrateOptions) -> Result<Calibrated> {
         progress: false,
         validation: options.validation,
         size_px: None,
+        calibration: Some(calibration),
     };
     let mut written = render_scene(&pattern.scene, &render)?;
     let written = written.pop().expect("the test pattern has one capture");

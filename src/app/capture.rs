@@ -32,6 +32,9 @@ pub struct RenderOptions {
     pub validation: bool,
     /// Override the scene's per-eye image size.
     pub size_px: Option<(u32, u32)>,
+    /// The screen the images are judged on for the parallax budget (the scene's `[head]`
+    /// calibration, else the shipped `calibration/screen.toml`, when `None`).
+    pub calibration: Option<crate::scene::ScreenCalibration>,
 }
 
 /// One written capture.
@@ -138,7 +141,8 @@ fn render_over(
     let clay = initial.upserted_bounds();
     // The views' copy of the scene, whose interaxial the parallax budget may lower.
     let mut viewed = scene.clone();
-    if let Some((_, warning)) = super::comfort::apply_parallax_budget(&mut viewed, clay) {
+    let calibration = options.calibration.unwrap_or_else(|| super::comfort::scene_calibration(&scene));
+    if let Some((_, warning)) = super::comfort::apply_parallax_budget(&mut viewed, calibration, clay) {
         tracing::warn!("{warning}");
     }
     renderer.apply(&initial)?;

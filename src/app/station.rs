@@ -47,7 +47,7 @@ use crate::mesh::Mesher;
 use crate::render::{Light, Presented, Renderer, RendererDesc, ValidationLog};
 use crate::scene::ScreenCalibration;
 use crate::scene::{line_column, FileError, Scene};
-use crate::stereo::comfort::AutoConvergence;
+use crate::stereo::comfort::{AutoConvergence, BudgetCheck};
 use crate::stereo::display::{choose_mode, DisplayMode, Parity};
 use crate::stereo::{HeadTrackedRig, Placement, StereoRig};
 use crate::tool::{
@@ -284,8 +284,20 @@ fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
-/// What a parallax budget verdict depends on: the clay's bounds and the stereo rig.
-type BudgetKey = ([f32; 6], [f32; 3], f32, f32);
+/// What a parallax budget verdict depends on: the clay's bounds, the stereo rig (eye,
+/// convergence, interaxial, the tracked eyes' interaxial) and how the window shows it.
+type BudgetKey = ([f32; 6], [f32; 3], [f32; 3], ((u32, u32), DisplayMode, bool));
+
+/// The parallax budget's last verdict (see [`Station::judge_parallax`]).
+#[derive(Clone, Debug)]
+struct Budgeted {
+    /// What it was judged on.
+    key: BudgetKey,
+    /// The check and the warning, when over the budget.
+    over: Option<(BudgetCheck, String)>,
+    /// The interaxial it allows in limit mode (of the tracked eyes while tracked).
+    allowed: Option<f32>,
+}
 
 /// The sculpt files (`.argile`) in `dir`, newest first (by modification time, then name).
 fn sculpts_in(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
@@ -438,9 +450,15 @@ pub struct Station<'s> {
     clay_bounds: crate::math::Aabb,
     /// The bounds of each chunk of that surface.
     chunk_bounds: std::collections::HashMap<crate::mesh::ChunkKey, crate::math::Aabb>,
-    /// The parallax budget's verdict for the current clay and stereo settings: what it was
-    /// judged on, the warning (if over budget) and the interaxial it allows in limit mode.
-    budget: Option<(BudgetKey, Option<String>, Option<f32>)>,
+    /// The parallax budget's verdict for what is shown now: what it was judged on, the check
+    /// and warning when over budget, and the interaxial it allows in limit mode (of the
+    /// head-tracked eyes when the views are head-tracked).
+    budget: Option<Budgeted>,
+    /// The distance between the eyes of head-tracked views, physical metres: the calibrated
+    /// viewer's, until the interaxial keys or the budget's limit change it.
+    tracked_interaxial_m: f32,
+    /// The monitor's resolution as the window system gives it (when the calibration does not).
+    monitor_px: Option<(u32, u32)>,
     /// How the window shows the stereo pair.
     display_mode: DisplayMode,
     /// Whether the window's surface can show quad-buffer stereo.
@@ -546,7 +564,9 @@ impl<'s> Station<'s> {
             stroke: None,
             convergence_factor: scene.rig.convergence_m / distance.max(1e-6),
             lights_follow_viewer: false,
-            calibration: scene.head.as_ref().map_or_else(ScreenCalibration::shipped, |h| h.calibration),
+            calibration: super::comfort::scene_calibration(scene),
+            tracked_interaxial_m: super::comfort::scene_calibration(scene).ipd_m,
+            monitor_px: None,
             head: None,
             auto_convergence: None,
             clay_bounds: crate::math::Aabb::EMPTY,
@@ -596,6 +616,7 @@ impl<'s> Station<'s> {
     /// the scene names one, and its interlace parity.
     pub fn set_calibration(&mut self, calibration: ScreenCalibration) {
         self.calibration = calibration;
+        self.tracked_interaxial_m = calibration.ipd_m;
         self.display_mode =
             self.scene.display.mode.or(calibration.display.mode).unwrap_or(DisplayMode::Anaglyph);
         self.fit_views();
@@ -941,11 +962,13 @@ impl<'s> Station<'s> {
         }
     }
 
-    /// Scales the interaxial distance by `factor`, up to [`StereoRig::MAX_INTERAXIAL_M`]; says
-    /// so at the end.
+    /// Scales the interaxial distance in use (the head-tracked eyes' while tracked) by
+    /// `factor`, up to [`StereoRig::MAX_INTERAXIAL_M`]; says so at the end.
     fn step_interaxial(&mut self, factor: f32) {
-        let wanted = self.view.rig.interaxial_m * factor;
-        self.view.rig.interaxial_m = wanted.min(StereoRig::MAX_INTERAXIAL_M);
+        let interaxial =
+            if self.tracked() { &mut self.tracked_interaxial_m } else { &mut self.view.rig.interaxial_m };
+        let wanted = *interaxial * factor;
+        *interaxial = wanted.min(StereoRig::MAX_INTERAXIAL_M);
         if wanted > StereoRig::MAX_INTERAXIAL_M {
             self.messages.push(format!(
                 "eyes {:.0} mm apart: at the most the station allows",
@@ -979,7 +1002,7 @@ impl<'s> Station<'s> {
                 "{}: convergence {:.2} m, eyes {:.0} mm",
                 self.display_mode,
                 rig.convergence_m,
-                rig.interaxial_m * 1000.0
+                self.interaxial_in_use_m() * 1000.0
             ),
             format!(
                 "{:.1} ms/frame, mouse {mouse}{}{}",
@@ -992,8 +1015,13 @@ impl<'s> Station<'s> {
                 }
             ),
         ];
-        if self.budget.as_ref().is_some_and(|(_, w, _)| w.is_some()) {
-            lines.push("over the parallax budget".to_owned());
+        if let Some(Budgeted { over: Some((check, _)), .. }) = &self.budget {
+            // Today's figures, not those of the first warning.
+            // The HUD's font has no degree sign.
+            lines.push(format!(
+                "over the parallax budget: {:.2} to {:.2} deg",
+                check.nearest_deg, check.farthest_deg
+            ));
         }
         lines
     }
@@ -1031,32 +1059,90 @@ impl<'s> Station<'s> {
         self.window_origin = origin;
     }
 
-    /// Checks the clay against the parallax budget of the screen calibration, when the clay
-    /// or the stereo settings changed since the last check.
+    /// Whether the views are head-tracked (opentrack, or the scene's scripted head).
+    fn tracked(&self) -> bool {
+        self.head.is_some() || self.scene.head.is_some()
+    }
+
+    /// The distance between the eyes of the views shown: the head-tracked eyes' while
+    /// tracked (physical metres), else the rig's.
+    fn interaxial_in_use_m(&self) -> f32 {
+        if self.tracked() {
+            self.tracked_interaxial_m
+        } else {
+            self.view.rig.interaxial_m
+        }
+    }
+
+    /// The rig of head-tracked views, while tracked: the scene's convergence plane on the
+    /// calibrated screen, the eyes [`Station::tracked_interaxial_m`] apart.
+    fn tracked_rig(&self) -> Option<HeadTrackedRig> {
+        let c = &self.calibration;
+        let rig = &self.view.rig;
+        self.tracked().then(|| HeadTrackedRig {
+            screen: c.screen,
+            placement: Placement::from_rig(&c.screen, c.default_eye_m, rig),
+            interaxial_m: self.tracked_interaxial_m,
+            near_m: rig.near_m,
+            far_m: rig.far_m,
+        })
+    }
+
+    /// How the parallax budget sees the window: each eye's picture on the calibrated screen.
+    pub fn describe_picture(&self) -> String {
+        let screen_px = self.calibration.resolution_px.or(self.monitor_px);
+        let seen =
+            super::comfort::Seen::window(self.calibration, self.display_mode, self.window_px, screen_px);
+        let from = match (self.calibration.resolution_px, self.monitor_px) {
+            (Some((w, h)), _) => format!("a {w}x{h} screen, as the calibration says"),
+            (None, Some((w, h))) => format!("a {w}x{h} monitor, as the window system says"),
+            (None, None) => "a screen of unknown resolution: fitted to it".to_owned(),
+        };
+        format!(
+            "parallax budget: each eye's picture is {:.0} mm wide on the {:.0} mm screen ({} pixels of {from}), \
+             seen from {:.2} m, within ±{:.2}°",
+            seen.picture_width_m * 1000.0,
+            self.calibration.screen.width_m() * 1000.0,
+            self.display_mode.eye_size_for_output(self.window_px).0,
+            self.calibration.viewing_distance_m(),
+            self.calibration.budget.max_disparity_deg
+        )
+    }
+
+    /// The window's monitor, as the window system gives its resolution.
+    pub fn set_monitor_px(&mut self, monitor_px: Option<(u32, u32)>) {
+        self.monitor_px = monitor_px;
+    }
+
+    /// Checks what is shown (the clay and the stage) against the parallax budget of the screen
+    /// calibration, as the window shows it on the screen and with the views' own eyes (the
+    /// head-tracked ones while tracked), when any of that changed since the last check.
     fn judge_parallax(&mut self) {
         let (b, rig) = (&self.clay_bounds, &self.view.rig);
         let key: BudgetKey = (
             [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z],
             rig.eye_m.to_array(),
-            rig.convergence_m,
-            rig.interaxial_m,
+            [rig.convergence_m, rig.interaxial_m, self.tracked_interaxial_m],
+            (self.window_px, self.display_mode, self.tracked()),
         );
-        if self.budget.as_ref().is_some_and(|(k, _, _)| *k == key) {
+        if self.budget.as_ref().is_some_and(|b| b.key == key) {
             return;
         }
-        let verdict = super::comfort::judge_parallax_budget(&self.view, self.clay_bounds);
-        // Limit mode narrows the rig's eyes; a head-tracked view keeps the viewer's own.
-        let allowed = verdict
-            .as_ref()
-            .filter(|v| v.limit && self.scene.head.is_none())
-            .map(|v| v.check.allowed_interaxial_m);
-        let warning = verdict.map(|v| v.warning);
-        if let Some(w) = &warning {
-            if self.budget.as_ref().is_none_or(|(_, old, _)| old.is_none()) {
+        let screen_px = self.calibration.resolution_px.or(self.monitor_px);
+        let seen = super::comfort::Seen {
+            tracked: self.tracked_rig(),
+            ..super::comfort::Seen::window(self.calibration, self.display_mode, self.window_px, screen_px)
+        };
+        let verdict = super::comfort::judge_parallax_budget(&self.view, &seen, self.clay_bounds);
+        // Limit mode narrows the eyes in use: the rig's, or the tracked eyes' (physical metres).
+        let allowed = verdict.as_ref().filter(|v| v.limit).map(|v| v.check.allowed_interaxial_m / v.scale);
+        let warning = verdict.map(|v| (v.check, v.warning));
+        if let Some((_, w)) = &warning {
+            if self.budget.as_ref().is_none_or(|b| b.over.is_none()) {
                 self.messages.push(w.clone());
             }
         }
-        self.budget = Some((key, warning, allowed));
+        self.budget = Some(Budgeted { key, over: warning, allowed });
     }
 
     /// Where the last [`Station::step`] spent its time.
@@ -1378,9 +1464,13 @@ impl<'s> Station<'s> {
         self.times.mesh_ms = ms_since(mesh_started);
 
         self.judge_parallax();
-        if let Some((_, _, Some(allowed))) = self.budget {
+        if let Some(Budgeted { allowed: Some(allowed), .. }) = self.budget {
             // Limit mode: this frame's eyes no farther apart than the budget allows.
-            self.view.rig.interaxial_m = self.view.rig.interaxial_m.min(allowed);
+            if self.tracked() {
+                self.tracked_interaxial_m = self.tracked_interaxial_m.min(allowed);
+            } else {
+                self.view.rig.interaxial_m = self.view.rig.interaxial_m.min(allowed);
+            }
         }
         let mut frame = build_frame(&self.view, &self.playback.hands(), true);
         if self.lights_follow_viewer {
@@ -1398,18 +1488,9 @@ impl<'s> Station<'s> {
             (None, Some(path)) => Some(path.pose_at(self.playback.time_s())),
             (None, None) => None,
         };
-        if let Some(head) = head_pose {
+        if let (Some(head), Some(tracked)) = (head_pose, self.tracked_rig()) {
             // Fish-tank views: the scene's convergence plane on the calibrated screen, seen from
             // the tracked eyes.
-            let c = self.screen_calibration();
-            let rig = &self.view.rig;
-            let tracked = HeadTrackedRig {
-                screen: c.screen,
-                placement: Placement::from_rig(&c.screen, c.default_eye_m, rig),
-                interaxial_m: c.ipd_m,
-                near_m: rig.near_m,
-                far_m: rig.far_m,
-            };
             frame.views = tracked.views(&head);
         }
         self.place_key_light(&mut frame.lights);
@@ -1660,6 +1741,8 @@ impl WindowApp<'_, '_> {
         if let Ok(p) = window.inner_position() {
             self.station.set_window_origin((p.x, p.y));
         }
+        self.station.set_monitor_px(window.current_monitor().map(|m| (m.size().width, m.size().height)));
+        println!("{}", self.station.describe_picture());
         self.validation = Some(renderer.validation_log());
         if let Some(addr) = self.options.opentrack {
             let head = OpentrackHead::start(&self.station.screen_calibration(), Some(addr))
@@ -1859,6 +1942,7 @@ impl ApplicationHandler for WindowApp<'_, '_> {
 mod tests {
     use super::*;
     use crate::mesh::remesh_dirty;
+    use crate::stereo::BudgetMode;
 
     #[test]
     fn a_wheel_turned_without_end_is_refused() {
@@ -2183,7 +2267,9 @@ mod tests {
         playback.advance_to(end, |_| {});
         let clay = crate::mesh::mesh_all(playback.field()).upserted_bounds();
         assert!(!clay.is_empty());
-        let verdict = super::super::comfort::judge_parallax_budget(&scene, clay);
+        use super::super::comfort::{judge_parallax_budget, scene_calibration, Seen};
+        let seen = Seen::fitted(scene_calibration(&scene), (scene.output.width_px, scene.output.height_px));
+        let verdict = judge_parallax_budget(&scene, &seen, clay);
         assert!(verdict.is_none(), "{:?}", verdict.map(|v| v.warning));
         let mut station =
             Station::new(&scene, KeyBindings::shipped(), (320, 240), PathBuf::from("unused.argile"));
@@ -2200,9 +2286,43 @@ mod tests {
     }
 
     #[test]
+    fn head_tracked_views_take_the_interaxial_keys_and_the_budget_judges_them() {
+        // A head-tracked scene with clay from 30 cm in front of the screen to 1 m behind it.
+        let text = "[head]\n[stage]\nshow = false\n[[clay]]\nshape = \"box\"\nsize_m = [0.1, 0.1, 1.3]\nposition_m = [0, 0, -0.35]\n";
+        let scene = Scene::parse(text, "deep.toml", None).unwrap();
+        let mut station = Station::new(&scene, KeyBindings::shipped(), (640, 360), PathBuf::from("u.argile"));
+        let apart = |v: &crate::render::StereoViews| (v.eyes[1].position_m - v.eyes[0].position_m).length();
+        let first = station.step(SCRIPTED_STEP_S, |_| {}).views;
+        let over =
+            |s: &Station<'_>| s.hud_lines().into_iter().find(|l| l.contains("over the parallax budget"));
+        let warned = over(&station).expect("the deep clay is over the budget");
+        for _ in 0..3 {
+            station.act(StationAction::InteraxialNarrower);
+        }
+        let narrowed = station.step(SCRIPTED_STEP_S, |_| {}).views;
+        let ratio = apart(&narrowed) / apart(&first);
+        assert!((ratio - 1.1f32.powi(-3)).abs() < 1e-3, "the tracked eyes moved closer: {ratio}");
+        assert!(station.hud_lines()[1].contains("eyes 47 mm"), "{:?}", station.hud_lines());
+        // Still over the budget, with today's figures.
+        let now = over(&station).expect("still over");
+        assert_ne!(now, warned, "the figures follow the eyes");
+        // Limit mode narrows the tracked eyes until it fits.
+        let mut calibration = station.screen_calibration();
+        calibration.budget.mode = BudgetMode::Limit;
+        station.set_calibration(calibration);
+        for _ in 0..3 {
+            station.step(SCRIPTED_STEP_S, |_| {});
+        }
+        assert!(over(&station).is_none(), "{:?}", station.hud_lines());
+        assert!(station.tracked_interaxial_m < 0.063 * 0.7, "{}", station.tracked_interaxial_m);
+    }
+
+    #[test]
     fn the_hud_warns_while_the_clay_exceeds_the_parallax_budget() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tests/station.toml");
-        let scene = Scene::load(&path).unwrap();
+        // Without its stage, whose back wall is over the budget on the shipped screen.
+        let text = std::fs::read_to_string(&path).unwrap().replace("[stage]", "[stage]\nshow = false");
+        let scene = Scene::parse(&text, "station.toml", None).unwrap();
         let mut station =
             Station::new(&scene, KeyBindings::shipped(), (320, 240), PathBuf::from("unused.argile"));
         // The first frame meshes the initial clay and judges it: within budget from afar.
@@ -2605,7 +2725,10 @@ mod tests {
             station.key(KeyCode::KeyO, false);
             station.set_modifiers(Modifiers::default());
             let diff = remesh_dirty(station.playback.field_mut());
-            (station.field().mass(), diff, station.messages.drain(..).collect::<Vec<_>>())
+            // What the open key said (not the parallax budget's word on the clay).
+            let said: Vec<String> =
+                station.messages.drain(..).filter(|m| !m.contains("stereo disparity")).collect();
+            (station.field().mass(), diff, said)
         };
         let (mass, diff, said) = open(&mut station);
         assert_eq!(mass, newer_mass, "the newest first: {said:?}");

@@ -57,6 +57,10 @@ pub struct ScreenCalibration {
     pub budget: ParallaxBudget,
     /// How the display shows stereo pairs.
     pub display: DisplayCalibration,
+    /// The screen's resolution, pixels (`[screen] resolution_px`): how much of the screen a
+    /// window of so many pixels covers. `None`: the window system's word for it, where there
+    /// is one.
+    pub resolution_px: Option<(u32, u32)>,
 }
 
 /// What the display does with a stereo pair: the mode it needs (a passive 3D monitor needs an
@@ -191,6 +195,22 @@ impl ScreenCalibration {
             base.map(|b| b.screen).ok_or_else(|| missing("screen"))?
         };
 
+        let resolution_px = match s.resolution_px {
+            Some(r) if r.get_ref().iter().all(|p| (16..=65_536).contains(p)) => {
+                let [w, h] = *r.get_ref();
+                Some((w, h))
+            }
+            Some(r) => {
+                return Err(at(
+                    Some(r.span()),
+                    format!(
+                        "`screen.resolution_px` must be two pixel counts from 16 to 65536, not {:?}",
+                        r.get_ref()
+                    ),
+                ))
+            }
+            None => base.and_then(|b| b.resolution_px),
+        };
         let v = file.viewer;
         let default_eye_m =
             vector(v.default_eye_m.clone(), "viewer.default_eye_m", base.map(|b| b.default_eye_m))?;
@@ -261,7 +281,7 @@ impl ScreenCalibration {
             mode: file.display.mode.or(bd.mode),
             parity: file.display.parity.unwrap_or(bd.parity),
         };
-        Ok(Self { screen, default_eye_m, ipd_m, near_m, far_m, tracker, budget, display })
+        Ok(Self { screen, default_eye_m, ipd_m, near_m, far_m, tracker, budget, display, resolution_px })
     }
 }
 
@@ -297,6 +317,7 @@ struct ScreenFile {
     height_m: Option<Spanned<f32>>,
     centre_m: Option<Spanned<[f32; 3]>>,
     rotation_deg: Option<Spanned<[f32; 3]>>,
+    resolution_px: Option<Spanned<[u32; 2]>>,
 }
 
 impl ScreenFile {
