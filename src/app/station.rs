@@ -910,6 +910,15 @@ impl<'s> Station<'s> {
                     )),
                 };
             }
+            StationAction::RecentreHead => {
+                let said = match self.head.as_mut().map(OpentrackHead::recentre) {
+                    Some(true) => "head tracking: recentred, your head is now the centred head",
+                    Some(false) => "head tracking: nothing received from the tracker yet to recentre on",
+                    None => "head tracking is off (--opentrack ADDR turns it on)",
+                };
+                let said = said.to_owned();
+                self.messages.push(said);
+            }
             StationAction::ResetView => {
                 let distance = (self.scene.rig.eye_m - self.scene.rig.target_m).length();
                 self.mouse.scene_rotation = Quat::IDENTITY;

@@ -59,6 +59,8 @@ pub enum StationAction {
     ToggleLights,
     /// Keep the desk tool at zero parallax (smoothly), or stop.
     ToggleAutoConvergence,
+    /// Take the head tracker's pose of now as the viewer's centred head (the default eye).
+    RecentreHead,
     /// Put the view and the tool back where the scene starts them.
     ResetView,
     /// Held: move the desk tool left (in the view).
@@ -100,6 +102,7 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("toggle-mouse-mode", StationAction::ToggleMouseMode),
     ("toggle-lights", StationAction::ToggleLights),
     ("toggle-auto-convergence", StationAction::ToggleAutoConvergence),
+    ("recentre-head", StationAction::RecentreHead),
     ("reset-view", StationAction::ResetView),
     ("pointer-left", StationAction::PointerLeft),
     ("pointer-right", StationAction::PointerRight),

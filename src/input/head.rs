@@ -44,9 +44,9 @@ impl HeadFilter {
     /// counts towards the dropout.
     pub fn update(&mut self, newest: Option<(Pose, f64, u64)>, now_s: f64) -> Pose {
         if let Some(sample) = newest {
-            if self.last.is_none_or(|(_, _, seq)| sample.2 != seq) {
-                self.last = Some(sample);
-            }
+            // The same datagram again keeps its arrival time; its pose may have changed (the
+            // viewer recentred the tracker).
+            self.last = Some(sample);
         }
         let Some((pose, at_s, _)) = self.last else { return self.default };
         let age = (now_s - at_s).max(0.0) as f32;

@@ -22,7 +22,7 @@ use std::time::{Duration, Instant};
 
 use super::head::{DropoutTimings, HeadFilter};
 use crate::math::{Pose, Quat, Vec3};
-use crate::scene::{ScreenCalibration, TrackerCalibration};
+use crate::scene::{ScreenCalibration, TrackerCalibration, TrackerZero};
 
 /// opentrack's default UDP port.
 pub const DEFAULT_PORT: u16 = 4242;
@@ -83,16 +83,28 @@ pub fn encode_packet(position_cm: [f64; 3], angles_deg: [f64; 3]) -> [u8; PACKET
 
 impl TrackerPose {
     /// The head's pose in screen space: the calibration's signs applied, then the tracker's
-    /// frame placed in the screen's. Yaw turns about the tracker's +Y, pitch about +X, roll about
+    /// frame placed in the screen's, its zero at the default eye `default_eye_m` (a tracker
+    /// centred on the viewer's head, [`TrackerZero::Centred`]) or at the tracker's origin
+    /// ([`TrackerZero::Origin`]). Yaw turns about the tracker's +Y, pitch about +X, roll about
     /// +Z, applied in that order (yaw outermost).
-    pub fn to_screen(&self, calibration: &TrackerCalibration) -> Pose {
+    pub fn to_screen(&self, calibration: &TrackerCalibration, default_eye_m: Vec3) -> Pose {
         let p = self.position_m * calibration.position_signs;
         let [yaw, pitch, roll] = (self.angles_deg * calibration.angle_signs).to_array().map(f32::to_radians);
         let local = Quat::from_euler(glam::EulerRot::YXZ, yaw, pitch, roll);
         let frame = calibration.to_screen;
-        Pose {
-            position_m: frame.position_m + frame.rotation * p,
-            rotation: (frame.rotation * local).normalize(),
+        let zero = match calibration.zero {
+            TrackerZero::Centred => default_eye_m,
+            TrackerZero::Origin => frame.position_m,
+        };
+        Pose { position_m: zero + frame.rotation * p, rotation: (frame.rotation * local).normalize() }
+    }
+
+    /// This pose as seen from `zero`, the pose the viewer recentred on: positions and angles
+    /// less `zero`'s.
+    pub fn relative_to(&self, zero: &TrackerPose) -> TrackerPose {
+        TrackerPose {
+            position_m: self.position_m - zero.position_m,
+            angles_deg: self.angles_deg - zero.angles_deg,
         }
     }
 }
@@ -230,6 +242,9 @@ pub struct OpentrackHead {
     receiver: OpentrackReceiver,
     filter: HeadFilter,
     tracker: TrackerCalibration,
+    default_eye_m: Vec3,
+    /// The tracker's pose the viewer recentred on ([`OpentrackHead::recentre`]).
+    zero: Option<TrackerPose>,
     epoch: Instant,
 }
 
@@ -243,6 +258,8 @@ impl OpentrackHead {
             receiver: OpentrackReceiver::bind(addr)?,
             filter: HeadFilter::new(calibration.default_head(), timings),
             tracker,
+            default_eye_m: calibration.default_eye_m,
+            zero: None,
             epoch: Instant::now(),
         })
     }
@@ -250,9 +267,28 @@ impl OpentrackHead {
     /// The head pose to render from now, screen space.
     pub fn pose(&mut self) -> Pose {
         let seconds = |t: Instant| t.saturating_duration_since(self.epoch).as_secs_f64();
-        let newest =
-            self.receiver.latest().map(|r| (r.pose.to_screen(&self.tracker), seconds(r.at), r.sequence));
+        let (tracker, eye, zero) = (&self.tracker, self.default_eye_m, self.zero);
+        let newest = self.receiver.latest().map(|r| {
+            let pose = zero.map_or(r.pose, |z| r.pose.relative_to(&z));
+            (pose.to_screen(tracker, eye), seconds(r.at), r.sequence)
+        });
         self.filter.update(newest, seconds(Instant::now()))
+    }
+
+    /// Takes the tracker's newest pose as the viewer's centred head: from now on it maps to
+    /// the default eye, looking at the screen. Returns `false` when no pose has arrived yet.
+    pub fn recentre(&mut self) -> bool {
+        let newest = self.receiver.latest().map(|r| r.pose);
+        // The pose as the calibration reads it, less where its zero already sits.
+        self.zero = newest.map(|p| match self.tracker.zero {
+            TrackerZero::Centred => p,
+            TrackerZero::Origin => {
+                let frame = self.tracker.to_screen;
+                let eye_in_tracker = frame.rotation.inverse() * (self.default_eye_m - frame.position_m);
+                TrackerPose { position_m: p.position_m - eye_in_tracker * self.tracker.position_signs, ..p }
+            }
+        });
+        self.zero.is_some()
     }
 
     /// Whether the tracker counts as lost (no datagram for longer than the hold time).
@@ -295,14 +331,31 @@ mod tests {
     #[test]
     fn a_tracker_pose_lands_in_screen_space_through_the_calibration() {
         let mut t = ScreenCalibration::shipped().tracker;
+        let eye = ScreenCalibration::shipped().default_eye_m;
+        t.zero = TrackerZero::Origin;
         t.to_screen.position_m = Vec3::new(0.0, 0.17, 0.0);
         let p = TrackerPose { position_m: Vec3::new(0.1, -0.17, 0.6), angles_deg: Vec3::new(90.0, 0.0, 0.0) };
-        let pose = p.to_screen(&t);
+        let pose = p.to_screen(&t, eye);
         assert!((pose.position_m - Vec3::new(0.1, 0.0, 0.6)).length() < 1e-6);
         // Yaw 90° (turned to the left) takes the head's right (+X) to the screen's −Z.
         assert!((pose.rotation * Vec3::X - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-5);
         t.position_signs = Vec3::new(-1.0, 1.0, 1.0);
-        assert!((p.to_screen(&t).position_m.x + 0.1).abs() < 1e-6, "a flipped axis");
+        assert!((p.to_screen(&t, eye).position_m.x + 0.1).abs() < 1e-6, "a flipped axis");
+        // Centred (the shipped zero): opentrack's all-zero pose is the default eye, looking
+        // at the screen, wherever the tracker itself sits.
+        let shipped = ScreenCalibration::shipped();
+        assert_eq!(shipped.tracker.zero, TrackerZero::Centred);
+        let centred =
+            TrackerPose { position_m: Vec3::ZERO, angles_deg: Vec3::ZERO }.to_screen(&shipped.tracker, eye);
+        assert!(
+            (centred.position_m - eye).length() < 1e-6
+                && centred.rotation.angle_between(Quat::IDENTITY) < 1e-6
+        );
+        let right = TrackerPose { position_m: Vec3::new(0.1, 0.0, 0.0), angles_deg: Vec3::ZERO };
+        assert!(
+            (right.to_screen(&shipped.tracker, eye).position_m - (eye + Vec3::new(0.1, 0.0, 0.0))).length()
+                < 1e-6
+        );
     }
 
     #[test]
@@ -314,6 +367,7 @@ mod tests {
         // A tracker at the screen's centre, axes along the screen's; a long hold, so that a slow
         // machine sees no dropout between two steps of this test.
         calibration.tracker.to_screen = Pose::default();
+        calibration.tracker.zero = TrackerZero::Origin;
         calibration.tracker.hold_s = 59.0;
         let rig = HeadTrackedRig {
             screen: calibration.screen,
@@ -349,6 +403,31 @@ mod tests {
         sender.send_to(&[1, 2, 3], to).unwrap();
         wait_for(head.receiver(), |r| r.counts().malformed() == 2);
         assert_eq!(head.pose(), moved);
+        // Recentred there, the head is the default eye again; 5 cm further right, 5 cm right
+        // of it.
+        assert!(head.recentre());
+        assert!((head.pose().position_m - calibration.default_eye_m).length() < 1e-5);
+        sender.send_to(&encode_packet([15.0, 0.0, 60.0], [0.0; 3]), to).unwrap();
+        wait_for(head.receiver(), |r| r.counts().accepted == 2);
+        assert!(
+            (head.pose().position_m - calibration.default_eye_m - Vec3::new(0.05, 0.0, 0.0)).length() < 1e-5
+        );
+    }
+
+    #[test]
+    fn a_centred_head_sees_the_scene_from_the_default_eye() {
+        // opentrack's centred pose: an all-zero datagram. The shipped calibration's tracker
+        // zero is the centred head, so the view is the default eye's, not the bezel's.
+        let mut calibration = ScreenCalibration::shipped();
+        calibration.tracker.hold_s = 59.0;
+        let mut head = OpentrackHead::start(&calibration, Some("127.0.0.1:0".parse().unwrap())).unwrap();
+        let sender = UdpSocket::bind("127.0.0.1:0").unwrap();
+        sender.send_to(&encode_packet([0.0; 3], [0.0; 3]), head.receiver().local_addr()).unwrap();
+        wait_for(head.receiver(), |r| r.counts().accepted == 1);
+        let pose = head.pose();
+        assert!(!head.lost());
+        assert!((pose.position_m - calibration.default_head().position_m).length() < 1e-6, "{pose:?}");
+        assert!(pose.rotation.angle_between(calibration.default_head().rotation) < 1e-5);
     }
 
     fn wait_for(receiver: &OpentrackReceiver, done: impl Fn(&OpentrackReceiver) -> bool) {

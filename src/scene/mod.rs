@@ -18,7 +18,9 @@ use std::path::{Path, PathBuf};
 
 pub use colour::{parse_hex, SceneColour};
 pub use head::{HeadKey, HeadPath};
-pub use screen::{DisplayCalibration, ScreenCalibration, TrackerCalibration, SHIPPED_SCREEN_TOML};
+pub use screen::{
+    DisplayCalibration, ScreenCalibration, TrackerCalibration, TrackerZero, SHIPPED_SCREEN_TOML,
+};
 pub use timeline::{Hand, HandState, Key, Timeline};
 pub use tool::SceneToolShape;
 

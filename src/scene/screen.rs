@@ -25,7 +25,10 @@ pub const SHIPPED_SCREEN_TOML: &str = include_str!("../../calibration/screen.tom
 pub struct TrackerCalibration {
     /// UDP port the opentrack receiver listens on.
     pub port: u16,
-    /// The tracker's frame in screen space (tracker → screen).
+    /// Where the tracker's zero is: the viewer's centred head, or the tracker's own origin.
+    pub zero: TrackerZero,
+    /// The tracker's frame in screen space (tracker → screen): its axes, and with
+    /// [`TrackerZero::Origin`] its origin.
     pub to_screen: Pose,
     /// Signs applied to the tracker's x, y, z before `to_screen` (±1; mirrors a tracker whose
     /// axes are left-handed).
@@ -36,6 +39,18 @@ pub struct TrackerCalibration {
     pub hold_s: f32,
     /// How long the view then takes to ease back to the default eye position, seconds.
     pub ease_s: f32,
+}
+
+/// What a tracker's zero position stands for (`[tracker] zero`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TrackerZero {
+    /// The head where the viewer centred the tracker (opentrack's "center"): the station maps
+    /// it to `[viewer] default_eye_m`, looking at the screen. The default.
+    Centred,
+    /// The tracker's own origin, at `[tracker] position_m` in screen space (a tracker that
+    /// reports absolute positions).
+    Origin,
 }
 
 /// A validated screen calibration.
@@ -253,6 +268,7 @@ impl ScreenCalibration {
         };
         let tracker = TrackerCalibration {
             port,
+            zero: t.zero.or(bt.map(|b| b.zero)).unwrap_or(TrackerZero::Centred),
             to_screen: Pose { position_m, rotation },
             position_signs: signs(t.position_signs, "tracker.position_signs", bt.map(|b| b.position_signs))?,
             angle_signs: signs(t.angle_signs, "tracker.angle_signs", bt.map(|b| b.angle_signs))?,
@@ -344,6 +360,7 @@ struct ViewerFile {
 #[serde(deny_unknown_fields)]
 struct TrackerFile {
     port: Option<Spanned<i64>>,
+    zero: Option<TrackerZero>,
     position_m: Option<Spanned<[f32; 3]>>,
     rotation_deg: Option<Spanned<[f32; 3]>>,
     position_signs: Option<Spanned<[f32; 3]>>,
