@@ -288,6 +288,27 @@ fn ms_since(t: Instant) -> f64 {
 /// convergence, interaxial, the tracked eyes' interaxial) and how the window shows it.
 type BudgetKey = ([f32; 6], [f32; 3], [f32; 3], ((u32, u32), DisplayMode, bool));
 
+/// Views `t` of the way from `a` to `b` (0 to 1): the eyes' positions moved and their
+/// orientations turned (slerp), the projections' terms blended, so that a change of view
+/// (tracking starting) is eased rather than cut.
+fn blend_views(
+    a: &crate::render::StereoViews,
+    b: &crate::render::StereoViews,
+    t: f32,
+) -> crate::render::StereoViews {
+    let mut out = *b;
+    for (o, (x, y)) in out.eyes.iter_mut().zip(a.eyes.iter().zip(&b.eyes)) {
+        let (rx, ry) = (Quat::from_mat4(&x.view.inverse()), Quat::from_mat4(&y.view.inverse()));
+        let position = x.position_m.lerp(y.position_m, t);
+        let world_from_eye =
+            crate::math::Mat4::from_rotation_translation(rx.slerp(ry, t).normalize(), position);
+        o.view = world_from_eye.inverse();
+        o.position_m = position;
+        o.projection = x.projection * (1.0 - t) + y.projection * t;
+    }
+    out
+}
+
 /// The parallax budget's last verdict (see [`Station::judge_parallax`]).
 #[derive(Clone, Debug)]
 struct Budgeted {
@@ -457,6 +478,8 @@ pub struct Station<'s> {
     /// The distance between the eyes of head-tracked views, physical metres: the calibrated
     /// viewer's, until the interaxial keys or the budget's limit change it.
     tracked_interaxial_m: f32,
+    /// Seconds since the views became head-tracked (they ease in from the untracked views).
+    tracked_for_s: Option<f32>,
     /// The monitor's resolution as the window system gives it (when the calibration does not).
     monitor_px: Option<(u32, u32)>,
     /// How the window shows the stereo pair.
@@ -567,6 +590,7 @@ impl<'s> Station<'s> {
             calibration: super::comfort::scene_calibration(scene),
             tracked_interaxial_m: super::comfort::scene_calibration(scene).ipd_m,
             monitor_px: None,
+            tracked_for_s: None,
             head: None,
             auto_convergence: None,
             clay_bounds: crate::math::Aabb::EMPTY,
@@ -1118,6 +1142,25 @@ impl<'s> Station<'s> {
         )
     }
 
+    /// Why head-tracked views look different from the camera rig's: the screen, seen from the
+    /// default eye, spans its own field of view, which the scene's camera may not.
+    fn tracking_notice(&self) -> String {
+        let c = &self.calibration;
+        let screen_fov = 2.0 * (0.5 * c.screen.height_m() / c.viewing_distance_m()).atan().to_degrees();
+        let scene_fov = self.view.rig.fov_y_deg;
+        let grows = (0.5 * scene_fov.to_radians()).tan() / (0.5 * screen_fov.to_radians()).tan();
+        if (grows - 1.0).abs() < 0.02 {
+            "head tracking: the views follow your head through the calibrated screen".to_owned()
+        } else {
+            format!(
+                "head tracking: the views follow your head through the calibrated screen, which spans \
+                 {screen_fov:.1}° from the default eye where the scene's camera shows {scene_fov:.1}°: \
+                 the clay looks {grows:.2} times as large (easing in over {:.1} s)",
+                c.tracker.ease_s
+            )
+        }
+    }
+
     /// The window's monitor, as the window system gives its resolution.
     pub fn set_monitor_px(&mut self, monitor_px: Option<(u32, u32)>) {
         self.monitor_px = monitor_px;
@@ -1499,8 +1542,26 @@ impl<'s> Station<'s> {
         };
         if let (Some(head), Some(tracked)) = (head_pose, self.tracked_rig()) {
             // Fish-tank views: the scene's convergence plane on the calibrated screen, seen from
-            // the tracked eyes.
-            frame.views = tracked.views(&head);
+            // the tracked eyes; eased in from the camera rig's views as tracking starts.
+            let views = tracked.views(&head);
+            let since = match self.tracked_for_s {
+                None => {
+                    self.messages.push(self.tracking_notice());
+                    0.0
+                }
+                Some(t) => t + dt_s,
+            };
+            self.tracked_for_s = Some(since);
+            let ease = self.calibration.tracker.ease_s;
+            frame.views = match ease > 0.0 && since < ease {
+                true => {
+                    let u = since / ease;
+                    blend_views(&frame.views, &views, u * u * (3.0 - 2.0 * u))
+                }
+                false => views,
+            };
+        } else {
+            self.tracked_for_s = None;
         }
         self.place_key_light(&mut frame.lights);
         frame.hud = self.hud_lines();
@@ -2295,12 +2356,63 @@ mod tests {
     }
 
     #[test]
+    fn tracking_eases_in_from_the_camera_view_and_says_why_the_view_changes() {
+        // The scene's camera sees 50° where the shipped screen spans 28° from the default eye.
+        let text = "[head]\n[camera]\nfov_y_deg = 50\n[[clay]]\nshape = \"sphere\"\nradius_m = 0.05\n";
+        let scene = Scene::parse(text, "wide.toml", None).unwrap();
+        let mut station = Station::new(&scene, KeyBindings::shipped(), (640, 360), PathBuf::from("u.argile"));
+        let aspect = 640.0 / 360.0;
+        let untracked = station.view.rig.views(aspect);
+        let first = station.step(SCRIPTED_STEP_S, |_| {}).views;
+        let said = station.messages.iter().find(|m| m.starts_with("head tracking:")).expect("said").clone();
+        assert!(said.contains("the clay looks 1.87 times") && said.contains("easing in"), "{said}");
+        let close = |a: &crate::render::StereoViews, b: &crate::render::StereoViews| {
+            a.eyes.iter().zip(&b.eyes).all(|(x, y)| {
+                x.projection.abs_diff_eq(y.projection, 1e-4) && x.view.abs_diff_eq(y.view, 1e-4)
+            })
+        };
+        assert!(close(&first, &untracked), "the first frame is the camera's view");
+        let frames = (station.calibration.tracker.ease_s / SCRIPTED_STEP_S).ceil() as usize + 1;
+        let mut last = first;
+        let mut steps = Vec::new();
+        for _ in 0..frames {
+            let v = station.step(SCRIPTED_STEP_S, |_| {}).views;
+            steps.push((v.eyes[0].projection.x_axis.x - last.eyes[0].projection.x_axis.x).abs());
+            last = v;
+        }
+        let head = scene.head.as_ref().unwrap().pose_at(station.playback.time_s());
+        let tracked = station.tracked_rig().unwrap().views(&head);
+        assert!(close(&last, &tracked), "then the tracked view");
+        let size = |v: &crate::render::StereoViews| {
+            let m = v.eyes[0].projection * v.eyes[0].view;
+            let ndc = |p: Vec3| {
+                let c = m * p.extend(1.0);
+                c.x / c.w
+            };
+            ndc(Vec3::new(0.05, 0.0, 0.0)) - ndc(Vec3::new(-0.05, 0.0, 0.0))
+        };
+        // As large as the notice says.
+        assert!(
+            (size(&tracked) / size(&untracked) - 1.87).abs() < 0.01,
+            "{}",
+            size(&tracked) / size(&untracked)
+        );
+        let total: f32 = steps.iter().sum();
+        assert!(steps.iter().all(|s| *s < 0.1 * total), "no step is a jump: {steps:?}");
+        assert_eq!(station.messages.iter().filter(|m| m.starts_with("head tracking:")).count(), 1);
+    }
+
+    #[test]
     fn head_tracked_views_take_the_interaxial_keys_and_the_budget_judges_them() {
         // A head-tracked scene with clay from 30 cm in front of the screen to 1 m behind it.
         let text = "[head]\n[stage]\nshow = false\n[[clay]]\nshape = \"box\"\nsize_m = [0.1, 0.1, 1.3]\nposition_m = [0, 0, -0.35]\n";
         let scene = Scene::parse(text, "deep.toml", None).unwrap();
         let mut station = Station::new(&scene, KeyBindings::shipped(), (640, 360), PathBuf::from("u.argile"));
         let apart = |v: &crate::render::StereoViews| (v.eyes[1].position_m - v.eyes[0].position_m).length();
+        // Past the ease into the tracked views.
+        for _ in 0..100 {
+            station.step(SCRIPTED_STEP_S, |_| {});
+        }
         let first = station.step(SCRIPTED_STEP_S, |_| {}).views;
         let over =
             |s: &Station<'_>| s.hud_lines().into_iter().find(|l| l.contains("over the parallax budget"));
@@ -2309,6 +2421,7 @@ mod tests {
             station.act(StationAction::InteraxialNarrower);
         }
         let narrowed = station.step(SCRIPTED_STEP_S, |_| {}).views;
+        assert!(over(&station).is_some());
         let ratio = apart(&narrowed) / apart(&first);
         assert!((ratio - 1.1f32.powi(-3)).abs() < 1e-3, "the tracked eyes moved closer: {ratio}");
         assert!(station.hud_lines()[1].contains("eyes 47 mm"), "{:?}", station.hud_lines());
