@@ -49,6 +49,7 @@ pub mod math;
 pub mod mesh;
 pub mod render;
 pub mod scene;
+pub mod spline;
 pub mod stereo;
 pub mod tool;
 pub mod xr;
