@@ -84,7 +84,8 @@ impl Clipping {
     pub const PAPER: Clipping = Clipping { iso: 0.5, cube_scale: 1.0 };
 
     /// A clipping at iso-level `iso` (in (0, 1)) with the cube's function scaled by
-    /// `cube_scale` (λ, positive).
+    /// `cube_scale` (λ, finite and at least `iso / 2`, which keeps the band at most 1: the
+    /// inverse mapping searches parameters in [−1, 2]³).
     pub fn new(iso: f64, cube_scale: f64) -> Result<Self, SplineError> {
         if !(iso.is_finite() && iso > 0.0 && iso < 1.0) {
             return Err(SplineError::Parameter {
@@ -93,10 +94,10 @@ impl Clipping {
                 value: iso,
             });
         }
-        if !(cube_scale.is_finite() && cube_scale > 0.0) {
+        if !(cube_scale.is_finite() && cube_scale >= iso / 2.0) {
             return Err(SplineError::Parameter {
                 name: "the cube's scale",
-                what: "a positive finite number",
+                what: "finite and at least half the iso-level (a clipping band of at most 1)",
                 value: cube_scale,
             });
         }
@@ -104,12 +105,12 @@ impl Clipping {
     }
 
     /// A clipping whose band of non-zero density outside the cube is at most `band` wide in
-    /// parameter units (a fraction of the box): `λ = iso / (band · (1 + band))`.
+    /// parameter units (a fraction of the box, in (0, 1]): `λ = iso / (band · (1 + band))`.
     pub fn with_band(iso: f64, band: f64) -> Result<Self, SplineError> {
-        if !(band.is_finite() && band > 0.0) {
+        if !(band.is_finite() && band > 0.0 && band <= 1.0) {
             return Err(SplineError::Parameter {
                 name: "the clipping band",
-                what: "a positive width",
+                what: "a width in (0, 1]",
                 value: band,
             });
         }
@@ -292,6 +293,10 @@ mod tests {
         assert!(Clipping::new(0.5, 0.0).is_err());
         assert!(Clipping::new(0.5, f64::NAN).is_err());
         assert!(Clipping::with_band(0.5, -0.1).is_err());
+        assert!(Clipping::with_band(0.5, 1.5).is_err());
+        assert!(Clipping::new(0.5, 0.2).is_err(), "a band wider than 1");
+        assert!((Clipping::with_band(0.5, 1.0).unwrap().band() - 1.0).abs() < 1e-12);
+        assert!((Clipping::new(0.9, 1.0).unwrap().band() - 0.5732).abs() < 1e-3);
         assert_eq!(Clipping::default(), Clipping::PAPER);
     }
 }

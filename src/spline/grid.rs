@@ -202,9 +202,11 @@ impl SplineVolume {
 
     /// The bounding box of the current positions of every control point that shares a knot
     /// span with `(i, j, k)`, grown by the clipping band (times the box's size) on the sides
-    /// where its support reaches a face. It holds the image of the control's support, so
-    /// moving `(i, j, k)` changes the mapped density only inside this box taken before the
-    /// move, or after it: re-evaluate the union of the two.
+    /// where its support reaches a face. It holds the image of the control's support inside
+    /// the cube (convex hull property), and about that of the band outside it (the continued
+    /// end spans, to first order). Moving `(i, j, k)` changes the mapped density only where
+    /// its support maps before or after the move: re-evaluate the union of this box taken
+    /// before and after.
     pub fn support_world_bounds(
         &self,
         i: usize,
@@ -249,7 +251,6 @@ impl SplineVolume {
         out: &mut [f32],
     ) -> Result<GridStats, SplineError> {
         grid.check_output(out.len())?;
-        let band = clip.band();
         let region = self.region();
         // Per axis: the parameters, and the run of grid points within the band (the others
         // are 0 whatever the function, `Clipping::is_empty_at`).
@@ -270,11 +271,9 @@ impl SplineVolume {
             return Ok(GridStats { points: grid.len(), ..GridStats::default() });
         }
         let live_params: [&[f64]; 3] = std::array::from_fn(|a| &params[a][active[a].0..active[a].1]);
-        let tables: [Rows; 3] = std::array::from_fn(|a| {
-            // Cut to the band: the extended polynomials are only needed that far.
-            let p: Vec<f64> = live_params[a].iter().map(|t| t.clamp(-band, 1.0 + band)).collect();
-            Rows::basis(self.knots(a), &p)
-        });
+        // The live parameters lie within the band: the continued polynomials are only
+        // needed that far.
+        let tables: [Rows; 3] = std::array::from_fn(|a| Rows::basis(self.knots(a), live_params[a]));
         let tables_ref = [&tables[0], &tables[1], &tables[2]];
         let counts = self.counts();
         let rational = !self.has_uniform_weights();

@@ -14,7 +14,7 @@
 //! ```
 //!
 //! Iterates stay in [−1, 2]³: beyond that, every clipping keeps the density at 0 (its band is
-//! at most 0.37 for the paper's scale, [`super::Clipping::band`]), and the extended
+//! at most 1, 0.37 for the paper's scale, [`super::Clipping::band`]), and the extended
 //! polynomials only grow. If the first start fails, the search falls back to the parameters of
 //! the nearest control point and to the nearest node of a coarse grid of `P`.
 //!
@@ -160,40 +160,31 @@ impl SplineVolume {
             let residual_m = norm(sub(self.position_f64(uvw), target));
             return (InverseMap { uvw, converged: false, inside: false, iterations: 0, residual_m }, None);
         }
-        let mut iterations = 0;
-        let mut best: Option<Run> = None;
-        let mut consider = |run: Run, best: &mut Option<Run>| {
+        let mut best = self.newton(target, start.unwrap_or(rest), tol);
+        let mut iterations = best.iterations;
+        if best.residual > tol && start.is_some() {
+            let run = self.newton(target, rest, tol);
             iterations += run.iterations;
-            if best.as_ref().is_none_or(|b| run.residual < b.residual) {
-                *best = Some(run);
-            }
-        };
-        let done = |best: &Option<Run>| best.as_ref().is_some_and(|b| b.residual <= tol);
-        let seeds = start.into_iter().chain(std::iter::once(rest));
-        for seed in seeds {
-            consider(self.newton(target, seed, tol), &mut best);
-            if done(&best) {
-                break;
+            if run.residual < best.residual {
+                best = run;
             }
         }
         let in_hull = x.cmpge(hull.min).all() && x.cmple(hull.max).all();
-        let converged_inside =
-            |best: &Option<Run>| done(best) && best.as_ref().is_some_and(|b| inside(b.uvw));
+        let converged_inside = |b: &Run| b.residual <= tol && inside(b.uvw);
         if fallbacks && in_hull && !converged_inside(&best) {
             for seed in [self.nearest_control_parameters(target), self.nearest_coarse_node(target)] {
                 let run = self.newton(target, seed, tol);
                 iterations += run.iterations;
-                let found_inside = run.residual <= tol && inside(run.uvw);
-                let closer = !done(&best) && best.as_ref().is_none_or(|b| run.residual < b.residual);
-                if found_inside || closer {
-                    best = Some(run);
+                // Prefer a preimage inside the cube; else the smallest residual.
+                let closer = best.residual > tol && run.residual < best.residual;
+                if converged_inside(&run) || closer {
+                    best = run;
                 }
                 if converged_inside(&best) {
                     break;
                 }
             }
         }
-        let best = best.expect("at least the rest start ran");
         let converged = best.residual <= tol;
         let map = InverseMap {
             uvw: best.uvw,
@@ -301,7 +292,7 @@ impl SplineVolume {
     ) -> (f32, InverseMap, Option<Eval>) {
         // Points whose preimage lies beyond the band read 0: refuse them at about the band's
         // width outside the hull (the rest lattice's parameters scale with the box).
-        let margin = self.region().size() * (clip.band().min(HULL_MARGIN) as f32);
+        let margin = self.region().size() * clip.band() as f32;
         let (map, eval) = self.inverse_map_within(x, start, margin, true);
         let density = match eval {
             // The search's last evaluation holds F at the parameters found.
@@ -524,5 +515,43 @@ mod tests {
             assert!((vol.mapped_density(x, &Clipping::PAPER) - d).abs() < 1e-5);
         }
         assert!(before.iter().any(|&d| d > 0.5));
+    }
+
+    mod properties {
+        use super::*;
+        use proptest::prelude::*;
+
+        proptest! {
+            #![proptest_config(ProptestConfig {
+                cases: 48,
+                rng_seed: proptest::test_runner::RngSeed::Fixed(73),
+                ..ProptestConfig::default()
+            })]
+            #[test]
+            fn any_moderate_deformation_round_trips(
+                seed in 1u64..u64::MAX,
+                order in 2usize..5,
+                count in 5usize..9,
+                clamped in any::<bool>(),
+                amount in 0.0f32..0.35,
+            ) {
+                let style = if clamped { KnotStyle::Clamped } else { KnotStyle::Uniform };
+                let b = unit_box();
+                let mut vol = SplineVolume::bspline(b, [count; 3], [order; 3], style).unwrap();
+                // Each control moves by up to `amount` of a lattice spacing on each axis.
+                let spacing = b.size() / (count - 1) as f32;
+                let mut rng = Rng(seed);
+                vol.update_positions(|_, c| c.rest_m + rng.uvw(-1.0, 1.0).to_vec3() * spacing * amount).unwrap();
+                let size = b.size().max_element() as f64;
+                for _ in 0..20 {
+                    let uvw = rng.uvw(0.0, 1.0);
+                    let x = vol.position(uvw);
+                    let map = vol.inverse_map(x);
+                    prop_assert!(map.converged, "{:?} from {:?}", map, uvw);
+                    let err = norm(sub(vol.position_f64(map.uvw), to_f64(x))) / size;
+                    prop_assert!(err < 1e-5);
+                }
+            }
+        }
     }
 }

@@ -404,7 +404,7 @@ mod tests {
             // The half-open rule, closed at the domain's end so that t = end is covered.
             // (Only where no span follows: with uniform knots the next span's right value is the
             // continuous one.)
-            let closed = i == last_span && t == b && knots.get(i + 2).is_none_or(|&c| c == b);
+            let closed = i == last_span && t == b && knots[i + 1..].iter().all(|&c| c == b);
             return if (a <= t && t < b) || closed { 1.0 } else { 0.0 };
         }
         let mut v = 0.0;
@@ -584,5 +584,48 @@ mod tests {
         assert_eq!(kv.span_breaks(), vec![0.0, 0.05, 0.25, 1.0]);
         assert_eq!(KnotVector::uniform(6, 3).unwrap().span_breaks(), vec![0.0, 0.25, 0.5, 0.75, 1.0]);
         assert_eq!(KnotVector::bezier(5).unwrap().span_breaks(), vec![0.0, 1.0]);
+    }
+
+    mod properties {
+        use super::*;
+        use proptest::prelude::*;
+
+        proptest! {
+            #![proptest_config(ProptestConfig {
+                cases: 200,
+                rng_seed: proptest::test_runner::RngSeed::Fixed(71),
+                ..ProptestConfig::default()
+            })]
+            #[test]
+            fn any_knot_vector_is_refused_or_a_partition_of_unity(
+                count in 0usize..18,
+                order in 0usize..8,
+                steps in proptest::collection::vec(prop_oneof![12 => 0.01f64..2.0, 3 => Just(0.0f64), 1 => -0.1f64..0.0], 26),
+                short in any::<bool>(),
+            ) {
+                // Non-decreasing mostly (a decrease now and then), the right length mostly.
+                let len = (count + order).saturating_sub(usize::from(short)).min(steps.len());
+                let knots: Vec<f64> = steps[..len].iter().scan(0.0, |t, s| { *t += s; Some(*t) }).collect();
+                if let Ok(kv) = KnotVector::new(count, order, knots) {
+                    prop_assert_eq!(kv.knots().len(), count + order);
+                    for s in 0..=40 {
+                        let u = -0.25 + 1.5 * s as f64 / 40.0;
+                        let b = kv.basis(u);
+                        prop_assert!(b.first + b.order <= count);
+                        let sum: f64 = b.values().iter().sum();
+                        let magnitude: f64 = b.values().iter().map(|v| v.abs()).sum();
+                        prop_assert!((sum - 1.0).abs() < 1e-10 * magnitude.max(1.0), "{:?} u={} sum={}", kv, u, sum);
+                        if (0.0..=1.0).contains(&u) {
+                            let t = kv.lo + u * (kv.hi - kv.lo);
+                            for i in 0..count {
+                                let want = reference(&kv.knots, order, i, t, kv.last_span);
+                                let got = if (b.first..b.first + b.order).contains(&i) { b.values[i - b.first] } else { 0.0 };
+                                prop_assert!((want - got).abs() < 1e-9, "{:?} u={} i={}", kv, u, i);
+                            }
+                        }
+                    }
+                }
+            }
+        }
     }
 }

@@ -22,6 +22,10 @@ use super::knots::{check_count_and_order, KnotStyle, KnotVector, MAX_ORDER};
 use super::{SplineError, AXES};
 
 /// Normalised parameters `(u, v, w)`; the unit cube [0, 1]³ is the spline's domain.
+///
+/// Evaluation takes finite parameters. Outside the cube the end spans' polynomials continue
+/// (finite for the parameters any search here produces, within [−1, 2]³); non-finite
+/// parameters give non-finite results.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Uvw(pub [f64; 3]);
 
