@@ -21,6 +21,15 @@
 //! lattice's *current* image of each parameter, `field(P(u, v, w))`: on an untouched lattice
 //! that is the box's affine grid, and fitting a deformed lattice bakes the field into it.
 //!
+//! ## Accuracy
+//!
+//! A polynomial of degree below the order on each axis lies in the spline space and is
+//! reproduced to rounding (10⁻⁹ in the tests). A smooth ball of clay (a logistic ramp whose
+//! 10–90 % width is 1.1 to 1.4 knot spans of the coarsest axis) is fitted with a largest
+//! error below 0.06 in density and an RMS error below 0.015 at the samples, and within 1.25
+//! times that between them; a sharper ramp than the knot spacing can carry rings (0.2 for a
+//! ramp of 0.6 spans). Choose the control count from the finest detail to keep.
+//!
 //! ## NURBS
 //!
 //! `F = Σ B w f / W` is not linear-separable in `f` when the weights differ. The fit solves
@@ -332,13 +341,10 @@ pub(crate) mod tests {
     #[test]
     fn a_smooth_ball_is_fitted_and_reproduced_through_the_mapping() {
         let b = unit_box();
-        for (counts, order, ramp, tolerance) in [
-            (8, 4, 0.02, 0.5),
-            (8, 4, 0.01, 0.5),
-            (16, 4, 0.01, 0.5),
-            (16, 3, 0.01, 0.5),
-            (16, 4, 0.005, 0.5),
-        ] {
+        // The ball's ramp (10–90 %, 4.4 × `ramp`) spans about 1.1 knot spans of the coarsest
+        // axis for 8³, 1.4 for 16³.
+        for (counts, order, ramp, tolerance) in [(8, 4, 0.02, 0.06), (16, 4, 0.01, 0.05), (16, 3, 0.01, 0.05)]
+        {
             let field = ball(b.centre(), 0.08, ramp);
             let mut vol = SplineVolume::bspline(b, [counts; 3], [order; 3], KnotStyle::Clamped).unwrap();
             let report = vol.fit_field(&field, DEFAULT_SAMPLES_PER_SPAN).unwrap();
@@ -355,7 +361,7 @@ pub(crate) mod tests {
                 let raw = vol.value(vol.inverse_map(x).uvw);
                 let err = (raw - field(x) as f64).abs();
                 worst = worst.max(err);
-                assert!(err < tolerance * 1.5, "at {x}: {raw} vs {}", field(x));
+                assert!(err < tolerance * 1.25, "at {x}: {raw} vs {}", field(x));
                 // Clipping keeps the fitted function's surface.
                 let d = vol.mapped_density(x, &clip) as f64;
                 if (raw - 0.5).abs() > 1e-6 {
@@ -363,6 +369,31 @@ pub(crate) mod tests {
                 }
             }
             eprintln!("  worst error between samples {worst:.4}");
+        }
+    }
+
+    #[test]
+    fn a_fit_on_a_deformed_lattice_bakes_the_field_into_it() {
+        // Fitting samples the field at the lattice's current image: afterwards the mapped
+        // function reproduces the field in the world, through the deformation.
+        let b = unit_box();
+        let field = ball(b.centre() + Vec3::new(0.02, 0.0, 0.0), 0.07, 0.02);
+        let mut vol = SplineVolume::bspline(b, [12; 3], [4; 3], KnotStyle::Clamped).unwrap();
+        let (c, size) = (b.centre(), b.size());
+        vol.update_positions(|_, cp| {
+            let t = (cp.rest_m.y - b.min.y) / size.y;
+            c + crate::math::Quat::from_rotation_y(0.8 * t) * (cp.rest_m - c)
+        })
+        .unwrap();
+        let report = vol.fit_field(&field, 3).unwrap();
+        assert!(report.max_error < 0.05, "{report:?}");
+        let mut rng = Rng(67);
+        for _ in 0..300 {
+            let x = vol.position(rng.uvw(0.15, 0.85));
+            let map = vol.inverse_map(x);
+            assert!(map.inside);
+            let err = (vol.value(map.uvw) - field(x) as f64).abs();
+            assert!(err < 0.06, "at {x}: {err}");
         }
     }
 

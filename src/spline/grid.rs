@@ -15,7 +15,9 @@
 //!   starts from its neighbour's parameters.
 //!
 //! [`SplineVolume::density_grid`] picks the first when it applies. Both clip
-//! ([`super::Clipping`]) and write densities, `x` fastest.
+//! ([`super::Clipping`]) and write densities, `x` fastest. The rest path allocates its
+//! intermediate arrays (8 bytes a grid point, twice that for NURBS); the deformed path
+//! allocates nothing per point.
 //!
 //! ## Locality
 //!
@@ -580,6 +582,7 @@ mod tests {
         // value, the effect is locally important too, depending of course on the order."
         let b = unit_box();
         let clip = Clipping::PAPER;
+        let mut reach = Vec::new();
         for order in [3, 4] {
             let mut vol = SplineVolume::nurbs(b, [10, 6, 6], [order, 3, 3], KnotStyle::Clamped).unwrap();
             // A slab of clay along u: signed values (f − iso) +0.5 for i ≤ 4, −0.5 beyond.
@@ -606,8 +609,9 @@ mod tests {
                     }
                 }
                 let shift = surface(&weighted) - base;
-                // The largest change of F at the samples, and of the density far from i.
-                let (mut near, mut far) = (0.0f64, 0.0f64);
+                // The largest change of F inside the control's support and outside it, and
+                // the length of u over which F changes.
+                let (mut near, mut far, mut changed) = (0.0f64, 0.0f64, 0);
                 for s in 0..=200 {
                     let uvw = Uvw::new(s as f64 / 200.0, 0.5, 0.5);
                     let d = (weighted.value(uvw) - vol.value(uvw)).abs();
@@ -617,28 +621,54 @@ mod tests {
                     } else {
                         far = far.max(d);
                     }
+                    changed += usize::from(d > 1e-9);
                 }
-                (shift, near, far)
+                // And in the world: where the mapped density crosses iso along x through
+                // the box's centre (the weight moves space too).
+                let crossing = |v: &SplineVolume| {
+                    let (mut lo, mut hi) = (b.min.x, b.max.x);
+                    for _ in 0..40 {
+                        let mid = 0.5 * (lo + hi);
+                        if v.mapped_density(Vec3::new(mid, b.centre().y, b.centre().z), &clip) > 0.5 {
+                            lo = mid;
+                        } else {
+                            hi = mid;
+                        }
+                    }
+                    lo
+                };
+                let world_shift = crossing(&weighted) - crossing(&vol);
+                (shift, near, far, changed as f64 / 200.0, world_shift)
             };
             // Deep inside: all its neighbours hold the same value, F is their weighted mean:
             // no effect at all.
-            let (shift, near, far) = effect(1, 4.0);
+            let (shift, near, far, _, world) = effect(1, 4.0);
             assert!(shift.abs() < 1e-12 && near < 1e-12 && far < 1e-12, "inside: {shift} {near}");
+            assert!(world.abs() < 1e-6, "inside: the surface moved by {world} m");
             // The last positive control, at the boundary: the surface moves outwards.
-            let (shift, near, far) = effect(4, 4.0);
+            let (shift, near, far, _, world) = effect(4, 4.0);
             assert!(shift > 0.01, "order {order}: boundary weight moved the surface by {shift}");
             assert!(near > 0.1 && far < 1e-12, "order {order}: near {near}, far {far}");
+            assert!(world > 0.0005, "order {order}: the surface moved by {world} m");
             // The first negative control: the surface moves inwards, locally.
-            let (shift, near, far) = effect(5, 4.0);
+            let (shift, near, far, extent, world) = effect(5, 4.0);
             assert!(shift < -0.01 && near > 0.1 && far < 1e-12, "order {order}: {shift} {near} {far}");
+            assert!(world < -0.0005, "order {order}: the surface moved by {world} m");
+            reach.push(extent);
             // And far on the negative side, where every neighbour is negative: no effect.
-            let (shift, near, _) = effect(9, 4.0);
+            let (shift, near, ..) = effect(9, 4.0);
             assert!(shift.abs() < 1e-12 && near < 1e-12);
+            let boundary = effect(4, 4.0);
             eprintln!(
-                "order {order}: surface at u = {base:.3}; weight 4 on the boundary control moves it by {:.3}",
-                effect(4, 4.0).0
+                "order {order}: surface at u = {base:.3}; weight 4 on the boundary control moves it by \
+                 {:.3} in u, {:.1} mm in the world; weight 4 on the first negative control changes F over \
+                 {extent:.2} of u",
+                boundary.0,
+                boundary.4 * 1e3
             );
         }
+        // "Depending of course on the order": a higher order spreads the effect wider.
+        assert!(reach[1] > reach[0], "{reach:?}");
     }
 
     #[test]

@@ -99,9 +99,19 @@ impl Basis {
     pub fn values(&self) -> &[f64] {
         &self.values[..self.order]
     }
+
+    /// The knot span `s` (`t_s ≤ t < t_{s+1}`): `first + order − 1`.
+    pub fn span(&self) -> usize {
+        self.first + self.order - 1
+    }
 }
 
 impl BasisDerivatives {
+    /// The knot span `s`: `first + order − 1`.
+    pub fn span(&self) -> usize {
+        self.first + self.order - 1
+    }
+
     /// The meaningful values.
     pub fn values(&self) -> &[f64] {
         &self.values[..self.order]
@@ -463,6 +473,12 @@ mod tests {
                 let u = s as f64 / 97.0;
                 let t = kv.lo + u * (kv.hi - kv.lo);
                 let b = kv.basis(u);
+                let s = b.span();
+                assert!(
+                    kv.knots[s] <= t && (t < kv.knots[s + 1] || s == kv.last_span),
+                    "{kv:?} u={u} span {s}"
+                );
+                assert!(kv.knots[s] < kv.knots[s + 1], "an empty span");
                 for i in 0..kv.count() {
                     let want = reference(&kv.knots, kv.order, i, t, kv.last_span);
                     let got =

@@ -60,8 +60,10 @@
 //! - The rest lattice maps the unit cube exactly onto the box ([`SplineVolume::over_box`]
 //!   places the rest control points at the Greville abscissae, for every kind and order), so
 //!   an untouched lattice maps every point to itself.
-//! - Weights are positive: the rational denominator never vanishes, the image of the unit cube
-//!   lies in the control points' convex hull, and nothing returns NaN for finite inputs.
+//! - Weights are positive: the rational denominator never vanishes in the cube, and the image
+//!   of the unit cube lies in the control points' convex hull. Nothing that takes a world
+//!   point returns NaN or an infinity, whatever the point or the lattice (coincident control
+//!   points included): the searches keep their parameters in [−1, 2]³.
 //! - Nothing panics on bad parameters: constructors and setters return [`SplineError`].
 //! - Evaluation of one point (basis, position, Jacobian, value, inverse map) allocates
 //!   nothing; the arithmetic is in `f64` (positions are stored as `Vec3`, values and weights
@@ -69,12 +71,20 @@
 //!
 //! ## Where this departs from the papers, and why
 //!
-//! - ESM §3 places the rest control points on the regular grid `i / l`. That maps the cube
-//!   onto the box by the identity only for Bézier volumes; for B-splines it is a non-linear
-//!   reparameterisation (and with `i / l` not even onto). We place them at the Greville
-//!   abscissae of the knots, which makes the rest mapping exactly affine for every order and
-//!   knot vector (linear precision of B-splines), so the inverse of the rest mapping is the
-//!   box's affine inverse and the Newton iteration starts at the answer.
+//! - ESM §3 places the rest control points on a regular grid (printed as `i / l`). Equally
+//!   spaced control points map the cube onto the box by the identity only for Bézier volumes;
+//!   for B-splines of order > 2 they give a non-linear reparameterisation. We place them at
+//!   the Greville abscissae of the knots, which makes the rest mapping exactly affine for
+//!   every order and knot vector (linear precision of B-splines), so the inverse of the rest
+//!   mapping is the box's affine inverse and the Newton iteration starts at the answer.
+//! - Weights act on all four coordinates, as in a NURBS hypersurface of the 4D extended
+//!   space: a heavier control point pulls space towards its position as well as the function
+//!   towards its value. ESM §4.4's observations hold (no effect inside the solid, a local
+//!   effect at its boundary that widens with the order; `grid::tests`), but in the world the
+//!   boundary moves much less than in the parameters (a weight of 4 on the last positive
+//!   control of an order-3 slab moves it by 0.046 of the box in `u`, by 1.6 mm of 300 mm in
+//!   the world), which agrees with ESM's remark that every NURBS result could also be had
+//!   with B-splines.
 //! - ESM draws negative weights as "−" spheres (§4.1). We refuse them: a weight of either sign
 //!   can make the denominator vanish inside the cube (a pole), which turns the mapping and the
 //!   function into infinities. With positive weights both are convex combinations.
@@ -89,6 +99,14 @@
 //!   matrices of at most 16 × 16 instead of one of 4096 × 4096. For NURBS the fit solves for
 //!   the homogeneous values `w·f` against `d·W` (W the weights' spline), which keeps that
 //!   separation and minimises the error weighted by `W²`.
+//!
+//! And what the papers leave open: ESM defers the inverse mapping to another paper ([8]); ours
+//! is damped Newton with Levenberg–Marquardt steps where the Jacobian is singular, fallback
+//! starts, and a refusal of points that cannot have a preimage (outside the control hull,
+//! convex hull property), so coincident control points or far points cost little and give no
+//! NaN (`inverse`). Grids of a deformed lattice start each point's search from its
+//! neighbour's parameters moved through the inverse Jacobian, about one Newton iteration a
+//! point (`grid`).
 
 mod clip;
 mod fit;

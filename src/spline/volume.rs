@@ -701,6 +701,29 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn a_bezier_volume_is_the_clamped_b_spline_of_full_order() {
+        let b = unit_box();
+        let mut bezier = SplineVolume::bezier(b, [5, 3, 7]).unwrap();
+        let mut spline = SplineVolume::bspline(b, [5, 3, 7], [5, 3, 7], KnotStyle::Clamped).unwrap();
+        assert!((0..3).all(|a| bezier.knots(a) == spline.knots(a)));
+        let mut rng = Rng(13);
+        let moves: Vec<(Vec3, f64)> =
+            (0..bezier.controls().len()).map(|_| (rng.uvw(-0.02, 0.02).to_vec3(), rng.next_f64())).collect();
+        for vol in [&mut bezier, &mut spline] {
+            vol.update_positions(|[i, j, k], c| c.rest_m + moves[i + 5 * (j + 3 * k)].0).unwrap();
+            vol.update_values(|[i, j, k], _| moves[i + 5 * (j + 3 * k)].1).unwrap();
+        }
+        for _ in 0..100 {
+            let uvw = rng.uvw(-0.1, 1.1);
+            assert_eq!(bezier.value(uvw), spline.value(uvw));
+            assert_eq!(bezier.position(uvw), spline.position(uvw));
+        }
+        // A clamped spline of lower order is no Bézier volume.
+        let lower = [0, 1, 2].map(|_| KnotVector::clamped(5, 4).unwrap());
+        assert!(SplineVolume::over_box(b, SplineKind::Bezier, lower).is_err());
+    }
+
+    #[test]
     fn jacobian_and_gradient_match_finite_differences() {
         let mut rng = Rng(19);
         for mut vol in volumes() {
