@@ -6,8 +6,9 @@
 //!   can be evaluated before"): the parameters of grid point `(x, y, z)` are
 //!   `((x − min)/size)` per axis, independent of the other axes, so the spline separates. One
 //!   basis table per axis (`N` samples × `k` values) and three axis-by-axis contractions of
-//!   the control values cost `O(N·l·m·n·k + N²·m·n·k + N³·n·k)`, i.e. `O(N³·k)` for `N ≥ l`,
-//!   instead of `k³` products per point. This evaluates the function mapping alone (`F` at
+//!   the `l × m × n` control values (along u, then v, then w) cost
+//!   `O(N·m·n·k + N²·n·k + N³·k)`, i.e. `O(N³·k)` for `N ≥ m, n`, instead of `k³` products
+//!   per point. This evaluates the function mapping alone (`F` at
 //!   the rest parameters); it is the mapped density when the lattice is at rest
 //!   ([`SplineVolume::is_at_rest`]).
 //! - *Deformed lattice* ([`SplineVolume::mapped_density_grid`]): per point, the inverse
@@ -165,7 +166,7 @@ impl SampleGrid {
         self.len() == 0
     }
 
-    /// The world position of grid point `(x, y, z)` (counted from `min`).
+    /// The world position of grid point `(x, y, z)`, counted from `min`, each below its count.
     pub fn point(&self, x: u32, y: u32, z: u32) -> Vec3 {
         self.transform.index_to_world((self.min + UVec3::new(x, y, z).as_ivec3()).as_vec3())
     }
@@ -254,12 +255,13 @@ impl SplineVolume {
     ) -> Result<GridStats, SplineError> {
         grid.check_output(out.len())?;
         let region = self.region();
-        // Per axis: the parameters, and the run of grid points within the band (the others
-        // are 0 whatever the function, `Clipping::is_empty_at`).
+        // Per axis: the parameters, and the run of grid points within the band (an interval:
+        // the others are 0 whatever the function, `Clipping::is_empty_at`, and no point of
+        // the runs' box is).
         let mut params: [Vec<f64>; 3] = Default::default();
         let mut active = [(0usize, 0usize); 3];
         for a in 0..3 {
-            let (min, size) = (region.min[a] as f64, region.size()[a] as f64);
+            let (min, size) = (region.min[a] as f64, region.max[a] as f64 - region.min[a] as f64);
             let p: Vec<f64> = grid.axis_coordinates(a).iter().map(|x| (x - min) / size).collect();
             let live = |t: &f64| clip.cube_scale() * unit_strip(*t) > -clip.iso();
             let first = p.iter().position(live).unwrap_or(p.len());
@@ -297,17 +299,11 @@ impl SplineVolume {
             .flat_map(|&sv| strips[0].iter().map(move |&su| r_intersection(su, sv)))
             .collect();
         let (nx, ny) = (grid.counts.x as usize, grid.counts.y as usize);
-        let mut evaluated = 0;
         for c in 0..n[2] {
             for b in 0..n[1] {
                 let row = nx * (active[1].0 + b + ny * (active[2].0 + c)) + active[0].0;
                 for a in 0..n[0] {
                     let index = a + n[0] * (b + n[1] * c);
-                    let uvw = Uvw::new(live_params[0][a], live_params[1][b], live_params[2][c]);
-                    if clip.is_empty_at(uvw) {
-                        continue;
-                    }
-                    evaluated += 1;
                     let f = match &den {
                         Some(w) => num[index] / w[index].max(1e-3 * self.min_weight_value()),
                         None => num[index],
@@ -320,6 +316,7 @@ impl SplineVolume {
         }
         let inside =
             (0..3).map(|a| live_params[a].iter().filter(|t| (0.0..=1.0).contains(*t)).count()).product();
+        let evaluated = n.iter().product();
         Ok(GridStats { points: grid.len(), evaluated, converged: evaluated, inside, newton_iterations: 0 })
     }
 
