@@ -299,7 +299,7 @@ impl SplineVolume {
             .flat_map(|&sv| strips[0].iter().map(move |&su| r_intersection(su, sv)))
             .collect();
         let (nx, ny) = (grid.counts.x as usize, grid.counts.y as usize);
-        for c in 0..n[2] {
+        for (c, &strip_w) in strips[2].iter().enumerate() {
             for b in 0..n[1] {
                 let row = nx * (active[1].0 + b + ny * (active[2].0 + c)) + active[0].0;
                 for a in 0..n[0] {
@@ -308,7 +308,7 @@ impl SplineVolume {
                         Some(w) => num[index] / w[index].max(1e-3 * self.min_weight_value()),
                         None => num[index],
                     };
-                    let cube = r_intersection(uv[a + n[0] * b], strips[2][c]);
+                    let cube = r_intersection(uv[a + n[0] * b], strip_w);
                     let g = r_intersection(f - clip.iso(), clip.cube_scale() * cube);
                     out[row + a] = (clip.iso() + g).clamp(0.0, 1.0) as f32;
                 }
