@@ -212,6 +212,10 @@ enum Command {
         /// Width of each eye's image in pixels (the height follows the screen's aspect ratio).
         #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(64..=8192))]
         width: u32,
+        /// Also write the pattern as this display mode shows it, as calibration-MODE.png: the
+        /// mode of the display being checked (repeat for several).
+        #[arg(long, value_enum)]
+        display_mode: Vec<DisplayMode>,
     },
 }
 
@@ -381,9 +385,14 @@ fn main() -> ExitCode {
         Some(Command::Info { sculpt: Some(path), .. }) => app::describe_sculpt(&path).map(|d| print!("{d}")),
         Some(Command::Info { input, sculpt: None }) => info(input.as_deref()),
         Some(Command::Bench { json, quick, workloads }) => run_bench(json, quick, &workloads),
-        Some(Command::Calibrate { calibration, out, width }) => {
-            let options =
-                app::CalibrateOptions { calibration, out_dir: out, width_px: width, validation: false };
+        Some(Command::Calibrate { calibration, out, width, display_mode }) => {
+            let options = app::CalibrateOptions {
+                calibration,
+                out_dir: out,
+                width_px: width,
+                validation: false,
+                display_modes: display_mode,
+            };
             app::calibrate(&options).map(|c| {
                 print!("{}", c.report);
                 print_written(std::slice::from_ref(&c.written));

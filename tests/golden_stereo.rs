@@ -361,8 +361,13 @@ fn silhouette_centroid(img: &image::RgbaImage, colour: impl Fn(&Pixel) -> bool) 
 #[test]
 fn the_calibration_test_pattern_shows_zero_parallax_on_the_screen_and_the_predicted_disparities() {
     let out_dir = out_dir("calibration");
-    let options =
-        argile::app::CalibrateOptions { calibration: None, out_dir, width_px: 256, validation: true };
+    let options = argile::app::CalibrateOptions {
+        calibration: None,
+        out_dir,
+        width_px: 256,
+        validation: true,
+        display_modes: Vec::new(),
+    };
     // A missing Vulkan device or any validation message fails here, loudly.
     let done = argile::app::calibrate(&options).unwrap_or_else(|e| panic!("argile calibrate failed: {e:#}"));
     let load = |p: &std::path::Path| image::open(p).expect("rendered image reads back").to_rgba8();

@@ -3,9 +3,11 @@
 //!
 //! The pattern is built in screen space (the world is the calibrated room, 1:1): a green grid
 //! of thin bars lying on the screen plane, which must show zero parallax (the two images
-//! agree on it), a red ball 12 % of the viewing distance in front of the screen (crossed
-//! disparity) and a blue ball 18 % of it behind the screen (uncrossed), both within the
-//! default 1° budget, each expected at `IPD · (Z − D) / Z` on the screen. Seen on the calibrated display from the default eye, with
+//! agree on it) and whose lines are a stated number of millimetres apart (a ruler on the screen
+//! checks its calibrated size, which zero parallax cannot show), a red ball 12 % of the viewing
+//! distance in front of the screen (crossed disparity) and a blue ball 15 % of it behind the
+//! screen (uncrossed), both wholly within the default 1° budget, each expected at
+//! `IPD · (Z − D) / Z` on the screen. Seen on the calibrated display from the default eye, with
 //! the right eye's image to the right eye, the grid sits on the glass and the balls float at
 //! the printed distances.
 
@@ -51,6 +53,11 @@ pub struct TestPattern {
     /// The grid's colour (linear RGB).
     pub grid_colour: Vec3,
 }
+
+/// The grid's cells across the screen.
+const GRID_COLUMNS: u32 = 8;
+/// The grid's cells up the screen.
+const GRID_ROWS: u32 = 4;
 
 /// Grid colour: green, so that neither marker's colour is confused with it.
 const GRID: Vec3 = Vec3::new(0.1, 0.9, 0.1);
@@ -100,8 +107,8 @@ pub fn test_pattern(calibration: &ScreenCalibration, width_px: u32) -> TestPatte
         op: CsgOp::Union,
         colour: colour.extend(1.0).to_array(),
     };
-    for i in 1..8 {
-        let x = (i as f32 / 8.0 - 0.5) * w;
+    for i in 1..GRID_COLUMNS {
+        let x = (i as f32 / GRID_COLUMNS as f32 - 0.5) * w;
         scene.clay.push(bar(
             at(x, 0.0, 0.0),
             0.5 * h,
@@ -109,8 +116,8 @@ pub fn test_pattern(calibration: &ScreenCalibration, width_px: u32) -> TestPatte
             GRID,
         ));
     }
-    for j in 1..4 {
-        let y = (j as f32 / 4.0 - 0.5) * h;
+    for j in 1..GRID_ROWS {
+        let y = (j as f32 / GRID_ROWS as f32 - 0.5) * h;
         scene.clay.push(bar(at(0.0, y, 0.0), 0.5 * w, Quat::IDENTITY, GRID));
     }
 
@@ -130,7 +137,7 @@ pub fn test_pattern(calibration: &ScreenCalibration, width_px: u32) -> TestPatte
     let markers = [
         // Each ball in a cell of the grid, clear of its bars, so neither eye sees a bar cut it.
         marker("near", Vec3::new(1.0, 0.12, 0.08), (-0.3125 * w, -0.125 * h), 0.12 * d, 0.035 * h),
-        marker("far", Vec3::new(0.08, 0.25, 1.0), (0.3125 * w, 0.125 * h), -0.18 * d, 0.07 * h),
+        marker("far", Vec3::new(0.08, 0.25, 1.0), (0.3125 * w, 0.125 * h), -0.15 * d, 0.07 * h),
     ];
     TestPattern { scene, markers, grid_colour: GRID }
 }
@@ -223,6 +230,13 @@ pub fn describe(calibration: &ScreenCalibration, source: &str, pattern: &TestPat
     let (w, h) = (pattern.scene.output.width_px, pattern.scene.output.height_px);
     let _ =
         writeln!(s, "Test pattern ({w} × {h} per eye): the green grid lies on the screen (zero parallax)");
+    let _ = writeln!(
+        s,
+        "  its lines are {:.1} mm apart across and {:.1} mm apart up the screen, shown full screen: \
+         measure them with a ruler; other spacings mean [screen] width_m and height_m are wrong",
+        c.screen.width_m() / GRID_COLUMNS as f32 * 1000.0,
+        c.screen.height_m() / GRID_ROWS as f32 * 1000.0
+    );
     for m in &pattern.markers {
         let _ = writeln!(
             s,
@@ -250,6 +264,8 @@ pub struct CalibrateOptions {
     pub width_px: u32,
     /// Turn the Vulkan validation layer on.
     pub validation: bool,
+    /// Also write the pattern as these display modes compose it (the display's own mode).
+    pub display_modes: Vec<crate::stereo::display::DisplayMode>,
 }
 
 /// What `argile calibrate` did.
@@ -273,7 +289,7 @@ pub fn calibrate(options: &CalibrateOptions) -> Result<Calibrated> {
     let report = describe(&calibration, &source, &pattern);
     let render = RenderOptions {
         out_dir: options.out_dir.clone(),
-        display_modes: Vec::new(),
+        display_modes: options.display_modes.clone(),
         progress: false,
         validation: options.validation,
         size_px: None,
@@ -295,10 +311,10 @@ mod tests {
         assert_eq!((p.scene.output.width_px, p.scene.output.height_px), (512, 288));
         let [near, far] = &p.markers;
         assert!(near.parallax_m < 0.0 && far.parallax_m > 0.0);
-        // 72 mm in front of a screen 600 mm away: 63 mm · (528 − 600) / 528 = −8.59 mm; 108 mm
-        // behind: 63 mm · 108 / 708 = 9.61 mm.
+        // 72 mm in front of a screen 600 mm away: 63 mm · (528 − 600) / 528 = −8.59 mm; 90 mm
+        // behind: 63 mm · 90 / 690 = 8.22 mm.
         assert!((near.parallax_m + 0.008_591).abs() < 1e-5, "{}", near.parallax_m);
-        assert!((far.parallax_m - 0.009_610).abs() < 1e-5, "{}", far.parallax_m);
+        assert!((far.parallax_m - 0.008_217).abs() < 1e-5, "{}", far.parallax_m);
         assert!(near.disparity_deg.abs() < 1.0 && far.disparity_deg < 1.0, "within the shipped budget");
         let rig = p.scene.head_tracked_rig().unwrap();
         assert!((rig.placement.scale - 1.0).abs() < 1e-5, "the world is screen space, 1:1");
@@ -308,5 +324,13 @@ mod tests {
             text.contains("left eye") && text.contains("crossed") && text.contains("uncrossed"),
             "{text}"
         );
+        // The grid's spacing, for a ruler: a 531.3 mm screen in 8 columns.
+        assert!(text.contains("66.4 mm apart across and 74.7 mm apart up"), "{text}");
+        // The pattern's own balls, whole, are within the budget it is judged on: calibrate
+        // warns of nothing.
+        let clay = crate::mesh::mesh_all(super::super::Playback::new(&p.scene).field()).upserted_bounds();
+        let mut scene = p.scene.clone();
+        let verdict = super::super::comfort::apply_parallax_budget(&mut scene, c, clay);
+        assert!(verdict.is_none(), "{:?}", verdict.map(|v| v.1));
     }
 }
