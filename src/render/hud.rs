@@ -23,17 +23,56 @@ const MARGIN_PX: u32 = 6;
 const TEXT: [f32; 4] = [0.95, 0.95, 0.85, 1.0];
 const PANEL: [f32; 4] = [0.0, 0.0, 0.0, 0.55];
 
+/// `lines` broken at spaces (a word longer than a line, within it) so that none is longer than
+/// `columns` characters.
+fn wrapped(lines: &[String], columns: usize) -> Vec<String> {
+    let columns = columns.max(1);
+    let mut out = Vec::new();
+    for line in lines {
+        let mut current = String::new();
+        for word in line.split(' ') {
+            let mut word: Vec<char> = word.chars().collect();
+            loop {
+                let used = current.chars().count();
+                let room = if used == 0 { columns } else { columns.saturating_sub(used + 1) };
+                if word.len() <= room {
+                    if used > 0 {
+                        current.push(' ');
+                    }
+                    current.extend(word.iter());
+                    break;
+                }
+                if used > 0 {
+                    out.push(std::mem::take(&mut current));
+                    continue;
+                }
+                // A word longer than a whole line: cut.
+                current.extend(word.drain(..columns));
+                out.push(std::mem::take(&mut current));
+            }
+        }
+        out.push(current);
+    }
+    out
+}
+
 /// The quads of `lines` in the top-left corner of a `width` × `height` image: vertices and
-/// indices, empty when there is no text.
+/// indices, empty when there is no text. Lines wider than the image are broken at spaces, so
+/// that every eye's image holds all the text (each eye of a side-by-side window too).
 pub(crate) fn layout(lines: &[String], width: u32, height: u32) -> (Vec<Vertex>, Vec<u32>) {
     let mut vertices = Vec::new();
     let mut indices = Vec::new();
-    let columns = lines.iter().map(|l| l.chars().count()).max().unwrap_or(0) as u32;
-    if columns == 0 || width == 0 || height == 0 {
+    if width == 0 || height == 0 {
         return (vertices, indices);
     }
     let scale = scale_for(width);
     let glyph = 8 * scale;
+    let fits = (width.saturating_sub(MARGIN_PX * 2) / glyph).max(1) as usize;
+    let lines = wrapped(lines, fits);
+    let columns = lines.iter().map(|l| l.chars().count()).max().unwrap_or(0) as u32;
+    if columns == 0 {
+        return (vertices, indices);
+    }
     let (w, h) = (width as f32, height as f32);
     let mut quad = |x0: u32, y0: u32, x1: u32, y1: u32, colour: [f32; 4]| {
         let ndc = |x: u32, y: u32| [2.0 * x as f32 / w - 1.0, 2.0 * y as f32 / h - 1.0, colour[3]];
@@ -109,6 +148,20 @@ mod tests {
         }
         assert_eq!(scale_for(1400), 2);
         assert_eq!(scale_for(200), 1);
+    }
+
+    #[test]
+    fn lines_wider_than_the_image_are_broken_at_spaces() {
+        let line = "over the parallax budget: -0.98 to 1.54 deg".to_owned();
+        assert_eq!(
+            wrapped(std::slice::from_ref(&line), 20),
+            ["over the parallax", "budget: -0.98 to", "1.54 deg"]
+        );
+        assert_eq!(wrapped(&["abcdefghij".to_owned()], 4), ["abcd", "efgh", "ij"]);
+        assert_eq!(wrapped(&["short".to_owned()], 40), ["short"]);
+        // Every quad inside a 160-pixel image (one eye of a 320-pixel side-by-side window).
+        let (v, _) = layout(&[line], 160, 120);
+        assert!(v.iter().all(|p| p.position[0] <= 1.0), "nothing beyond the right edge");
     }
 
     #[test]
