@@ -71,6 +71,10 @@ enum Command {
         /// Turn the Vulkan validation layer on (fails on any validation message).
         #[arg(long)]
         validation: bool,
+        /// Each eye gets the other's image (glasses worn backwards, emitters that invert); the
+        /// E key swaps them back and forth.
+        #[arg(long)]
+        swap_eyes: bool,
         /// Sculpt in an OpenXR headset; without a loader, runtime or headset, says which is
         /// missing and opens the desktop stereo station instead.
         #[arg(long)]
@@ -118,6 +122,10 @@ enum Command {
         /// [head] calibration, else the shipped calibration/screen.toml).
         #[arg(long)]
         calibration: Option<PathBuf>,
+        /// Each eye's image written as the other's (glasses worn backwards, emitters that
+        /// invert); as the scene's `[display] swap_eyes`.
+        #[arg(long)]
+        swap_eyes: bool,
         /// Turn the Vulkan validation layer on (fails on any validation message).
         #[arg(long)]
         validation: bool,
@@ -310,6 +318,7 @@ fn main() -> ExitCode {
             opentrack,
             calibration,
             validation,
+            swap_eyes,
             xr,
             left_handed,
             xr_wait_s,
@@ -336,10 +345,21 @@ fn main() -> ExitCode {
                 open: None,
                 open_dir,
                 edit_finest,
+                swap_eyes,
             },
         ),
-        Some(Command::Render { scene, out, display_mode, size, calibration, validation, autosave }) => {
-            render(&scene, out, display_mode, size, calibration.as_deref(), validation, &autosave)
+        Some(Command::Render {
+            scene,
+            out,
+            display_mode,
+            size,
+            calibration,
+            swap_eyes,
+            validation,
+            autosave,
+        }) => {
+            let view = RenderView { size, calibration: calibration.as_deref(), swap_eyes };
+            render(&scene, out, display_mode, view, validation, &autosave)
         }
         Some(Command::Export { input, format, out, force }) => app::export(&input, format, &out, force, true)
             .map(|s| {
@@ -465,6 +485,8 @@ fn station(
         }
         None => (Scene::default_scene(), Some(argile::scene::DEFAULT_SCENE_TOML.to_owned())),
     };
+    let mut scene = scene;
+    scene.display.swap_eyes |= options.swap_eyes;
     let name = scene_path
         .as_deref()
         .and_then(|p| p.file_stem())
@@ -581,27 +603,36 @@ fn station(
     Ok(())
 }
 
+/// How `argile render` shows the scene: the eyes' size, the screen judged on, swapped eyes.
+struct RenderView<'a> {
+    size: Option<(u32, u32)>,
+    calibration: Option<&'a std::path::Path>,
+    swap_eyes: bool,
+}
+
 fn render(
     scene: &std::path::Path,
     out: PathBuf,
     display_modes: Vec<DisplayMode>,
-    size: Option<(u32, u32)>,
-    calibration: Option<&std::path::Path>,
+    view: RenderView<'_>,
     validation: bool,
     autosave: &AutosaveArgs,
 ) -> Result<()> {
+    let RenderView { size, calibration, swap_eyes } = view;
     let calibration = calibration.map(argile::scene::ScreenCalibration::load).transpose()?;
     let options =
         RenderOptions { out_dir: out, display_modes, progress: true, validation, size_px: size, calibration };
     if app::is_sculpt(scene) {
         // Nothing is sculpted while rendering a sculpt: there is nothing to autosave.
-        let (scene, sculpt) = app::open_sculpt(scene)?;
+        let (mut scene, sculpt) = app::open_sculpt(scene)?;
+        scene.display.swap_eyes |= swap_eyes;
         print_written(&app::render_sculpt(&scene, sculpt.field, &options)?);
         return Ok(());
     }
     let text = argile::io::text::read_text(scene, argile::io::text::SCENE_LIMIT)
         .with_context(|| format!("cannot read scene file {}", scene.display()))?;
-    let scene = Scene::parse(&text, &scene.display().to_string(), scene.parent())?;
+    let mut scene = Scene::parse(&text, &scene.display().to_string(), scene.parent())?;
+    scene.display.swap_eyes |= swap_eyes;
     let written = app::render_scene_autosaved(&scene, &options, autosave.start(), Some(&text))?;
     print_written(&written);
     Ok(())

@@ -560,3 +560,30 @@ fn the_glyph_shapes_match_golden() {
     check_against_golden("glyph-shapes", "left", &image.left);
     check_against_golden("glyph-shapes", "right", &image.right);
 }
+
+#[test]
+fn swapped_eyes_write_each_eye_the_others_image() {
+    // The same scene rendered as it is and with `[display] swap_eyes`: each image of the one is
+    // the other eye's of the other, byte for byte.
+    let text = std::fs::read_to_string(root().join("scenes/default.toml")).unwrap();
+    let render = |swap: bool, case: &str| {
+        let mut scene = Scene::parse(&text, "default.toml", None).unwrap();
+        scene.display.swap_eyes = swap;
+        let options = RenderOptions {
+            out_dir: out_dir(case),
+            display_modes: Vec::new(),
+            progress: false,
+            validation: true,
+            size_px: Some((64, 64)),
+            calibration: None,
+        };
+        let written =
+            render_scene(&scene, &options).unwrap_or_else(|e| panic!("rendering {case} failed: {e:#}"));
+        let last = written.last().expect("a capture");
+        (std::fs::read(&last.left).unwrap(), std::fs::read(&last.right).unwrap())
+    };
+    let (left, right) = render(false, "eyes-as-rendered");
+    let (swapped_left, swapped_right) = render(true, "eyes-swapped");
+    assert_ne!(left, right, "the eyes differ");
+    assert!(swapped_left == right && swapped_right == left, "each eye has the other's image");
+}

@@ -170,6 +170,9 @@ fn render_over(
         if let (Some(head), Some(rig)) = (&viewed.head, viewed.head_tracked_rig()) {
             frame.views = rig.views(&head.pose_at(capture.time_s));
         }
+        if viewed.display.swap_eyes {
+            frame.views.eyes.swap(0, 1);
+        }
         renderer.draw(&frame)?;
         let StereoImage { left, right } = renderer.read_back()?;
         let left_path = options.out_dir.join(format!("{}-left.png", capture.name));

@@ -105,6 +105,8 @@ pub struct StationOptions {
     /// than [`HAND_SIZE_SAMPLES`] voxels edits the level its size chooses, unless its scene
     /// tool says which).
     pub edit_finest: bool,
+    /// Each eye gets the other's image (as the scene's `[display] swap_eyes`).
+    pub swap_eyes: bool,
 }
 
 /// How a station run ended.
@@ -480,6 +482,10 @@ pub struct Station<'s> {
     tracked_interaxial_m: f32,
     /// Seconds since the views became head-tracked (they ease in from the untracked views).
     tracked_for_s: Option<f32>,
+    /// Each eye gets the other's image.
+    swap_eyes: bool,
+    /// The interlace parity is the calibration's flipped.
+    parity_flipped: bool,
     /// The monitor's resolution as the window system gives it (when the calibration does not).
     monitor_px: Option<(u32, u32)>,
     /// How the window shows the stereo pair.
@@ -591,6 +597,8 @@ impl<'s> Station<'s> {
             tracked_interaxial_m: super::comfort::scene_calibration(scene).ipd_m,
             monitor_px: None,
             tracked_for_s: None,
+            swap_eyes: scene.display.swap_eyes,
+            parity_flipped: false,
             head: None,
             auto_convergence: None,
             clay_bounds: crate::math::Aabb::EMPTY,
@@ -934,6 +942,21 @@ impl<'s> Station<'s> {
                     )),
                 };
             }
+            StationAction::SwapEyes => {
+                self.swap_eyes = !self.swap_eyes;
+                self.messages.push(match self.swap_eyes {
+                    true => "eyes swapped: the left eye's image goes to the right eye".to_owned(),
+                    false => "eyes as rendered: the left eye's image goes to the left eye".to_owned(),
+                });
+            }
+            StationAction::FlipParity => {
+                self.parity_flipped = !self.parity_flipped;
+                let parity = self.display().1;
+                self.messages.push(format!(
+                    "interlace parity {}: the other rows (columns) carry the left eye",
+                    parity.name()
+                ));
+            }
             StationAction::RecentreHead => {
                 let said = match self.head.as_mut().map(OpentrackHead::recentre) {
                     Some(true) => "head tracking: recentred, your head is now the centred head",
@@ -1062,7 +1085,10 @@ impl<'s> Station<'s> {
     /// The display mode and, for interlaced modes, the parity in window pixels (the
     /// calibration's parity is the screen's; a window on an odd row or column flips it).
     pub fn display(&self) -> (DisplayMode, Parity) {
-        let screen = self.calibration.display.parity;
+        let screen = match self.parity_flipped {
+            true => self.calibration.display.parity.flipped(),
+            false => self.calibration.display.parity,
+        };
         let parity = match self.display_mode {
             DisplayMode::ColumnInterlaced => screen.for_origin(self.window_origin.0),
             _ => screen.for_origin(self.window_origin.1),
@@ -1562,6 +1588,9 @@ impl<'s> Station<'s> {
             };
         } else {
             self.tracked_for_s = None;
+        }
+        if self.swap_eyes {
+            frame.views.eyes.swap(0, 1);
         }
         self.place_key_light(&mut frame.lights);
         frame.hud = self.hud_lines();
@@ -2082,6 +2111,30 @@ mod tests {
             let tool = place(mode, window_px);
             assert!(tool.distance(mono) < 1e-4, "{mode} at {window_px}: {tool}, where mono puts {mono}");
         }
+    }
+
+    #[test]
+    fn the_swap_key_gives_each_eye_the_others_image_and_the_parity_key_flips_the_rows() {
+        let scene = ball_scene();
+        let mut station = small_station(&scene);
+        let before = station.step(SCRIPTED_STEP_S, |_| {}).views;
+        station.act(StationAction::SwapEyes);
+        let swapped = station.step(SCRIPTED_STEP_S, |_| {}).views;
+        assert_eq!(swapped.eyes[0], before.eyes[1]);
+        assert_eq!(swapped.eyes[1], before.eyes[0]);
+        assert!(station.messages.iter().any(|m| m.starts_with("eyes swapped")), "{:?}", station.messages);
+        station.act(StationAction::SwapEyes);
+        assert_eq!(station.step(SCRIPTED_STEP_S, |_| {}).views, before);
+        // A scene that asks for it starts swapped.
+        let text = "[display]\nswap_eyes = true\n[[tool]]\nname = \"b\"\nradius_m = 0.03\naction = \"add\"\n";
+        let swapped_scene = Scene::parse(text, "swapped", None).unwrap();
+        let mut other = small_station(&swapped_scene);
+        assert_eq!(other.step(SCRIPTED_STEP_S, |_| {}).views, swapped);
+        let parity = station.display().1;
+        station.act(StationAction::FlipParity);
+        assert_eq!(station.display().1, parity.flipped());
+        station.act(StationAction::FlipParity);
+        assert_eq!(station.display().1, parity);
     }
 
     #[test]

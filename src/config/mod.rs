@@ -61,6 +61,10 @@ pub enum StationAction {
     ToggleAutoConvergence,
     /// Take the head tracker's pose of now as the viewer's centred head (the default eye).
     RecentreHead,
+    /// Give each eye the other's image (glasses worn backwards), or back.
+    SwapEyes,
+    /// Flip the interlace parity: the other rows (columns) carry the left eye.
+    FlipParity,
     /// Put the view and the tool back where the scene starts them.
     ResetView,
     /// Held: move the desk tool left (in the view).
@@ -103,6 +107,8 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("toggle-lights", StationAction::ToggleLights),
     ("toggle-auto-convergence", StationAction::ToggleAutoConvergence),
     ("recentre-head", StationAction::RecentreHead),
+    ("swap-eyes", StationAction::SwapEyes),
+    ("flip-parity", StationAction::FlipParity),
     ("reset-view", StationAction::ResetView),
     ("pointer-left", StationAction::PointerLeft),
     ("pointer-right", StationAction::PointerRight),

@@ -511,5 +511,7 @@ pub(super) struct DisplaySpec {
     pub mode: Option<crate::stereo::display::DisplayMode>,
     #[serde(default)]
     pub parity: crate::stereo::display::Parity,
+    #[serde(default)]
+    pub swap_eyes: bool,
     pub fallback: Option<Spanned<String>>,
 }

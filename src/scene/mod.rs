@@ -175,11 +175,13 @@ pub struct DisplaySettings {
     pub parity: Parity,
     /// The mode shown where quad-buffer stereo cannot be (`None`: refuse instead).
     pub fallback: Option<DisplayMode>,
+    /// Each eye gets the other's image (glasses worn backwards, emitters that invert).
+    pub swap_eyes: bool,
 }
 
 impl Default for DisplaySettings {
     fn default() -> Self {
-        Self { mode: None, parity: Parity::LeftEven, fallback: Some(DisplayMode::Anaglyph) }
+        Self { mode: None, parity: Parity::LeftEven, fallback: Some(DisplayMode::Anaglyph), swap_eyes: false }
     }
 }
 
@@ -906,7 +908,12 @@ fn resolve(
             },
         },
     };
-    let display = DisplaySettings { mode: file.display.mode, parity: file.display.parity, fallback };
+    let display = DisplaySettings {
+        mode: file.display.mode,
+        parity: file.display.parity,
+        fallback,
+        swap_eyes: file.display.swap_eyes,
+    };
 
     let vc = &file.virtual_clay;
     if !(0.0..=1.0).contains(&vc.fluidity) {
