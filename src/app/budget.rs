@@ -159,9 +159,9 @@ pub fn mesh_triangles(surface_voxels: f64) -> f64 {
     surface_voxels * TRIANGLES_PER_SURFACE_VOXEL
 }
 
-/// Refuses a scene whose initial clay would take more than the budget, before it is built.
-pub fn admit_scene(scene: &Scene) -> Result<()> {
-    let cost = scene_clay_cost(scene);
+/// Refuses a scene whose initial clay, of `cost` ([`scene_clay_cost`]), would take more than
+/// the budget, before it is built.
+pub fn admit_scene(scene: &Scene, cost: &RasterCost) -> Result<()> {
     admit(
         &format!(
             "the initial clay of {} ({:.3e} bricks of {} mm voxels, {:.3e} of them on its surface)",
@@ -170,7 +170,7 @@ pub fn admit_scene(scene: &Scene) -> Result<()> {
             scene.voxel_size_m * 1000.0,
             cost.surface_bricks
         ),
-        clay_bytes(&cost),
+        clay_bytes(cost),
         "make the clay smaller or its [field] voxel_size_m larger",
     )
 }

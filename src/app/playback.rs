@@ -489,8 +489,8 @@ const LONG_BUILD_POINTS: f64 = 5e7;
 /// SIGHUP, where the station handles them) breaks it off between two slabs of bricks, with an
 /// error that says so (nothing has been sculpted yet: nothing is lost).
 pub fn initial_clay(scene: &Scene) -> Result<Field> {
-    super::budget::admit_scene(scene)?;
     let cost = super::budget::scene_clay_cost(scene);
+    super::budget::admit_scene(scene, &cost)?;
     let mut field = empty_field(scene);
     let long = cost.points > LONG_BUILD_POINTS;
     if long {
@@ -523,7 +523,8 @@ pub fn initial_clay(scene: &Scene) -> Result<Field> {
             primitive.colour,
             &mut progress,
         );
-        if !whole || super::signals::received().is_some() {
+        // A signal during a solid's last slab is the station's to handle once it runs.
+        if !whole {
             bar.abandon();
             let signal = super::signals::received().map_or("a signal", super::signals::name);
             bail!(

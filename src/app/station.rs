@@ -560,6 +560,7 @@ impl<'s> Station<'s> {
         );
         mouse.tool_position_m = rig.target_m;
         let home = home_poses(rig.target_m);
+        let calibration = super::comfort::scene_calibration(scene);
         let mut desk = DeskInput::new(settings.spacemouse.0, settings.mapping, Rates::default());
         desk.poses = home;
         let desk_tool = playback
@@ -593,8 +594,8 @@ impl<'s> Station<'s> {
             stroke: None,
             convergence_factor: scene.rig.convergence_m / distance.max(1e-6),
             lights_follow_viewer: false,
-            calibration: super::comfort::scene_calibration(scene),
-            tracked_interaxial_m: super::comfort::scene_calibration(scene).ipd_m,
+            calibration,
+            tracked_interaxial_m: calibration.ipd_m,
             monitor_px: None,
             tracked_for_s: None,
             swap_eyes: scene.display.swap_eyes,
@@ -1147,11 +1148,16 @@ impl<'s> Station<'s> {
         })
     }
 
+    /// The window's eyes' pictures as seen on the calibrated screen, whose resolution the
+    /// calibration gives, else the window system.
+    fn seen_window(&self) -> super::comfort::Seen {
+        let screen_px = self.calibration.resolution_px.or(self.monitor_px);
+        super::comfort::Seen::window(self.calibration, self.display_mode, self.window_px, screen_px)
+    }
+
     /// How the parallax budget sees the window: each eye's picture on the calibrated screen.
     pub fn describe_picture(&self) -> String {
-        let screen_px = self.calibration.resolution_px.or(self.monitor_px);
-        let seen =
-            super::comfort::Seen::window(self.calibration, self.display_mode, self.window_px, screen_px);
+        let seen = self.seen_window();
         let from = match (self.calibration.resolution_px, self.monitor_px) {
             (Some((w, h)), _) => format!("a {w}x{h} screen, as the calibration says"),
             (None, Some((w, h))) => format!("a {w}x{h} monitor, as the window system says"),
@@ -1206,11 +1212,7 @@ impl<'s> Station<'s> {
         if self.budget.as_ref().is_some_and(|b| b.key == key) {
             return;
         }
-        let screen_px = self.calibration.resolution_px.or(self.monitor_px);
-        let seen = super::comfort::Seen {
-            tracked: self.tracked_rig(),
-            ..super::comfort::Seen::window(self.calibration, self.display_mode, self.window_px, screen_px)
-        };
+        let seen = super::comfort::Seen { tracked: self.tracked_rig(), ..self.seen_window() };
         let verdict = super::comfort::judge_parallax_budget(&self.view, &seen, self.clay_bounds);
         // Limit mode narrows the eyes in use: the rig's, or the tracked eyes' (physical metres).
         let allowed = verdict.as_ref().filter(|v| v.limit).map(|v| v.check.allowed_interaxial_m / v.scale);

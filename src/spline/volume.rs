@@ -212,12 +212,8 @@ impl SplineVolume {
 
     /// A Bézier volume of `counts` control points per axis over `region` (order = count).
     pub fn bezier(region: Aabb, counts: [usize; 3]) -> Result<Self, SplineError> {
-        let knots = [0, 1, 2].map(|a| {
-            let order = counts[a].clamp(super::MIN_ORDER, MAX_ORDER);
-            KnotVector::styled(KnotStyle::Clamped, counts[a], order, a)
-        });
-        let [u, v, w] = knots;
-        Self::over_box(region, SplineKind::Bezier, [u?, v?, w?])
+        let orders = counts.map(|n| n.clamp(super::MIN_ORDER, MAX_ORDER));
+        Self::styled(region, SplineKind::Bezier, counts, orders, KnotStyle::Clamped)
     }
 
     /// A B-spline volume of `counts` control points and `orders` per axis, with knots of
@@ -228,8 +224,7 @@ impl SplineVolume {
         orders: [usize; 3],
         style: KnotStyle,
     ) -> Result<Self, SplineError> {
-        let [u, v, w] = [0, 1, 2].map(|a| KnotVector::styled(style, counts[a], orders[a], a));
-        Self::over_box(region, SplineKind::BSpline, [u?, v?, w?])
+        Self::styled(region, SplineKind::BSpline, counts, orders, style)
     }
 
     /// A NURBS volume, as [`Self::bspline`], with every weight 1 until set.
@@ -239,8 +234,19 @@ impl SplineVolume {
         orders: [usize; 3],
         style: KnotStyle,
     ) -> Result<Self, SplineError> {
+        Self::styled(region, SplineKind::Nurbs, counts, orders, style)
+    }
+
+    /// A volume of `kind` over `region` with knots of `style` on every axis.
+    fn styled(
+        region: Aabb,
+        kind: SplineKind,
+        counts: [usize; 3],
+        orders: [usize; 3],
+        style: KnotStyle,
+    ) -> Result<Self, SplineError> {
         let [u, v, w] = [0, 1, 2].map(|a| KnotVector::styled(style, counts[a], orders[a], a));
-        Self::over_box(region, SplineKind::Nurbs, [u?, v?, w?])
+        Self::over_box(region, kind, [u?, v?, w?])
     }
 
     /// The volume's kind.
