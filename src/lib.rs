@@ -45,6 +45,7 @@ pub mod config;
 pub mod field;
 pub mod input;
 pub mod io;
+pub mod lattice;
 pub mod math;
 pub mod mesh;
 pub mod render;

@@ -75,6 +75,22 @@ const RULES: &[(&str, &[&str])] = &[
         &["crate::render", "crate::xr", "crate::input", "crate::app", "ash", "openxr", "hidapi", "gilrs"],
     ),
     (
+        "lattice",
+        &[
+            "crate::render",
+            "crate::xr",
+            "crate::input",
+            "crate::app",
+            "crate::mesh",
+            "crate::scene",
+            "crate::clay",
+            "ash",
+            "openxr",
+            "hidapi",
+            "gilrs",
+        ],
+    ),
+    (
         "render",
         &[
             "crate::field",
