@@ -476,6 +476,11 @@ fn bend_bar_matches_golden_through_its_timeline() {
 }
 
 #[test]
+fn lattice_bars_match_golden_through_their_timeline() {
+    golden_timeline_case("scenes/lattice-bars.toml");
+}
+
+#[test]
 fn push_print_matches_golden_through_its_timeline() {
     golden_timeline_case("scenes/push-print.toml");
 }

@@ -64,6 +64,11 @@ pub enum Workload {
     /// Virtual-clay steps per second bending a bar held by a support (Dewaele–Cani §5.1) in
     /// active windows of 32³, 128×32×32 and 128³ cells, with each layer's share of the time.
     ClayBend,
+    /// An 8×8×8 cubic B-spline lattice over a 128³ box of 1 mm clay around a bar: opening it
+    /// (the copy of the clay and the least-squares fit of its values), and after each drag of
+    /// an interior control point the re-evaluation of the clay over the box that drag
+    /// changed, then its write into the field.
+    LatticeDrag,
     /// The headset frame against the OpenXR test runtime (built with
     /// `cargo build -p argile-xr-test-runtime`): from `xrWaitFrame` returning to `xrEndFrame`
     /// returning while the right controller carves the default scene, split into the frame's
@@ -73,7 +78,7 @@ pub enum Workload {
 
 impl Workload {
     /// Every workload, in the order `argile bench` runs them.
-    pub const ALL: [Workload; 15] = [
+    pub const ALL: [Workload; 16] = [
         Workload::Stamp,
         Workload::StampCarve,
         Workload::StampAdaptive,
@@ -88,6 +93,7 @@ impl Workload {
         Workload::SaveLarge,
         Workload::LoadLarge,
         Workload::ClayBend,
+        Workload::LatticeDrag,
         Workload::FrameXr,
     ];
 }
@@ -113,6 +119,10 @@ pub struct BenchSize {
     pub large_sphere_radius_voxels: f32,
     /// Timed virtual-clay steps per window.
     pub clay_steps: usize,
+    /// Side of the lattice workload's box, voxels.
+    pub lattice_side_voxels: i32,
+    /// Timed drags of the lattice workload.
+    pub lattice_drags: usize,
 }
 
 impl BenchSize {
@@ -127,6 +137,8 @@ impl BenchSize {
         input_frames: 20_000,
         large_sphere_radius_voxels: 130.0,
         clay_steps: 60,
+        lattice_side_voxels: 128,
+        lattice_drags: 11,
     };
     /// A small run that checks the workloads work (not for figures).
     pub const QUICK: BenchSize = BenchSize {
@@ -139,6 +151,8 @@ impl BenchSize {
         input_frames: 200,
         large_sphere_radius_voxels: 24.0,
         clay_steps: 4,
+        lattice_side_voxels: 24,
+        lattice_drags: 2,
     };
 }
 
@@ -172,6 +186,7 @@ pub fn run(workloads: &[Workload], size: BenchSize, mut emit: impl FnMut(Value))
             Workload::SaveLarge => super::bench_io::save_large(size, &mut emit)?,
             Workload::LoadLarge => super::bench_io::load_large(size, &mut emit)?,
             Workload::ClayBend => bench_clay_bend(size, &mut emit),
+            Workload::LatticeDrag => bench_lattice_drag(size, &mut emit)?,
             Workload::FrameXr => super::xr_station::bench_frame_xr(size.image_px, size.frames, &mut emit)?,
         }
     }
@@ -692,6 +707,69 @@ fn bench_clay_bend(size: BenchSize, emit: &mut impl FnMut(Value)) {
     }
 }
 
+fn bench_lattice_drag(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> {
+    use crate::lattice::{Lattice, LatticeSpec};
+    use crate::math::{Aabb, Pose};
+    use crate::tool::{rasterize_solid, CsgOp, PlacedSolid, Solid};
+
+    let h = 0.001;
+    let side = size.lattice_side_voxels;
+    let half = 0.5 * side as f32 * h;
+    let mut field = Field::new(h, 0.5);
+    let bar = Solid::Bar { half_length_m: 0.8 * half, radius_m: 0.2 * half };
+    rasterize_solid(
+        &mut field,
+        &PlacedSolid { solid: bar, pose: Pose::default(), scale: 1.0 },
+        CsgOp::Union,
+        [0.7, 0.4, 0.2, 1.0],
+    );
+    let region = Aabb { min: Vec3::splat(-half), max: Vec3::splat(half - h) };
+    let spec = LatticeSpec::cubic(region, [8, 8, 8]);
+    let start = Instant::now();
+    let mut lattice = Lattice::open(&field, &spec)?;
+    let open_s = start.elapsed().as_secs_f64();
+    let opened = lattice.open_times();
+    let ijk = [3, 4, 4];
+    let rest = lattice.volume().control(3, 4, 4)?.position_m;
+    let (mut eval_ms, mut write_ms, mut points, mut iterations) = (Vec::new(), Vec::new(), 0usize, 0u64);
+    let mut densities = Vec::new();
+    field.begin_stroke();
+    for drag in 0..size.lattice_drags {
+        // Up and down by a sixth of the box's side and back: a drag of the point through the bar.
+        let lift = [1.0, -1.0, 0.5][drag % 3] * side as f32 * h / 6.0;
+        let changed = lattice.move_control(ijk, rest + Vec3::new(0.0, lift, 0.0))?;
+        let (lo, hi) = lattice.points_of(changed);
+        let t = Instant::now();
+        let stats = lattice.evaluate(lo, hi, &mut densities, None);
+        eval_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        points = stats.points;
+        iterations = stats.newton_iterations;
+        let t = Instant::now();
+        lattice.write(&mut field, changed)?;
+        write_ms.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    field.end_stroke();
+    let fit = lattice.fit_report();
+    emit(json!({
+        "workload": "lattice-drag",
+        "box_voxels": side,
+        "controls": [8, 8, 8],
+        "order": 4,
+        "threads": rayon::current_num_threads(),
+        "open_ms": open_s * 1e3,
+        "copy_ms": opened.copy_s * 1e3,
+        "fit_ms": opened.fit_s * 1e3,
+        "fit_samples": fit.samples,
+        "fit_rms_error": fit.rms_error,
+        "drags": size.lattice_drags,
+        "points_per_drag": points,
+        "newton_iterations_per_point": iterations as f64 / points.max(1) as f64,
+        "evaluate_ms_median": median(eval_ms),
+        "write_ms_median": median(write_ms),
+    }));
+    Ok(())
+}
+
 /// Copies of `mesh` on a square grid on the XZ plane until the total reaches `triangles`.
 fn replicate(mesh: &MeshDiff, triangles: usize, spacing_m: f32) -> (MeshDiff, f32) {
     let per_copy = mesh.upserted_triangles().max(1);
@@ -1010,6 +1088,20 @@ mod tests {
             assert!(l["us_per_frame_median"].as_f64().unwrap() > 0.0);
             assert!(l["tool_moved_m"].as_f64().unwrap() > 0.0, "the SpaceMice moved the tool: {l}");
         }
+    }
+
+    #[test]
+    fn the_lattice_workload_reports_its_fit_and_drags() {
+        let mut lines = Vec::new();
+        run(&[Workload::LatticeDrag], BenchSize::QUICK, |v| lines.push(v)).unwrap();
+        let l = &lines[0];
+        assert_eq!(l["workload"], "lattice-drag");
+        assert!(l["points_per_drag"].as_u64().unwrap() > 0, "{l}");
+        assert!(
+            l["evaluate_ms_median"].as_f64().unwrap() > 0.0 && l["fit_ms"].as_f64().unwrap() > 0.0,
+            "{l}"
+        );
+        assert!(l["newton_iterations_per_point"].as_f64().unwrap() > 0.0, "{l}");
     }
 
     #[test]

@@ -164,9 +164,13 @@ fn render_over(
             );
             break;
         }
+        playback.sync_lattices();
         let diff = mesher.remesh_dirty(playback.field_mut());
         renderer.apply(diff)?;
         let mut frame = build_frame(&viewed, &playback.hands(), capture.show_tools);
+        if capture.show_tools {
+            frame.tools.extend(super::frame::lattice_glyphs(&playback));
+        }
         if let (Some(head), Some(rig)) = (&viewed.head, viewed.head_tracked_rig()) {
             frame.views = rig.views(&head.pose_at(capture.time_s));
         }

@@ -6,6 +6,16 @@ use crate::render::{Frame, Light, Material, Stage};
 use crate::scene::{Attachment, Scene, SceneLight, SceneToolShape};
 use crate::tool::ToolShape;
 
+/// The glyphs of the lattices `playback` has open and whose scene shows them.
+pub fn lattice_glyphs(playback: &super::playback::Playback<'_>) -> Vec<crate::render::ToolGlyph> {
+    let iso = playback.field().iso() as f64;
+    playback
+        .open_lattices()
+        .filter(|(scene, _)| scene.show)
+        .flat_map(|(_, lattice)| super::glyphs::lattice_glyphs(lattice.volume(), iso))
+        .collect()
+}
+
 /// Resolves the scene's lights into world space for the current viewer.
 pub fn world_lights(scene: &Scene) -> Vec<Light> {
     // The viewer's frame is the centre eye's: view space → world space.

@@ -181,6 +181,83 @@ pub fn tool_glyph(shape: &ToolShape, pose: Pose, scale: Vec3, colour: Vec4) -> T
     }
 }
 
+/// How a lattice is drawn (ESM §4.1): each control point a sphere coloured by its function
+/// value ([`value_colour`]), its radius growing with its NURBS weight (`w^⅓`), a weight above 1
+/// marked with a "+" and one below with a "−" (thin bars across the sphere); and the lines
+/// between neighbouring control points.
+pub fn lattice_glyphs(volume: &crate::spline::SplineVolume, iso: f64) -> Vec<ToolGlyph> {
+    let counts = volume.counts();
+    let spacing = (0..3)
+        .map(|a| volume.region().size()[a] / (counts[a].max(2) - 1) as f32)
+        .fold(f32::INFINITY, f32::min);
+    let radius = (0.12 * spacing).min(0.01);
+    let line = 0.12 * radius;
+    let mut glyphs = Vec::with_capacity(4 * volume.controls().len());
+    let at = |i: usize, j: usize, k: usize| volume.controls()[i + counts[0] * (j + counts[1] * k)];
+    for k in 0..counts[2] {
+        for j in 0..counts[1] {
+            for i in 0..counts[0] {
+                let c = at(i, j, k);
+                let r = radius * (c.weight as f32).cbrt().clamp(0.3, 3.0);
+                let place = Mat4::from_translation(c.position_m);
+                glyphs.push(ToolGlyph::sphere(
+                    place * Mat4::from_scale(Vec3::splat(r)),
+                    value_colour(c.value, iso).extend(0.9),
+                ));
+                if c.weight != 1.0 {
+                    let bar = |half: Vec3| ToolGlyph {
+                        shape: GlyphShape::Box,
+                        model: place * Mat4::from_scale(half),
+                        colour: Vec4::new(0.05, 0.05, 0.05, 1.0),
+                    };
+                    glyphs.push(bar(Vec3::new(1.3 * r, 0.15 * r, 0.15 * r)));
+                    if c.weight > 1.0 {
+                        glyphs.push(bar(Vec3::new(0.15 * r, 1.3 * r, 0.15 * r)));
+                    }
+                }
+                for (a, next) in [
+                    (i + 1 < counts[0], (i + 1, j, k)),
+                    (j + 1 < counts[1], (i, j + 1, k)),
+                    (k + 1 < counts[2], (i, j, k + 1)),
+                ] {
+                    if a {
+                        let n = at(next.0, next.1, next.2).position_m;
+                        glyphs.push(segment(c.position_m, n, line, Vec4::new(0.8, 0.8, 0.85, 0.6)));
+                    }
+                }
+            }
+        }
+    }
+    glyphs
+}
+
+/// A thin cylinder of `radius` from `a` to `b`.
+fn segment(a: Vec3, b: Vec3, radius: f32, colour: Vec4) -> ToolGlyph {
+    let d = b - a;
+    let len = d.length();
+    let turn = if len > 0.0 {
+        crate::math::Quat::from_rotation_arc(Vec3::Y, d / len)
+    } else {
+        crate::math::Quat::IDENTITY
+    };
+    let model =
+        Mat4::from_scale_rotation_translation(Vec3::new(radius, 0.5 * len, radius), turn, 0.5 * (a + b));
+    ToolGlyph { shape: GlyphShape::Cylinder, model, colour }
+}
+
+/// The colour scale of control values (linear RGB): blue for empty (0), white at the
+/// iso-level, the clay's terracotta for full (1), saturated beyond the ends.
+pub fn value_colour(value: f64, iso: f64) -> Vec3 {
+    let (empty, surface, full) = (Vec3::new(0.1, 0.3, 1.0), Vec3::splat(0.95), Vec3::new(0.85, 0.3, 0.08));
+    if value <= iso {
+        let t = (value / iso.max(1e-6)).clamp(0.0, 1.0) as f32;
+        empty.lerp(surface, t)
+    } else {
+        let t = ((value - iso) / (1.0 - iso).max(1e-6)).clamp(0.0, 1.0) as f32;
+        surface.lerp(full, t)
+    }
+}
+
 /// The colour (linear RGB) a headset shows an action in: on the tool and on the palette.
 pub fn action_colour(action: &Action) -> Vec3 {
     let rgb = match action {

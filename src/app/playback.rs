@@ -10,8 +10,9 @@ use crate::math::Pose;
 use std::sync::Arc;
 
 use crate::clay::{window_around, Clay, ClayParams, ClayTool};
+use crate::lattice::{volume_at, Lattice, LatticeError};
 use crate::math::{Aabb, Vec3};
-use crate::scene::{Hand, HandState, Key, Scene, SceneTool, SceneToolShape};
+use crate::scene::{Hand, HandState, Key, Scene, SceneLattice, SceneTool, SceneToolShape};
 use crate::tool::{
     rasterize_solid, rasterize_solid_in_slabs, Action, Freeform, Stroke, Tool, ToolFrame, ToolShape,
 };
@@ -46,6 +47,19 @@ pub struct Playback<'s> {
     autosave: Option<Autosave>,
     /// The hands' states given live (a headset's controllers) instead of the timeline's.
     live: Option<[Option<HandState>; 2]>,
+    /// Per scene lattice: still to open, open, or applied.
+    lattices: Vec<LatticeState>,
+}
+
+/// Where a scene's lattice stands on the timeline.
+#[derive(Debug)]
+enum LatticeState {
+    /// Its `open_s` has not come.
+    Waiting,
+    /// Open over the clay, with the world box its last changes have not been written to yet.
+    Open(Box<Lattice>, Aabb),
+    /// Applied (or refused): the clay keeps what it did.
+    Closed,
 }
 
 /// How far a live hand may move during one push and stay in the clay's window, metres.
@@ -119,6 +133,7 @@ impl<'s> Playback<'s> {
             time_s: 0.0,
             autosave,
             live: None,
+            lattices: scene.lattices.iter().map(|_| LatticeState::Waiting).collect(),
         };
         // Keys at time 0 with their action on stamp at once.
         playback.step_to(0.0);
@@ -138,6 +153,12 @@ impl<'s> Playback<'s> {
         self.strokes = [None, None];
         self.owns_stroke = false;
         self.push = None;
+        // An open lattice resamples the clay it opened over: it ends with that clay.
+        for state in &mut self.lattices {
+            if matches!(state, LatticeState::Open(..)) {
+                *state = LatticeState::Closed;
+            }
+        }
         let keys: Vec<_> = self.field.covered_keys().into_iter().chain(field.covered_keys()).collect();
         for key in keys {
             let lo = key * BRICK_SIZE;
@@ -230,6 +251,12 @@ impl<'s> Playback<'s> {
                 next = next.min(k.time_s);
             }
         }
+        for l in &self.scene.lattices {
+            let times = [l.open_s, l.apply_s].into_iter().chain(l.edits.iter().map(|e| e.time_s));
+            if let Some(t) = times.filter(|&t| t > self.time_s).reduce(f32::min) {
+                next = next.min(t);
+            }
+        }
         self.step_to(next);
         next
     }
@@ -264,9 +291,13 @@ impl<'s> Playback<'s> {
             }
         }
         self.step_clay(previous, t);
-        // The hands' strokes and pushes form one undo step while any of them acts. A stroke
-        // someone else opened on the field (the station's desk tool) is theirs to close.
-        let drawing = self.strokes.iter().any(Option::is_some) || self.push.is_some();
+        self.step_lattices(t);
+        // The hands' strokes, pushes and open lattices form one undo step while any of them
+        // acts. A stroke someone else opened on the field (the station's desk tool) is theirs
+        // to close.
+        let drawing = self.strokes.iter().any(Option::is_some)
+            || self.push.is_some()
+            || self.lattices.iter().any(|l| matches!(l, LatticeState::Open(..)));
         if drawing && !self.field.in_stroke() {
             self.field.begin_stroke();
             self.owns_stroke = true;
@@ -362,6 +393,73 @@ impl<'s> Playback<'s> {
         }
         push.clay.advance(&poses, t - previous);
         push.clay.write_to(&mut self.field);
+    }
+
+    /// Opens the scene's lattices whose time has come, shapes the open ones as their keys say
+    /// at `t`, and applies those whose `apply_s` it is. The clay is re-evaluated where a
+    /// control changed when a key is reached, when the lattice is applied, and whenever
+    /// [`Playback::sync_lattices`] asks (before a frame is drawn): a ramp's steps in between
+    /// need no clay. A lattice that cannot open or follow its keys (its copy of the clay would
+    /// grow over its limit) is closed with a warning, the clay left as it last was.
+    fn step_lattices(&mut self, t: f32) {
+        let scene = self.scene;
+        for (state, sl) in self.lattices.iter_mut().zip(&scene.lattices) {
+            if matches!(state, LatticeState::Waiting) && t >= sl.open_s {
+                if !self.field.in_stroke() {
+                    self.field.begin_stroke();
+                    self.owns_stroke = true;
+                }
+                *state = match Lattice::open(&self.field, &sl.spec) {
+                    Ok(l) => LatticeState::Open(Box::new(l), Aabb::EMPTY),
+                    Err(e) => {
+                        eprintln!("warning: {}: lattice `{}` cannot open: {e}", scene.source, sl.name);
+                        LatticeState::Closed
+                    }
+                };
+            }
+            let LatticeState::Open(lattice, pending) = state else { continue };
+            let shaped = volume_at(lattice.fitted(), &sl.edits, t).map_err(LatticeError::from);
+            let keyed = t >= sl.apply_s || sl.edits.iter().any(|e| e.time_s == t);
+            let written = shaped.and_then(|v| lattice.set_controls(&v)).and_then(|changed| {
+                if let Some(b) = changed {
+                    *pending = pending.union(&b);
+                }
+                if keyed && !pending.is_empty() {
+                    lattice.write(&mut self.field, std::mem::replace(pending, Aabb::EMPTY))?;
+                }
+                Ok(())
+            });
+            if let Err(e) = written {
+                eprintln!("warning: {}: lattice `{}` stops at {t} s: {e}", scene.source, sl.name);
+                *state = LatticeState::Closed;
+            } else if t >= sl.apply_s {
+                *state = LatticeState::Closed;
+            }
+        }
+    }
+
+    /// Writes into the clay what the open lattices changed since they last wrote: call before
+    /// the clay is meshed, measured or saved while a lattice is open.
+    pub fn sync_lattices(&mut self) {
+        let scene = self.scene;
+        for (state, sl) in self.lattices.iter_mut().zip(&scene.lattices) {
+            let LatticeState::Open(lattice, pending) = state else { continue };
+            if pending.is_empty() {
+                continue;
+            }
+            if let Err(e) = lattice.write(&mut self.field, std::mem::replace(pending, Aabb::EMPTY)) {
+                eprintln!("warning: {}: lattice `{}` stops: {e}", scene.source, sl.name);
+                *state = LatticeState::Closed;
+            }
+        }
+    }
+
+    /// The scene's lattices open now, with their scene entries.
+    pub fn open_lattices(&self) -> impl Iterator<Item = (&'s SceneLattice, &Lattice)> + '_ {
+        self.lattices.iter().zip(&self.scene.lattices).filter_map(|(state, sl)| match state {
+            LatticeState::Open(l, _) => Some((sl, &**l)),
+            _ => None,
+        })
     }
 
     /// Whether `hand` holds `tool` active and still at `pose` over `from ..= to` (a support's
@@ -642,6 +740,28 @@ position_m = [0.1, 0.0, 0.0]
         assert!(field.undo().unwrap() && field.undo().unwrap());
         assert!(!field.undo().unwrap());
         assert!(field.same_samples(&initial), "undoing both strokes gives back the initial clay");
+    }
+
+    #[test]
+    fn the_lattice_scene_applies_each_lattice_as_one_undo_step() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/lattice-bars.toml");
+        let scene = Scene::load(&path).unwrap();
+        let mut p = Playback::new(&scene);
+        let initial = p.field().clone();
+        assert_eq!(p.open_lattices().count(), 3, "the lattices open at 0 s");
+        p.advance_to(1.0, |_| {});
+        p.sync_lattices();
+        assert!(!p.field().same_samples(&initial) && p.field().in_stroke());
+        p.advance_to(2.0, |_| {});
+        assert_eq!(p.open_lattices().count(), 0, "applied at 2 s");
+        assert!(!p.field().in_stroke());
+        // Swelled, twisted (its matter kept within a few per cent) and bent.
+        let m = p.field().mass() / initial.mass();
+        assert!(m > 1.01 && m < 1.2, "mass ratio {m}");
+        let field = p.field_mut();
+        assert_eq!(field.history_stats().undo_in_memory, 1, "the three lattices, applied together");
+        assert!(field.undo().unwrap());
+        assert!(field.same_samples(&initial), "the undo gives back the clay exactly");
     }
 
     #[test]

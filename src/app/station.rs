@@ -1532,6 +1532,7 @@ impl<'s> Station<'s> {
 
         // Field → mesh → renderer.
         let mesh_started = Instant::now();
+        self.playback.sync_lattices();
         let diff = self.mesher.remesh_dirty(self.playback.field_mut());
         if !diff.is_empty() {
             for key in &diff.removed {
@@ -1553,6 +1554,7 @@ impl<'s> Station<'s> {
             }
         }
         let mut frame = build_frame(&self.view, &self.playback.hands(), true);
+        frame.tools.extend(super::frame::lattice_glyphs(&self.playback));
         if self.lights_follow_viewer {
             // The scene's lights, carried along with the viewer's turn about the target.
             let pivot = self.scene.rig.target_m;

@@ -465,6 +465,7 @@ impl<'s> XrSculptor<'s> {
         }
         let tools_ms = started.elapsed().as_secs_f64() * 1e3;
         let meshing = std::time::Instant::now();
+        self.playback.sync_lattices();
         let diff = self.mesher.remesh_dirty(self.playback.field_mut());
         if !diff.is_empty() {
             apply(diff);

@@ -19,15 +19,22 @@
 //!   ΔF     = F(u) − F₀(u)                     what the function mapping changed: the current
 //!                                             function against the one fitted at opening
 //!   g      = ∇ₓF₀(u)                          the fitted function's gradient (per metre)
-//!   v      = ΔF · g / (|g|² + ε²)             the shift that moves F₀'s iso-surface by ΔF:
-//!                                             the first-order step of ESM's function mapping
+//!   v      = φ(F) · ΔF · g / (|g|² + ε²)      the shift that moves F₀'s iso-surface by ΔF (the
+//!                                             first-order step of ESM's function mapping),
+//!                                             φ fading it out away from the new surface
 //!   κ      = s(λ · F_c(u))                    ESM's cube function (§3.1) as a window: 0 on
-//!                                             the lattice's faces and outside, 1 inside
-//!   y      = x + κ · (P_rest(u) + v − x)      where the clay is read
-//!   clay'(x) = clay₀(y)                       trilinear, colour from the nearest sample
+//!                                             the lattice's faces, 1 inside
+//!   y      = P_rest(u) + κ · v                where the clay is read
+//!
+//!   clay'(x) = clay₀(y)                       x in the box, u in the cube
+//!            = 0                              x in the box, no preimage in the cube (the
+//!                                             deformed lattice has left it)
+//!            = max(clay₀(y), clay₀(x))        x outside the box, u in the cube (it has
+//!                                             reached out there)
+//!            = clay₀(x)                       x outside the box, no preimage in the cube
 //! ```
 //!
-//! so that:
+//! read trilinearly, the colour from the nearest sample holding matter. So:
 //!
 //! - an untouched lattice leaves the clay bit for bit as it was (`y = x`, read at the lattice
 //!   point itself), whatever the fit's error;
@@ -36,10 +43,13 @@
 //!   the fitted function's iso-surface would move (ESM's function mapping, to first order),
 //!   with the clay's own detail and sharpness kept; raising a value never removes matter
 //!   (`v` points up `F₀`'s gradient as `ΔF` grows);
-//! - nothing changes outside the lattice, and the clay inside joins the clay outside without
-//!   a seam: the window `κ` goes to 0 continuously on the faces (ESM §3.1's role for the
-//!   R-function clipping: no ghost solid appears outside the lattice, since no polynomial is
-//!   ever evaluated outside the unit cube).
+//! - nothing changes outside the deformed lattice and its box, and no ghost solid appears
+//!   there: no polynomial is ever evaluated outside the unit cube (the role of ESM §3.1's
+//!   R-function clipping), and the function mapping's shift vanishes on the faces;
+//! - with clamped knots (the default) a face of the cube maps by its own control points
+//!   only: while the outer layer of control points stays where it is, the deformed clay
+//!   meets the clay outside without a seam. Moving the outer layer moves the box's face
+//!   through the clay and cuts it there, as a sculptor moving the lattice's edge expects.
 //!
 //! ## Where this departs from the papers, and why
 //!
@@ -56,11 +66,17 @@
 //!
 //! A drag changes the mapping only on the dragged control's support
 //! ([`SplineVolume::support_world_bounds`] before and after); [`Lattice::changed_box`] says
-//! where, and callers re-evaluate only there. Rows of the box are evaluated in parallel; each
-//! point's Newton search starts from its neighbour's parameters, extrapolated.
+//! where, and callers re-evaluate only there. The inverse mapping is found by Newton's method
+//! at every [`COARSE_STRIDE`]-th point of that box and interpolated between (the points near
+//! the box's faces and outside it are mapped one by one); the function mapping's shift, when a
+//! value or weight has changed, is evaluated at every point. Rows are evaluated in parallel;
+//! each Newton search starts from its neighbour's parameters, extrapolated.
 
+mod edit;
 #[cfg(test)]
 mod tests;
+
+pub use edit::{volume_at, ControlEdit, Selection, TimedEdit};
 
 use rayon::prelude::*;
 
@@ -118,6 +134,19 @@ impl LatticeSpec {
             knots: KnotStyle::Clamped,
             samples_per_span: None,
         }
+    }
+
+    /// The smallest distance between neighbouring rest control points, metres (over the
+    /// counts, not the Greville points: a lower bound of theirs for clamped knots).
+    pub fn spacing_m(&self) -> f64 {
+        (0..3)
+            .map(|a| (self.region.size()[a] as f64) / (self.counts[a].max(2) - 1) as f64)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The longest shift the function mapping reads the clay at, metres.
+    pub fn max_shift_m(&self) -> f64 {
+        MAX_SHIFT_SPACINGS * self.spacing_m()
     }
 
     /// The fit's samples per span for clay of `voxel_m` voxels.
@@ -265,9 +294,24 @@ impl Source {
         let base = p.map(f64::floor);
         let f = [p[0] - base[0], p[1] - base[1], p[2] - base[2]];
         let b = IVec3::new(base[0] as i32, base[1] as i32, base[2] as i32);
+        let c = b - self.lo;
+        if c.cmpge(IVec3::ZERO).all() && (c + IVec3::ONE).cmplt(self.dims).all() {
+            // The 2 × 2 × 2 block lies in the copy: direct indices.
+            let (sy, sz) = (self.dims.x as usize, (self.dims.x * self.dims.y) as usize);
+            let i = c.x as usize + sy * c.y as usize + sz * c.z as usize;
+            let d = &self.density;
+            let lerp = |a: f32, b: f32, t: f64| a as f64 + (b as f64 - a as f64) * t;
+            let x00 = lerp(d[i], d[i + 1], f[0]);
+            let x10 = lerp(d[i + sy], d[i + sy + 1], f[0]);
+            let x01 = lerp(d[i + sz], d[i + sz + 1], f[0]);
+            let x11 = lerp(d[i + sy + sz], d[i + sy + sz + 1], f[0]);
+            let y0 = x00 + (x10 - x00) * f[1];
+            let y1 = x01 + (x11 - x01) * f[1];
+            return (y0 + (y1 - y0) * f[2]) as f32;
+        }
         let mut acc = 0.0f64;
-        for c in 0..8 {
-            let o = IVec3::new(c & 1, (c >> 1) & 1, (c >> 2) & 1);
+        for n in 0..8 {
+            let o = IVec3::new(n & 1, (n >> 1) & 1, (n >> 2) & 1);
             let w = (if o.x == 1 { f[0] } else { 1.0 - f[0] })
                 * (if o.y == 1 { f[1] } else { 1.0 - f[1] })
                 * (if o.z == 1 { f[2] } else { 1.0 - f[2] });
@@ -298,6 +342,72 @@ impl Source {
     }
 }
 
+/// The spacing, in lattice points, of the nodes where a deformed lattice's inverse mapping is
+/// found by Newton's method; between them the parameters are interpolated trilinearly (the
+/// mapping is a polynomial of the lattice's order over spans many voxels long: `tests` bound
+/// the error it makes), and the function mapping's shift, which varies on the scale of the
+/// clay's surface, is evaluated at every point.
+pub const COARSE_STRIDE: i32 = 4;
+
+/// The parameters at the nodes of a coarse grid over a box of lattice points: `None` at nodes
+/// outside the box or the deformed lattice, where points are mapped one by one.
+#[derive(Debug)]
+struct CoarseMap {
+    counts: IVec3,
+    nodes: Vec<Option<[f64; 3]>>,
+}
+
+impl CoarseMap {
+    /// For the row of points at offset `(0, y, z)` from the box's first point: per node
+    /// column, the parameters interpolated in `y` and `z` from the four nodes around the
+    /// row (`None` where one of them has none).
+    fn row_edges(&self, offset: IVec3) -> Vec<Option<[f64; 3]>> {
+        let s = COARSE_STRIDE;
+        let (cy, cz) = (offset.y / s, offset.z / s);
+        let (ty, tz) = ((offset.y % s) as f64 / s as f64, (offset.z % s) as f64 / s as f64);
+        let (nx, ny) = (self.counts.x as usize, self.counts.y as usize);
+        let node = |x: usize, y: i32, z: i32| self.nodes[x + nx * (y as usize + ny * z as usize)];
+        (0..nx)
+            .map(|x| {
+                let corners =
+                    [node(x, cy, cz), node(x, cy + 1, cz), node(x, cy, cz + 1), node(x, cy + 1, cz + 1)];
+                let [a, b, c, d] = [corners[0]?, corners[1]?, corners[2]?, corners[3]?];
+                Some(std::array::from_fn(|i| {
+                    let low = a[i] + (b[i] - a[i]) * ty;
+                    let high = c[i] + (d[i] - c[i]) * ty;
+                    low + (high - low) * tz
+                }))
+            })
+            .collect()
+    }
+
+    /// The parameters of the row's point `x` (from the box's first), from `edges`.
+    #[inline]
+    fn interpolate(&self, edges: &[Option<[f64; 3]>], x: i32) -> Option<[f64; 3]> {
+        let s = COARSE_STRIDE;
+        let (c, t) = ((x / s) as usize, (x % s) as f64 / s as f64);
+        let (a, b) = (edges[c]?, edges[c + 1]?);
+        Some(std::array::from_fn(|i| a[i] + (b[i] - a[i]) * t))
+    }
+}
+
+/// The lattice points a lattice of `spec` copies when its control points span `hull`: the box
+/// and the hull, grown by the longest shift and two voxels; and how many they are.
+fn source_bounds(spec: &LatticeSpec, t: &VoxelTransform, hull: Aabb) -> (IVec3, IVec3, u64) {
+    let room = spec.max_shift_m() as f32 + 2.0 * t.voxel_size_m;
+    let world = spec.region.union(&hull).expanded(room);
+    let lo = t.world_to_index(world.min).floor().as_ivec3();
+    let hi = t.world_to_index(world.max).ceil().as_ivec3();
+    let dims = (hi - lo + IVec3::ONE).as_i64vec3();
+    (lo, hi, (dims.x * dims.y * dims.z).max(0) as u64)
+}
+
+/// How many samples of clay of `voxel_m` voxels a lattice of `spec` copies when its control
+/// points span `hull` (refused over [`MAX_SOURCE_POINTS`]).
+pub fn source_points(spec: &LatticeSpec, voxel_m: f32, hull: Aabb) -> u64 {
+    source_bounds(spec, &VoxelTransform::new(voxel_m), hull).2
+}
+
 /// A lattice open over a box of clay: the spline volume as the user shapes it, the function
 /// it was fitted with, and the clay as it was.
 #[derive(Clone, Debug)]
@@ -317,17 +427,43 @@ pub struct Lattice {
     max_shift_m: f64,
     /// `λ` of the window: `λ F_c = 1` at [`FACE_BLEND`] inside a face.
     window_scale: f64,
+    /// What opening it cost.
+    opened: OpenTimes,
 }
 
-/// One sample of the result: where the clay is read for it, and its parameters.
+/// What opening a lattice cost, seconds.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct OpenTimes {
+    /// Copying the clay of its box.
+    pub copy_s: f64,
+    /// Fitting its control values.
+    pub fit_s: f64,
+}
+
+/// How one sample of the result reads the clay as it was.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Read {
+    /// Its own lattice point: nothing moved it (the lattice at rest there, or outside it).
+    Own,
+    /// The clay at these index coordinates (the mapping's source), alone: the sample lies in
+    /// the lattice's box.
+    At([f64; 3]),
+    /// The densest of the clay there and of its own: the sample lies outside the box, where
+    /// the deformed lattice has reached.
+    AtOrOwn([f64; 3]),
+    /// Nothing: the sample lies in the box, but the deformed lattice has left it.
+    Empty,
+}
+
+/// One sample of the result: how it reads the clay, and its parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Mapped {
-    /// Where the clay is read, in index coordinates of the field's lattice.
-    pub read_at: [f64; 3],
-    /// Whether that is the sample's own lattice point (nothing moved it).
-    pub unmoved: bool,
+    /// Where the clay is read.
+    pub read: Read,
     /// Its parameters, when it has a preimage.
     pub uvw: Option<Uvw>,
+    /// Whether the sample lies in the lattice's box.
+    pub in_box: bool,
     /// Newton iterations spent.
     pub iterations: u32,
 }
@@ -344,9 +480,7 @@ impl Lattice {
     pub fn open(field: &Field, spec: &LatticeSpec) -> Result<Self, LatticeError> {
         let mut volume = spec.volume()?;
         let transform = *field.transform();
-        let spacing = (0..3)
-            .map(|a| (spec.region.size()[a] as f64) / (spec.counts[a].max(2) - 1) as f64)
-            .fold(f64::INFINITY, f64::min);
+        let spacing = spec.spacing_m();
         let mut lattice = Self {
             spec: *spec,
             fitted: volume.clone(),
@@ -356,11 +490,15 @@ impl Lattice {
             source: Source::empty(),
             iso: field.iso() as f64,
             epsilon: 0.25 / spacing,
-            max_shift_m: MAX_SHIFT_SPACINGS * spacing,
+            max_shift_m: spec.max_shift_m(),
             window_scale: 1.0 / (FACE_BLEND * (1.0 - FACE_BLEND)),
+            opened: OpenTimes::default(),
         };
         let (lo, hi) = lattice.source_box(volume.hull())?;
+        let start = std::time::Instant::now();
         lattice.source = Source::empty().grown(field, lo, hi);
+        lattice.opened.copy_s = start.elapsed().as_secs_f64();
+        let start = std::time::Instant::now();
         let source = &lattice.source;
         let to_index = |x: Vec3| {
             let p = transform.world_to_index(x);
@@ -368,27 +506,22 @@ impl Lattice {
         };
         let per_span = spec.fit_samples_per_span(transform.voxel_size_m);
         lattice.fit = volume.fit_field(|x| source.density_at(to_index(x)), per_span)?;
+        lattice.opened.fit_s = start.elapsed().as_secs_f64();
         lattice.fitted = volume.clone();
         lattice.volume = volume;
         Ok(lattice)
     }
 
     /// The lattice points to copy so that every read of the result over `hull` (the control
-    /// points' box) lies in the copy: the box and the hull, grown by the longest shift and a
-    /// voxel; refused over [`MAX_SOURCE_POINTS`].
+    /// points' box) lies in the copy; refused over [`MAX_SOURCE_POINTS`].
     fn source_box(&self, hull: Aabb) -> Result<(IVec3, IVec3), LatticeError> {
-        let t = &self.transform;
-        let room = self.max_shift_m as f32 + 2.0 * t.voxel_size_m;
-        let world = self.spec.region.union(&hull).expanded(room);
-        let lo = t.world_to_index(world.min).floor().as_ivec3();
-        let hi = t.world_to_index(world.max).ceil().as_ivec3();
-        let dims = (hi - lo + IVec3::ONE).as_i64vec3();
-        let points = (dims.x * dims.y * dims.z) as u64;
+        let (lo, hi, points) = source_bounds(&self.spec, &self.transform, hull);
         if points > MAX_SOURCE_POINTS {
+            let t = &self.transform;
             return Err(LatticeError::TooLarge {
                 points,
                 limit: MAX_SOURCE_POINTS,
-                size_m: world.size().to_array(),
+                size_m: ((hi - lo).as_vec3() * t.voxel_size_m).to_array(),
                 voxel_m: t.voxel_size_m,
             });
         }
@@ -408,6 +541,11 @@ impl Lattice {
     /// The volume as it was opened: at rest, the control values fitted to the clay.
     pub fn fitted(&self) -> &SplineVolume {
         &self.fitted
+    }
+
+    /// What opening it cost.
+    pub fn open_times(&self) -> OpenTimes {
+        self.opened
     }
 
     /// How well the fitted values match the clay at the fit's samples.
@@ -470,9 +608,10 @@ impl Lattice {
 
     /// Replaces the volume's control positions, values and weights by those of `volume`
     /// (the same lattice, shaped elsewhere: a scripted key, a sculpt file); returns the world
-    /// box to re-evaluate (everything the lattice reaches before and after).
-    pub fn set_controls(&mut self, volume: &SplineVolume) -> Result<Aabb, LatticeError> {
-        let before = self.reach();
+    /// box to re-evaluate (the changed boxes of the controls that changed, before and after),
+    /// or `None` when nothing changed. Refused, and nothing changes, when `volume` is not the
+    /// same lattice or reaches too far.
+    pub fn set_controls(&mut self, volume: &SplineVolume) -> Result<Option<Aabb>, LatticeError> {
         let same = volume.counts() == self.volume.counts()
             && volume.kind() == self.volume.kind()
             && volume.region() == self.volume.region()
@@ -486,8 +625,28 @@ impl Lattice {
             .into());
         }
         self.source_box(volume.hull())?;
+        let [l, m, _] = self.volume.counts();
+        let changed: Vec<[usize; 3]> = self
+            .volume
+            .controls()
+            .iter()
+            .zip(volume.controls())
+            .enumerate()
+            .filter(|(_, (a, b))| a != b)
+            .map(|(n, _)| [n % l, (n / l) % m, n / (l * m)])
+            .collect();
+        if changed.is_empty() {
+            return Ok(None);
+        }
+        let mut region = Aabb::EMPTY;
+        for &ijk in &changed {
+            region = region.union(&self.changed_box(ijk)?);
+        }
         self.volume = volume.clone();
-        Ok(before.union(&self.reach()))
+        for &ijk in &changed {
+            region = region.union(&self.changed_box(ijk)?);
+        }
+        Ok(Some(region))
     }
 
     /// Where the clay is read for the world point `x` (see the module documentation); the
@@ -507,37 +666,78 @@ impl Lattice {
             (origin.y as f64 + own[1] * voxel) as f32,
             (origin.z as f64 + own[2] * voxel) as f32,
         );
-        let unmoved = Mapped { read_at: own, unmoved: true, uvw: None, iterations: 0 };
+        let in_box = self.volume.rest_parameters(x).is_in_unit_cube();
+        // Where no preimage lies in the cube: the clay as it was outside the box, none inside.
+        let left = |uvw: Option<Uvw>, iterations: u32| Mapped {
+            read: if in_box { Read::Empty } else { Read::Own },
+            uvw,
+            in_box,
+            iterations,
+        };
         let (uvw, iterations) = if self.volume.is_at_rest() {
             (self.volume.rest_parameters(x), 0)
         } else {
-            let m = self.volume.inverse_map_from(x, start);
+            // Outside the control points' hull nothing has a preimage in the cube (convex
+            // hull property); inside it, the neighbour's parameters first, the searches with
+            // fallback starts only where that fails.
+            let hull = self.volume.hull();
+            if !(x.cmpge(hull.min).all() && x.cmple(hull.max).all()) {
+                return left(None, 0);
+            }
+            let (mut m, _) = self.volume.inverse_map_within(x, start, Vec3::ZERO, false);
             if !m.converged {
-                return Mapped { iterations: m.iterations, ..unmoved };
+                let spent = m.iterations;
+                m = self.volume.inverse_map_from(x, start);
+                m.iterations += spent;
+            }
+            if !m.converged {
+                return left(None, m.iterations);
             }
             (m.uvw, m.iterations)
         };
-        let cube = unit_cube_function(uvw);
-        if cube <= 0.0 {
-            return Mapped { uvw: Some(uvw), iterations, ..unmoved };
+        if !uvw.is_in_unit_cube() {
+            return left(Some(uvw), iterations);
         }
-        let kappa = smoothstep(self.window_scale * cube);
+        let read = self.read_at_parameters(own, uvw, in_box, self.shifts());
+        Mapped { read, uvw: Some(uvw), in_box, iterations }
+    }
+
+    /// Whether the function mapping shifts anything: some control's value or weight differs
+    /// from the fitted lattice's.
+    fn shifts(&self) -> bool {
+        self.volume
+            .controls()
+            .iter()
+            .zip(self.fitted.controls())
+            .any(|(a, b)| a.value != b.value || a.weight != b.weight)
+    }
+
+    /// How the point at index coordinates `own`, whose parameters `uvw` lie in the cube,
+    /// reads the clay (`shifting`: [`Self::shifts`]).
+    #[inline]
+    fn read_at_parameters(&self, own: [f64; 3], uvw: Uvw, in_box: bool, shifting: bool) -> Read {
+        let t = &self.transform;
+        let (voxel, origin) = (t.voxel_size_m as f64, t.origin_m);
         let region = self.spec.region;
         let (min, size) = (region.min, region.size());
         let mut rest: [f64; 3] = std::array::from_fn(|a| min[a] as f64 + size[a] as f64 * uvw.0[a]);
-        let shift = self.shift(uvw);
-        for a in 0..3 {
-            rest[a] += shift[a];
+        // The function mapping's shift, faded out on the faces so that it meets the clay
+        // outside without a step.
+        if shifting {
+            let kappa = smoothstep(self.window_scale * unit_cube_function(uvw));
+            if kappa > 0.0 {
+                let shift = self.shift(uvw);
+                for a in 0..3 {
+                    rest[a] += kappa * shift[a];
+                }
+            }
         }
-        let read_at: [f64; 3] = std::array::from_fn(|a| {
-            let target = (rest[a] - origin[a] as f64) / voxel;
-            own[a] + kappa * (target - own[a])
-        });
+        let read_at: [f64; 3] = std::array::from_fn(|a| (rest[a] - origin[a] as f64) / voxel);
         let moved = (0..3).any(|a| (read_at[a] - own[a]).abs() > 1e-4);
-        if moved {
-            Mapped { read_at, unmoved: false, uvw: Some(uvw), iterations }
-        } else {
-            Mapped { uvw: Some(uvw), iterations, ..unmoved }
+        match (moved, in_box) {
+            (false, true) => Read::Own,
+            (true, true) => Read::At(read_at),
+            (_, false) => Read::AtOrOwn(read_at),
         }
     }
 
@@ -579,7 +779,20 @@ impl Lattice {
         lo: IVec3,
         hi: IVec3,
         densities: &mut Vec<f32>,
+        colours: Option<&mut Vec<Colour>>,
+    ) -> LatticeStats {
+        self.evaluate_with(lo, hi, densities, colours, true)
+    }
+
+    /// [`Self::evaluate`], the mapping interpolated between the nodes of a coarse grid when
+    /// `coarse`, found at every point otherwise.
+    fn evaluate_with(
+        &self,
+        lo: IVec3,
+        hi: IVec3,
+        densities: &mut Vec<f32>,
         mut colours: Option<&mut Vec<Colour>>,
+        coarse: bool,
     ) -> LatticeStats {
         let dims = (hi - lo + IVec3::ONE).max(IVec3::ZERO);
         let n = (dims.x as usize) * (dims.y as usize) * (dims.z as usize);
@@ -596,37 +809,46 @@ impl Lattice {
         let row_of = |row: usize| {
             IVec3::new(lo.x, lo.y + (row % dims.y as usize) as i32, lo.z + (row / dims.y as usize) as i32)
         };
+        let (coarse, coarse_stats) =
+            if coarse { self.coarse_map(lo, dims) } else { (None, LatticeStats::default()) };
+        let shifting = self.shifts();
         let eval_row = |row: usize, out: &mut [f32], mut colour: Option<&mut [Colour]>| {
             let start = row_of(row);
             let mut stats = LatticeStats { points: nx, ..LatticeStats::default() };
+            let edges = coarse.as_ref().map(|c| c.row_edges(start - lo));
             let mut previous: [Option<Uvw>; 2] = [None, None];
             for (x, d) in out.iter_mut().enumerate() {
                 let p = start + IVec3::new(x as i32, 0, 0);
-                let guess = match previous {
-                    [Some(a), Some(b)] => Some(Uvw(std::array::from_fn(|i| 2.0 * b.0[i] - a.0[i]))),
-                    [_, b] => b,
+                let own = [p.x as f64, p.y as f64, p.z as f64];
+                let interpolated = match (&coarse, &edges) {
+                    (Some(c), Some(e)) => c.interpolate(e, x as i32).map(Uvw),
+                    _ => None,
                 };
-                let m = self.map_index([p.x as f64, p.y as f64, p.z as f64], guess);
-                previous = [previous[1], m.uvw];
-                stats.searched += usize::from(m.iterations > 0);
-                stats.newton_iterations += m.iterations as u64;
-                if m.unmoved {
-                    let own = self.source.index(p);
-                    *d = own.map_or(0.0, |i| self.source.density[i]);
-                    if let Some(c) = colour.as_deref_mut() {
-                        c[x] = own.map_or(DEFAULT_COLOUR, |i| self.source.colour[i]);
+                let read = match interpolated {
+                    Some(uvw) if uvw.is_in_unit_cube() => self.read_at_parameters(own, uvw, true, shifting),
+                    Some(_) => Read::Empty,
+                    None => {
+                        let guess = match previous {
+                            [Some(a), Some(b)] => Some(Uvw(std::array::from_fn(|i| 2.0 * b.0[i] - a.0[i]))),
+                            [_, b] => b,
+                        };
+                        let m = self.map_index(own, guess);
+                        previous = [previous[1], m.uvw];
+                        stats.searched += usize::from(m.iterations > 0);
+                        stats.newton_iterations += m.iterations as u64;
+                        m.read
                     }
-                } else {
-                    stats.moved += 1;
-                    *d = self.source.density_at(m.read_at).clamp(0.0, 1.0);
-                    if let Some(c) = colour.as_deref_mut() {
-                        c[x] = self.source.colour_near(m.read_at);
-                    }
+                };
+                stats.moved += usize::from(read != Read::Own);
+                let (density, c) = self.read(p, read, colour.is_some());
+                *d = density;
+                if let Some(out) = colour.as_deref_mut() {
+                    out[x] = c;
                 }
             }
             stats
         };
-        match colours {
+        let stats = match colours {
             Some(c) => densities
                 .par_chunks_mut(nx)
                 .zip(c.par_chunks_mut(nx))
@@ -638,7 +860,74 @@ impl Lattice {
                 .enumerate()
                 .map(|(row, out)| eval_row(row, out, None))
                 .reduce(LatticeStats::default, |a, b| a + b),
+        };
+        let LatticeStats { searched, newton_iterations, .. } = coarse_stats;
+        LatticeStats {
+            searched: stats.searched + searched,
+            newton_iterations: stats.newton_iterations + newton_iterations,
+            ..stats
         }
+    }
+
+    /// The density and colour of sample `p` read as `read` says (the colour only when asked).
+    #[inline]
+    fn read(&self, p: IVec3, read: Read, colour: bool) -> (f32, Colour) {
+        let own = || {
+            let i = self.source.index(p);
+            (i.map_or(0.0, |i| self.source.density[i]), i.map_or(DEFAULT_COLOUR, |i| self.source.colour[i]))
+        };
+        let at = |q: [f64; 3]| {
+            let d = self.source.density_at(q).clamp(0.0, 1.0);
+            (d, if colour { self.source.colour_near(q) } else { DEFAULT_COLOUR })
+        };
+        match read {
+            Read::Own => own(),
+            Read::Empty => (0.0, DEFAULT_COLOUR),
+            Read::At(q) => at(q),
+            Read::AtOrOwn(q) => {
+                let (o, a) = (own(), at(q));
+                if o.0 >= a.0 {
+                    o
+                } else {
+                    a
+                }
+            }
+        }
+    }
+
+    /// The mapping at every [`COARSE_STRIDE`]-th lattice point of the box of `dims` points from
+    /// `lo` (and one node past its far end), node rows in parallel; `None` when the lattice
+    /// is at rest (every point's own read is cheaper) or the box too thin.
+    fn coarse_map(&self, lo: IVec3, dims: IVec3) -> (Option<CoarseMap>, LatticeStats) {
+        let s = COARSE_STRIDE;
+        if self.volume.is_at_rest() || dims.min_element() < 2 * s {
+            return (None, LatticeStats::default());
+        }
+        let counts = (dims - IVec3::ONE) / s + IVec3::splat(2);
+        let (cx, cy) = (counts.x as usize, counts.y as usize);
+        let mut nodes = vec![None; cx * cy * counts.z as usize];
+        let stats = nodes
+            .par_chunks_mut(cx)
+            .enumerate()
+            .map(|(row, out)| {
+                let (y, z) = ((row % cy) as i32, (row / cy) as i32);
+                let mut stats = LatticeStats::default();
+                let mut previous: Option<Uvw> = None;
+                for (x, node) in out.iter_mut().enumerate() {
+                    let p = lo + s * IVec3::new(x as i32, y, z);
+                    let m = self.map_index([p.x as f64, p.y as f64, p.z as f64], previous);
+                    previous = m.uvw;
+                    stats.searched += usize::from(m.iterations > 0);
+                    stats.newton_iterations += m.iterations as u64;
+                    *node = match (m.read, m.uvw) {
+                        (Read::Own | Read::At(_), Some(uvw)) if m.in_box => Some(uvw.0),
+                        _ => None,
+                    };
+                }
+                stats
+            })
+            .reduce(LatticeStats::default, |a, b| a + b);
+        (Some(CoarseMap { counts, nodes }), stats)
     }
 
     /// Evaluates the deformed clay over `world` and writes it into `field`, growing the copy

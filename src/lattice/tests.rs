@@ -138,17 +138,18 @@ fn nothing_changes_outside_the_lattice_and_its_faces_join_without_a_seam() {
         let p =
             IVec3::new(n as i32 % dims.x, (n as i32 / dims.x) % dims.y, n as i32 / (dims.x * dims.y)) + lo;
         let w = t.index_to_world(p.as_vec3());
-        let inside = w.cmpgt(region.min).all() && w.cmplt(region.max).all();
+        let inside = w.cmpge(region.min - 0.25 * VOXEL).all() && w.cmple(region.max + 0.25 * VOXEL).all();
         if !inside {
             assert_eq!(x, y, "the clay changed outside the lattice at {w}");
         }
-        // Within a voxel of a face: the result meets the clay outside.
+        // On a face the result is the clay as it was: it meets the clay outside, and its
+        // change grows from nothing into the box (the mapping is continuous there).
         let to_face = (w - region.min).min(region.max - w).min_element();
-        if inside && to_face < VOXEL {
+        if to_face.abs() < 0.25 * VOXEL {
             worst_at_face = worst_at_face.max((x - y).abs());
         }
     }
-    assert!(worst_at_face < 0.02, "a seam on the lattice's faces: {worst_at_face}");
+    assert!(worst_at_face < 2e-3, "a seam on the lattice's faces: {worst_at_face}");
 }
 
 #[test]
@@ -295,4 +296,37 @@ fn refusals_leave_the_lattice_as_it_was() {
     let huge = Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) };
     let e = Lattice::open(&field, &LatticeSpec::cubic(huge, [4, 4, 4])).unwrap_err();
     assert!(e.to_string().contains("over the limit"), "{e}");
+}
+
+#[test]
+fn the_interpolated_mapping_matches_the_exact_one() {
+    // A strong twist (a quarter turn over 20 mm) and swell of the bar: the mapping
+    // interpolated between coarse nodes reads the clay about where the exact one does.
+    let field = bar();
+    let mut lattice = open(&field, LatticeSpec::cubic(bar_box(), [8, 5, 5]));
+    for i in 1..7 {
+        for k in 0..5 {
+            for j in 0..5 {
+                let c = lattice.volume().control(i, j, k).unwrap();
+                let p = c.position_m;
+                let turn = Quat::from_rotation_x(0.2 * i as f32);
+                let moved = Vec3::new(p.x, 0.0, 0.0) + turn * Vec3::new(0.0, p.y, p.z);
+                let v = c.value;
+                // Whole layers turned (a twist that folds nothing), the inner values raised.
+                lattice.move_control([i, j, k], moved).unwrap();
+                if j > 0 && j < 4 && k > 0 && k < 4 {
+                    lattice.set_value([i, j, k], v + 0.1).unwrap();
+                }
+            }
+        }
+    }
+    let (lo, hi) = lattice.points_of(bar_box());
+    let (mut exact, mut fast) = (Vec::new(), Vec::new());
+    let slow = lattice.evaluate_with(lo, hi, &mut exact, None, false);
+    let quick = lattice.evaluate_with(lo, hi, &mut fast, None, true);
+    assert!(quick.newton_iterations < slow.newton_iterations, "{quick:?} {slow:?}");
+    let worst = exact.iter().zip(&fast).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+    let mean = exact.iter().zip(&fast).map(|(a, b)| (a - b).abs() as f64).sum::<f64>() / exact.len() as f64;
+    assert!(worst < 0.1 && mean < 1e-3, "worst {worst}, mean {mean}");
+    assert!(fast.iter().all(|d| d.is_finite() && (0.0..=1.0).contains(d)));
 }

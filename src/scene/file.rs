@@ -39,6 +39,10 @@ pub(super) struct SceneFile {
     #[serde(default)]
     pub virtual_clay: VirtualClaySpec,
     pub input: Option<InputSpec>,
+    #[serde(default)]
+    pub lattice: Vec<Spanned<super::lattice::LatticeFile>>,
+    #[serde(default)]
+    pub lattice_key: Vec<Spanned<super::lattice::LatticeKeyFile>>,
 }
 
 /// `[input]`: the desk input settings file the scene asks for.

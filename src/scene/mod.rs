@@ -10,6 +10,7 @@ mod colour;
 mod file;
 mod finite;
 mod head;
+mod lattice;
 mod screen;
 mod timeline;
 mod tool;
@@ -18,6 +19,7 @@ use std::path::{Path, PathBuf};
 
 pub use colour::{parse_hex, SceneColour};
 pub use head::{HeadKey, HeadPath};
+pub use lattice::{SceneLattice, MAX_WEIGHT};
 pub use screen::{
     DisplayCalibration, ScreenCalibration, TrackerCalibration, TrackerZero, SHIPPED_SCREEN_TOML,
 };
@@ -264,6 +266,8 @@ pub struct Scene {
     /// scene's folder): which target each device drives and its calibration files, read over
     /// the user's settings and under the command line's.
     pub input_settings: Option<std::path::PathBuf>,
+    /// The lattices opened over the clay, shaped by their keys and applied (`[[lattice]]`).
+    pub lattices: Vec<SceneLattice>,
 }
 
 /// The virtual clay's settings: its fluidity, its step, and what holds it besides the tools.
@@ -399,7 +403,7 @@ pub(super) fn positive(
     }
 }
 
-fn rotation(deg: [f32; 3]) -> Quat {
+pub(super) fn rotation(deg: [f32; 3]) -> Quat {
     let [x, y, z] = deg.map(f32::to_radians);
     Quat::from_euler(glam::EulerRot::XYZ, x, y, z)
 }
@@ -491,7 +495,7 @@ fn solid_of(spec: &ClaySpec, span: &std::ops::Range<usize>, at: &At<'_>) -> Resu
 type KeyAt<'a> = dyn Fn(&str) -> Option<std::ops::Range<usize>> + 'a;
 
 /// Whether every coordinate of `p` lies within ±[`MAX_POSITION_M`].
-fn within_reach(p: [f32; 3]) -> bool {
+pub(super) fn within_reach(p: [f32; 3]) -> bool {
     p.iter().all(|c| c.is_finite() && c.abs() <= MAX_POSITION_M)
 }
 
@@ -850,6 +854,9 @@ fn resolve(
         ));
     }
     let timeline = Timeline::new(keys, step_s).map_err(|(i, msg)| at(Some(file.key[i].span()), msg))?;
+    let lattices = lattice::resolve_lattices(&file.lattice, &file.lattice_key, field_voxel, at)?;
+    // The timeline lasts until its last key, the lattices' included.
+    let lattice_end = lattices.iter().map(|l| l.apply_s).fold(0.0f32, f32::max);
 
     let mut captures: Vec<Capture> = Vec::new();
     for spanned in &file.capture {
@@ -872,12 +879,13 @@ fn resolve(
         captures.push(Capture { name: c.name.clone(), time_s: c.time_s, show_tools: c.show_tools });
     }
     if captures.is_empty() {
-        captures.push(Capture { name: "final".to_owned(), time_s: timeline.duration_s(), show_tools: true });
+        let end = timeline.duration_s().max(lattice_end);
+        captures.push(Capture { name: "final".to_owned(), time_s: end, show_tools: true });
     }
     captures.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
     // The timeline is played in steps of f32 seconds: at most MAX_STEPS of them, which also
     // keeps each step at least eight units of the last place of the time it advances.
-    let last = captures.last().map_or(0.0, |c| c.time_s).max(timeline.duration_s());
+    let last = captures.last().map_or(0.0, |c| c.time_s).max(timeline.duration_s()).max(lattice_end);
     if f64::from(last) / f64::from(step_s) > MAX_STEPS as f64 {
         return Err(at(
             step_at,
@@ -988,6 +996,7 @@ fn resolve(
         head,
         virtual_clay,
         input_settings,
+        lattices,
     })
 }
 

@@ -354,3 +354,60 @@ fn lengths_scales_and_freeform_regions_that_would_run_away_are_refused() {
     );
     Scene::parse(&format!("{}{text}", clay("")), "t.toml", None).unwrap();
 }
+
+const LATTICE: &str = "[[lattice]]\nname = \"l\"\nmin_m = [-0.1, -0.05, -0.05]\nmax_m = [0.1, 0.05, 0.05]\n\
+                       controls = [6, 4, 4]\n";
+
+#[test]
+fn lattices_and_their_keys_are_read_in_time_order_each_ramping_from_the_one_before() {
+    let text = format!(
+        "{LATTICE}open_s = 0.5\n\
+         [[lattice_key]]\ntime_s = 2.0\nlattice = \"l\"\ni = [5, 5]\nrotation_deg = [90, 0, 0]\n\
+         [[lattice_key]]\ntime_s = 1.0\nlattice = \"l\"\ni = [2, 3]\nj = [1, 2]\nvalue_offset = 0.2\n"
+    );
+    let s = Scene::parse(&text, "t.toml", None).unwrap();
+    let l = &s.lattices[0];
+    assert_eq!((l.open_s, l.apply_s, l.show), (0.5, 2.0, true));
+    assert_eq!(l.spec.counts, [6, 4, 4]);
+    assert_eq!(l.spec.kind, crate::spline::SplineKind::BSpline);
+    let times: Vec<(f32, f32)> = l.edits.iter().map(|e| (e.from_s, e.time_s)).collect();
+    assert_eq!(times, [(0.5, 1.0), (1.0, 2.0)]);
+    assert_eq!(l.edits[0].edit.select.ranges, [(2, 3), (1, 2), (0, 3)]);
+    // The default capture comes when the lattice is applied.
+    assert_eq!(s.captures[0].time_s, 2.0);
+}
+
+#[test]
+fn bad_lattices_and_keys_are_refused_where_they_are() {
+    let key = |body: &str| format!("{LATTICE}[[lattice_key]]\ntime_s = 1.0\nlattice = \"l\"\n{body}");
+    let cases = [
+        (format!("{LATTICE}order = 1\n"), "t.toml:1:1", "order must be 2 to 16"),
+        (LATTICE.replace("[6, 4, 4]", "[6, 1, 4]"), "t.toml:1:1", "2 to 16 control points"),
+        (LATTICE.replace("max_m = [0.1,", "max_m = [-0.2,"), "t.toml:1:1", "must exceed min_m"),
+        (
+            format!("{}kind = \"bezier\"\n", LATTICE.replace("[6, 4, 4]", "[17, 4, 4]")),
+            "t.toml:1:1",
+            "2 to 16",
+        ),
+        (LATTICE.replace("[0.1, 0.05, 0.05]", "[3.0, 3.0, 3.0]"), "t.toml:1:1", "over the limit"),
+        (key("i = [2, 6]\n"), "t.toml:6:1", "index ranges within"),
+        (key("weight = 2.0\n"), "t.toml:6:1", "NURBS lattices"),
+        (key("value_offset = 3.0\n"), "t.toml:6:1", "-1 to 1"),
+        (key("offset_m = [4.0, 0.0, 0.0]\n"), "t.toml:1:1", "over the limit"),
+        (
+            format!("{LATTICE}apply_s = 0.5\n[[lattice_key]]\ntime_s = 1.0\nlattice = \"l\"\n"),
+            "t.toml:1:1",
+            "apply_s",
+        ),
+        (
+            format!("{LATTICE}[[lattice_key]]\ntime_s = 1.0\nlattice = \"m\"\n"),
+            "t.toml:6:1",
+            "no lattice named `m`",
+        ),
+        (format!("{LATTICE}{LATTICE}"), "t.toml:6:1", "distinct"),
+    ];
+    for (text, place, words) in &cases {
+        let e = Scene::parse(text, "t.toml", None).unwrap_err().to_string();
+        assert!(e.starts_with(place) && e.contains(words), "{text:?}: {e}");
+    }
+}
