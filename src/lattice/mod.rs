@@ -235,11 +235,25 @@ struct Source {
     dims: IVec3,
     density: Vec<f32>,
     colour: Vec<Colour>,
+    /// The lowest and highest density of each block of [`BLOCK`]³ samples from `lo`, `x`
+    /// fastest: where a deformation only reads within a constant block, it needs no reads.
+    blocks: Vec<(f32, f32)>,
+    block_dims: IVec3,
 }
+
+/// The side of the copy's blocks of known density range, samples.
+const BLOCK: i32 = 4;
 
 impl Source {
     fn empty() -> Self {
-        Self { lo: IVec3::ZERO, dims: IVec3::ZERO, density: Vec::new(), colour: Vec::new() }
+        Self {
+            lo: IVec3::ZERO,
+            dims: IVec3::ZERO,
+            density: Vec::new(),
+            colour: Vec::new(),
+            blocks: Vec::new(),
+            block_dims: IVec3::ZERO,
+        }
     }
 
     fn contains(&self, lo: IVec3, hi: IVec3) -> bool {
@@ -279,7 +293,45 @@ impl Source {
                 }
             }
         }
-        Self { lo, dims, density, colour }
+        let block_dims = (dims + IVec3::splat(BLOCK - 1)) / BLOCK;
+        let mut blocks =
+            vec![(f32::INFINITY, f32::NEG_INFINITY); (block_dims.x * block_dims.y * block_dims.z) as usize];
+        let mut i = 0;
+        for z in 0..dims.z {
+            for y in 0..dims.y {
+                let row = ((y / BLOCK) + block_dims.y * (z / BLOCK)) * block_dims.x;
+                for x in 0..dims.x {
+                    let b = &mut blocks[(row + x / BLOCK) as usize];
+                    b.0 = b.0.min(density[i]);
+                    b.1 = b.1.max(density[i]);
+                    i += 1;
+                }
+            }
+        }
+        Self { lo, dims, density, colour, blocks, block_dims }
+    }
+
+    /// The density, when every sample of the lattice points `lo ..= hi` (index coordinates,
+    /// any of them outside the copy reading 0) has the same one.
+    fn constant_over(&self, lo: IVec3, hi: IVec3) -> Option<f32> {
+        let inside = lo.cmpge(self.lo).all() && (hi - self.lo).cmplt(self.dims).all();
+        if !inside {
+            return None;
+        }
+        let (a, b) = ((lo - self.lo) / BLOCK, (hi - self.lo) / BLOCK);
+        let mut range = (f32::INFINITY, f32::NEG_INFINITY);
+        for z in a.z..=b.z {
+            for y in a.y..=b.y {
+                for x in a.x..=b.x {
+                    let r = self.blocks[(x + self.block_dims.x * (y + self.block_dims.y * z)) as usize];
+                    range = (range.0.min(r.0), range.1.max(r.1));
+                    if range.0 != range.1 {
+                        return None;
+                    }
+                }
+            }
+        }
+        Some(range.0)
     }
 
     /// The density at a lattice point (0 outside).
@@ -349,12 +401,20 @@ impl Source {
 /// clay's surface, is evaluated at every point.
 pub const COARSE_STRIDE: i32 = 4;
 
-/// The parameters at the nodes of a coarse grid over a box of lattice points: `None` at nodes
-/// outside the box or the deformed lattice, where points are mapped one by one.
+/// The parameters at the nodes of a coarse grid over a box of lattice points (in the cube or
+/// not): `None` at nodes where the search found none (outside the control points' hull, or
+/// not converged), around which points are mapped one by one.
 #[derive(Debug)]
 struct CoarseMap {
     counts: IVec3,
+    /// The offset of the box's last point from its first: node `n` lies at
+    /// `min(n · COARSE_STRIDE, last)`, so that the last nodes lie on the box's far faces.
+    last: IVec3,
     nodes: Vec<Option<[f64; 3]>>,
+    /// Per cell (`counts − 1` per axis): the density of every point in it, when every read
+    /// its points make lies where the clay is constant (the rest mapping is affine, so
+    /// their reads lie in the box of its corners' reads), and no shift applies.
+    constant: Vec<Option<f32>>,
 }
 
 impl CoarseMap {
@@ -362,9 +422,8 @@ impl CoarseMap {
     /// column, the parameters interpolated in `y` and `z` from the four nodes around the
     /// row (`None` where one of them has none).
     fn row_edges(&self, offset: IVec3) -> Vec<Option<[f64; 3]>> {
-        let s = COARSE_STRIDE;
-        let (cy, cz) = (offset.y / s, offset.z / s);
-        let (ty, tz) = ((offset.y % s) as f64 / s as f64, (offset.z % s) as f64 / s as f64);
+        let (cy, ty) = self.cell(1, offset.y);
+        let (cz, tz) = self.cell(2, offset.z);
         let (nx, ny) = (self.counts.x as usize, self.counts.y as usize);
         let node = |x: usize, y: i32, z: i32| self.nodes[x + nx * (y as usize + ny * z as usize)];
         (0..nx)
@@ -381,12 +440,34 @@ impl CoarseMap {
             .collect()
     }
 
+    /// The offset of node `n` along `axis`.
+    #[inline]
+    fn node_offset(&self, axis: usize, n: i32) -> i32 {
+        (n * COARSE_STRIDE).min(self.last[axis])
+    }
+
+    /// The cell holding offset `o` along `axis`, and where in it `o` lies (0 to 1).
+    #[inline]
+    fn cell(&self, axis: usize, o: i32) -> (i32, f64) {
+        let c = (o / COARSE_STRIDE).min(self.counts[axis] - 2);
+        let (a, b) = (self.node_offset(axis, c), self.node_offset(axis, c + 1));
+        (c, (o - a) as f64 / (b - a).max(1) as f64)
+    }
+
+    /// The constant density of the cell holding the point at `offset + (x, 0, 0)` from the
+    /// box's first, if it has one.
+    #[inline]
+    fn constant_at(&self, offset: IVec3, x: i32) -> Option<f32> {
+        let c = IVec3::new(self.cell(0, x).0, self.cell(1, offset.y).0, self.cell(2, offset.z).0);
+        let cells = self.counts - IVec3::ONE;
+        self.constant[(c.x + cells.x * (c.y + cells.y * c.z)) as usize]
+    }
+
     /// The parameters of the row's point `x` (from the box's first), from `edges`.
     #[inline]
     fn interpolate(&self, edges: &[Option<[f64; 3]>], x: i32) -> Option<[f64; 3]> {
-        let s = COARSE_STRIDE;
-        let (c, t) = ((x / s) as usize, (x % s) as f64 / s as f64);
-        let (a, b) = (edges[c]?, edges[c + 1]?);
+        let (c, t) = self.cell(0, x);
+        let (a, b) = (edges[c as usize]?, edges[c as usize + 1]?);
         Some(std::array::from_fn(|i| a[i] + (b[i] - a[i]) * t))
     }
 }
@@ -453,6 +534,15 @@ pub enum Read {
     AtOrOwn([f64; 3]),
     /// Nothing: the sample lies in the box, but the deformed lattice has left it.
     Empty,
+}
+
+/// What the lattice is, as every point's mapping needs it: found once per evaluation.
+#[derive(Clone, Copy, Debug)]
+struct State {
+    /// [`SplineVolume::is_at_rest`].
+    at_rest: bool,
+    /// [`Lattice::shifts`].
+    shifting: bool,
 }
 
 /// One sample of the result: how it reads the clay, and its parameters.
@@ -653,11 +743,11 @@ impl Lattice {
     /// inverse mapping starts from `start` when given.
     pub fn map_point(&self, x: Vec3, start: Option<Uvw>) -> Mapped {
         let xi = self.transform.world_to_index(x);
-        self.map_index([xi.x as f64, xi.y as f64, xi.z as f64], start)
+        self.map_index([xi.x as f64, xi.y as f64, xi.z as f64], start, &self.state())
     }
 
     /// [`Self::map_point`] for the point at index coordinates `own` of the field's lattice.
-    fn map_index(&self, own: [f64; 3], start: Option<Uvw>) -> Mapped {
+    fn map_index(&self, own: [f64; 3], start: Option<Uvw>, state: &State) -> Mapped {
         let t = &self.transform;
         let voxel = t.voxel_size_m as f64;
         let origin = t.origin_m;
@@ -674,7 +764,7 @@ impl Lattice {
             in_box,
             iterations,
         };
-        let (uvw, iterations) = if self.volume.is_at_rest() {
+        let (uvw, iterations) = if state.at_rest {
             (self.volume.rest_parameters(x), 0)
         } else {
             // Outside the control points' hull nothing has a preimage in the cube (convex
@@ -698,8 +788,13 @@ impl Lattice {
         if !uvw.is_in_unit_cube() {
             return left(Some(uvw), iterations);
         }
-        let read = self.read_at_parameters(own, uvw, in_box, self.shifts());
+        let read = self.read_at_parameters(own, uvw, in_box, state.shifting);
         Mapped { read, uvw: Some(uvw), in_box, iterations }
+    }
+
+    /// What every point's mapping asks of the whole lattice, found once per evaluation.
+    fn state(&self) -> State {
+        State { at_rest: self.volume.is_at_rest(), shifting: self.shifts() }
     }
 
     /// Whether the function mapping shifts anything: some control's value or weight differs
@@ -811,7 +906,9 @@ impl Lattice {
         };
         let (coarse, coarse_stats) =
             if coarse { self.coarse_map(lo, dims) } else { (None, LatticeStats::default()) };
-        let shifting = self.shifts();
+        let state = self.state();
+        let shifting = state.shifting;
+        let t = self.transform;
         let eval_row = |row: usize, out: &mut [f32], mut colour: Option<&mut [Colour]>| {
             let start = row_of(row);
             let mut stats = LatticeStats { points: nx, ..LatticeStats::default() };
@@ -820,19 +917,36 @@ impl Lattice {
             for (x, d) in out.iter_mut().enumerate() {
                 let p = start + IVec3::new(x as i32, 0, 0);
                 let own = [p.x as f64, p.y as f64, p.z as f64];
+                // A cell of constant clay: its value, and no colour to find but the default.
+                if let Some(v) = coarse.as_ref().and_then(|c| c.constant_at(start - lo, x as i32)) {
+                    if v == 0.0 || colour.is_none() {
+                        *d = v;
+                        if let Some(out) = colour.as_deref_mut() {
+                            out[x] = DEFAULT_COLOUR;
+                        }
+                        continue;
+                    }
+                }
                 let interpolated = match (&coarse, &edges) {
                     (Some(c), Some(e)) => c.interpolate(e, x as i32).map(Uvw),
                     _ => None,
                 };
                 let read = match interpolated {
-                    Some(uvw) if uvw.is_in_unit_cube() => self.read_at_parameters(own, uvw, true, shifting),
-                    Some(_) => Read::Empty,
+                    Some(uvw) => {
+                        let x = t.index_to_world(p.as_vec3());
+                        let in_box = self.volume.rest_parameters(x).is_in_unit_cube();
+                        match (uvw.is_in_unit_cube(), in_box) {
+                            (true, _) => self.read_at_parameters(own, uvw, in_box, shifting),
+                            (false, true) => Read::Empty,
+                            (false, false) => Read::Own,
+                        }
+                    }
                     None => {
                         let guess = match previous {
                             [Some(a), Some(b)] => Some(Uvw(std::array::from_fn(|i| 2.0 * b.0[i] - a.0[i]))),
                             [_, b] => b,
                         };
-                        let m = self.map_index(own, guess);
+                        let m = self.map_index(own, guess, &state);
                         previous = [previous[1], m.uvw];
                         stats.searched += usize::from(m.iterations > 0);
                         stats.newton_iterations += m.iterations as u64;
@@ -900,10 +1014,12 @@ impl Lattice {
     /// is at rest (every point's own read is cheaper) or the box too thin.
     fn coarse_map(&self, lo: IVec3, dims: IVec3) -> (Option<CoarseMap>, LatticeStats) {
         let s = COARSE_STRIDE;
-        if self.volume.is_at_rest() || dims.min_element() < 2 * s {
+        let state = self.state();
+        if state.at_rest || dims.min_element() < 2 * s {
             return (None, LatticeStats::default());
         }
-        let counts = (dims - IVec3::ONE) / s + IVec3::splat(2);
+        let last = dims - IVec3::ONE;
+        let counts = (last + IVec3::splat(s - 1)) / s + IVec3::ONE;
         let (cx, cy) = (counts.x as usize, counts.y as usize);
         let mut nodes = vec![None; cx * cy * counts.z as usize];
         let stats = nodes
@@ -914,20 +1030,50 @@ impl Lattice {
                 let mut stats = LatticeStats::default();
                 let mut previous: Option<Uvw> = None;
                 for (x, node) in out.iter_mut().enumerate() {
-                    let p = lo + s * IVec3::new(x as i32, y, z);
-                    let m = self.map_index([p.x as f64, p.y as f64, p.z as f64], previous);
+                    let p = lo + (s * IVec3::new(x as i32, y, z)).min(last);
+                    let m = self.map_index([p.x as f64, p.y as f64, p.z as f64], previous, &state);
                     previous = m.uvw;
                     stats.searched += usize::from(m.iterations > 0);
                     stats.newton_iterations += m.iterations as u64;
-                    *node = match (m.read, m.uvw) {
-                        (Read::Own | Read::At(_), Some(uvw)) if m.in_box => Some(uvw.0),
-                        _ => None,
-                    };
+                    // Its parameters wherever the search converged, in the cube or not.
+                    *node = m.uvw.map(|u| u.0);
                 }
                 stats
             })
             .reduce(LatticeStats::default, |a, b| a + b);
-        (Some(CoarseMap { counts, nodes }), stats)
+        let cells = counts - IVec3::ONE;
+        let region = self.spec.region;
+        let t = &self.transform;
+        let read_of = |u: [f64; 3]| -> [f64; 3] {
+            std::array::from_fn(|a| {
+                let world = region.min[a] as f64 + region.size()[a] as f64 * u[a];
+                (world - t.origin_m[a] as f64) / t.voxel_size_m as f64
+            })
+        };
+        let node = |x: i32, y: i32, z: i32| nodes[(x + counts.x * (y + counts.y * z)) as usize];
+        let constant = (0..cells.x * cells.y * cells.z)
+            .into_par_iter()
+            .map(|c| {
+                if state.shifting {
+                    return None;
+                }
+                let (x, y, z) = (c % cells.x, (c / cells.x) % cells.y, c / (cells.x * cells.y));
+                let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+                for n in 0..8 {
+                    let u = node(x + (n & 1), y + ((n >> 1) & 1), z + ((n >> 2) & 1))?;
+                    let r = read_of(u);
+                    for a in 0..3 {
+                        lo[a] = lo[a].min(r[a]);
+                        hi[a] = hi[a].max(r[a]);
+                    }
+                }
+                let lo = IVec3::new(lo[0].floor() as i32, lo[1].floor() as i32, lo[2].floor() as i32);
+                let hi =
+                    IVec3::new(hi[0].floor() as i32, hi[1].floor() as i32, hi[2].floor() as i32) + IVec3::ONE;
+                self.source.constant_over(lo, hi)
+            })
+            .collect();
+        (Some(CoarseMap { counts, last, nodes, constant }), stats)
     }
 
     /// Evaluates the deformed clay over `world` and writes it into `field`, growing the copy
