@@ -731,7 +731,9 @@ fn bench_lattice_drag(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<(
     let opened = lattice.open_times();
     let ijk = [3, 4, 4];
     let rest = lattice.volume().control(3, 4, 4)?.position_m;
-    let (mut eval_ms, mut write_ms, mut points, mut iterations) = (Vec::new(), Vec::new(), 0usize, 0u64);
+    let (mut eval_ms, mut write_ms, mut points, mut iterations, mut searched) =
+        (Vec::new(), Vec::new(), 0usize, 0u64, 0usize);
+    let mut interpolated = 0usize;
     let mut densities = Vec::new();
     field.begin_stroke();
     for drag in 0..size.lattice_drags {
@@ -744,6 +746,8 @@ fn bench_lattice_drag(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<(
         eval_ms.push(t.elapsed().as_secs_f64() * 1e3);
         points = stats.points;
         iterations = stats.newton_iterations;
+        searched = stats.searched;
+        interpolated = stats.interpolated;
         let t = Instant::now();
         lattice.write(&mut field, changed)?;
         write_ms.push(t.elapsed().as_secs_f64() * 1e3);
@@ -764,6 +768,8 @@ fn bench_lattice_drag(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<(
         "drags": size.lattice_drags,
         "points_per_drag": points,
         "newton_iterations_per_point": iterations as f64 / points.max(1) as f64,
+        "searched_per_drag": searched,
+        "interpolated_per_drag": interpolated,
         "evaluate_ms_median": median(eval_ms),
         "write_ms_median": median(write_ms),
     }));

@@ -213,6 +213,9 @@ pub struct LatticeStats {
     pub moved: usize,
     /// Newton iterations, in all.
     pub newton_iterations: u64,
+    /// Samples whose parameters were interpolated between the coarse grid's nodes, or whose
+    /// cell of constant clay needed none.
+    pub interpolated: usize,
 }
 
 impl std::ops::Add for LatticeStats {
@@ -224,6 +227,7 @@ impl std::ops::Add for LatticeStats {
             searched: self.searched + o.searched,
             moved: self.moved + o.moved,
             newton_iterations: self.newton_iterations + o.newton_iterations,
+            interpolated: self.interpolated + o.interpolated,
         }
     }
 }
@@ -407,8 +411,11 @@ pub const COARSE_STRIDE: i32 = 4;
 #[derive(Debug)]
 struct CoarseMap {
     counts: IVec3,
-    /// The offset of the box's last point from its first: node `n` lies at
-    /// `min(n · COARSE_STRIDE, last)`, so that the last nodes lie on the box's far faces.
+    /// The lattice point of the first node: the grid covers the lattice's box (where the
+    /// mapping is smooth) within the box of points evaluated.
+    origin: IVec3,
+    /// The offset of the grid's last point from its first: node `n` lies at
+    /// `origin + min(n · COARSE_STRIDE, last)`, so that the last nodes lie on its far faces.
     last: IVec3,
     nodes: Vec<Option<[f64; 3]>>,
     /// Per cell (`counts − 1` per axis): the density of every point in it, when every read
@@ -418,26 +425,32 @@ struct CoarseMap {
 }
 
 impl CoarseMap {
-    /// For the row of points at offset `(0, y, z)` from the box's first point: per node
-    /// column, the parameters interpolated in `y` and `z` from the four nodes around the
-    /// row (`None` where one of them has none).
-    fn row_edges(&self, offset: IVec3) -> Vec<Option<[f64; 3]>> {
-        let (cy, ty) = self.cell(1, offset.y);
-        let (cz, tz) = self.cell(2, offset.z);
+    /// For the row of lattice points `(·, y, z)` of `p`: per node column, the parameters
+    /// interpolated in `y` and `z` from the four nodes around the row (`None` where one of
+    /// them has none); `None` for a row outside the grid.
+    fn row_edges(&self, p: IVec3) -> Option<Vec<Option<[f64; 3]>>> {
+        let q = p - self.origin;
+        if q.y < 0 || q.z < 0 || q.y > self.last.y || q.z > self.last.z {
+            return None;
+        }
+        let (cy, ty) = self.cell(1, q.y);
+        let (cz, tz) = self.cell(2, q.z);
         let (nx, ny) = (self.counts.x as usize, self.counts.y as usize);
         let node = |x: usize, y: i32, z: i32| self.nodes[x + nx * (y as usize + ny * z as usize)];
-        (0..nx)
-            .map(|x| {
-                let corners =
-                    [node(x, cy, cz), node(x, cy + 1, cz), node(x, cy, cz + 1), node(x, cy + 1, cz + 1)];
-                let [a, b, c, d] = [corners[0]?, corners[1]?, corners[2]?, corners[3]?];
-                Some(std::array::from_fn(|i| {
-                    let low = a[i] + (b[i] - a[i]) * ty;
-                    let high = c[i] + (d[i] - c[i]) * ty;
-                    low + (high - low) * tz
-                }))
-            })
-            .collect()
+        Some(
+            (0..nx)
+                .map(|x| {
+                    let corners =
+                        [node(x, cy, cz), node(x, cy + 1, cz), node(x, cy, cz + 1), node(x, cy + 1, cz + 1)];
+                    let [a, b, c, d] = [corners[0]?, corners[1]?, corners[2]?, corners[3]?];
+                    Some(std::array::from_fn(|i| {
+                        let low = a[i] + (b[i] - a[i]) * ty;
+                        let high = c[i] + (d[i] - c[i]) * ty;
+                        low + (high - low) * tz
+                    }))
+                })
+                .collect(),
+        )
     }
 
     /// The offset of node `n` along `axis`.
@@ -454,19 +467,26 @@ impl CoarseMap {
         (c, (o - a) as f64 / (b - a).max(1) as f64)
     }
 
-    /// The constant density of the cell holding the point at `offset + (x, 0, 0)` from the
-    /// box's first, if it has one.
+    /// The constant density of the cell holding lattice point `p`, if it has one.
     #[inline]
-    fn constant_at(&self, offset: IVec3, x: i32) -> Option<f32> {
-        let c = IVec3::new(self.cell(0, x).0, self.cell(1, offset.y).0, self.cell(2, offset.z).0);
+    fn constant_at(&self, p: IVec3) -> Option<f32> {
+        let q = p - self.origin;
+        if q.cmplt(IVec3::ZERO).any() || q.cmpgt(self.last).any() {
+            return None;
+        }
+        let c = IVec3::new(self.cell(0, q.x).0, self.cell(1, q.y).0, self.cell(2, q.z).0);
         let cells = self.counts - IVec3::ONE;
         self.constant[(c.x + cells.x * (c.y + cells.y * c.z)) as usize]
     }
 
-    /// The parameters of the row's point `x` (from the box's first), from `edges`.
+    /// The parameters at lattice point `(x, ·, ·)` of the row whose `edges` are given.
     #[inline]
     fn interpolate(&self, edges: &[Option<[f64; 3]>], x: i32) -> Option<[f64; 3]> {
-        let (c, t) = self.cell(0, x);
+        let q = x - self.origin.x;
+        if q < 0 || q > self.last.x {
+            return None;
+        }
+        let (c, t) = self.cell(0, q);
         let (a, b) = (edges[c as usize]?, edges[c as usize + 1]?);
         Some(std::array::from_fn(|i| a[i] + (b[i] - a[i]) * t))
     }
@@ -912,14 +932,15 @@ impl Lattice {
         let eval_row = |row: usize, out: &mut [f32], mut colour: Option<&mut [Colour]>| {
             let start = row_of(row);
             let mut stats = LatticeStats { points: nx, ..LatticeStats::default() };
-            let edges = coarse.as_ref().map(|c| c.row_edges(start - lo));
+            let edges = coarse.as_ref().and_then(|c| c.row_edges(start));
             let mut previous: [Option<Uvw>; 2] = [None, None];
             for (x, d) in out.iter_mut().enumerate() {
                 let p = start + IVec3::new(x as i32, 0, 0);
                 let own = [p.x as f64, p.y as f64, p.z as f64];
                 // A cell of constant clay: its value, and no colour to find but the default.
-                if let Some(v) = coarse.as_ref().and_then(|c| c.constant_at(start - lo, x as i32)) {
+                if let Some(v) = coarse.as_ref().and_then(|c| c.constant_at(p)) {
                     if v == 0.0 || colour.is_none() {
+                        stats.interpolated += 1;
                         *d = v;
                         if let Some(out) = colour.as_deref_mut() {
                             out[x] = DEFAULT_COLOUR;
@@ -928,9 +949,10 @@ impl Lattice {
                     }
                 }
                 let interpolated = match (&coarse, &edges) {
-                    (Some(c), Some(e)) => c.interpolate(e, x as i32).map(Uvw),
+                    (Some(c), Some(e)) => c.interpolate(e, p.x).map(Uvw),
                     _ => None,
                 };
+                stats.interpolated += usize::from(interpolated.is_some());
                 let read = match interpolated {
                     Some(uvw) => {
                         let x = t.index_to_world(p.as_vec3());
@@ -1015,10 +1037,17 @@ impl Lattice {
     fn coarse_map(&self, lo: IVec3, dims: IVec3) -> (Option<CoarseMap>, LatticeStats) {
         let s = COARSE_STRIDE;
         let state = self.state();
-        if state.at_rest || dims.min_element() < 2 * s {
+        // The grid covers the lattice's box within the points evaluated: outside the box the
+        // mapping has no preimage or meets the clay outside, and is found point by point.
+        let t = &self.transform;
+        let region = self.spec.region;
+        let box_lo = t.world_to_index(region.min).ceil().as_ivec3();
+        let box_hi = t.world_to_index(region.max).floor().as_ivec3();
+        let lo = lo.max(box_lo);
+        let last = (lo + dims - IVec3::ONE).min(box_hi) - lo;
+        if state.at_rest || last.min_element() < 2 * s {
             return (None, LatticeStats::default());
         }
-        let last = dims - IVec3::ONE;
         let counts = (last + IVec3::splat(s - 1)) / s + IVec3::ONE;
         let (cx, cy) = (counts.x as usize, counts.y as usize);
         let mut nodes = vec![None; cx * cy * counts.z as usize];
@@ -1042,8 +1071,6 @@ impl Lattice {
             })
             .reduce(LatticeStats::default, |a, b| a + b);
         let cells = counts - IVec3::ONE;
-        let region = self.spec.region;
-        let t = &self.transform;
         let read_of = |u: [f64; 3]| -> [f64; 3] {
             std::array::from_fn(|a| {
                 let world = region.min[a] as f64 + region.size()[a] as f64 * u[a];
@@ -1073,7 +1100,7 @@ impl Lattice {
                 self.source.constant_over(lo, hi)
             })
             .collect();
-        (Some(CoarseMap { counts, last, nodes, constant }), stats)
+        (Some(CoarseMap { counts, origin: lo, last, nodes, constant }), stats)
     }
 
     /// Evaluates the deformed clay over `world` and writes it into `field`, growing the copy
