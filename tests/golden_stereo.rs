@@ -99,12 +99,12 @@ fn tool_eraser_matches_golden() {
 
 #[test]
 fn tool_heat_gun_matches_golden() {
-    golden_tool_case("tool-heat-gun");
+    golden_rate_tool_case("tool-heat-gun");
 }
 
 #[test]
 fn tool_build_matches_golden() {
-    golden_tool_case("tool-build");
+    golden_rate_tool_case("tool-build");
 }
 
 #[test]
@@ -146,6 +146,20 @@ fn tool_freeform_matches_golden() {
 /// (160×120 per eye).
 fn golden_tool_case(case: &str) {
     golden_case(case, &format!("scenes/tests/{case}.toml"), None);
+}
+
+/// The largest mean error of the held (rate) tools' pictures, levels: rendered on an Intel
+/// Xeon host, the pictures blessed on an AMD EPYC one differ by one level over about half their
+/// pixels (mean 0.46, 99th percentile 1), the same before and after the lattice work; every
+/// other golden matches both hosts within the common bound. The 99th percentile's bound of 4
+/// levels still catches any change of shape.
+const RATE_TOOL_MAX_MEAN_ERROR: f64 = 0.6;
+
+fn golden_rate_tool_case(case: &str) {
+    let (left, right, _) = render(case, &format!("scenes/tests/{case}.toml"), None);
+    assert_ne!(left, right, "{case}: the two eyes must differ");
+    common::check_against_golden_within(case, "left", &left, RATE_TOOL_MAX_MEAN_ERROR);
+    common::check_against_golden_within(case, "right", &right, RATE_TOOL_MAX_MEAN_ERROR);
 }
 
 /// The stage seen from inside fills both eyes: no pixel of the magenta background may show
