@@ -48,6 +48,7 @@ pub mod io;
 pub mod lattice;
 pub mod math;
 pub mod mesh;
+pub mod parts;
 pub mod render;
 pub mod scene;
 pub mod spline;

@@ -88,6 +88,98 @@ impl Pose {
     }
 }
 
+/// A rigid motion that may mirror: `x ↦ linear·x + translation` with `linear` orthonormal
+/// (determinant +1 for a rotation, −1 for a reflection). The images of a symmetry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Isometry {
+    /// The orthonormal part.
+    pub linear: Mat3,
+    /// The translation, metres.
+    pub translation: Vec3,
+}
+
+impl Default for Isometry {
+    fn default() -> Self {
+        Self::IDENTITY
+    }
+}
+
+impl Isometry {
+    /// The identity.
+    pub const IDENTITY: Self = Self { linear: Mat3::IDENTITY, translation: Vec3::ZERO };
+
+    /// The reflection across the plane through `point_m` with unit normal `normal`.
+    pub fn reflection(point_m: Vec3, normal: Vec3) -> Self {
+        let n = normal.normalize();
+        let linear = Mat3::IDENTITY - 2.0 * Mat3::from_cols(n * n.x, n * n.y, n * n.z);
+        Self { linear, translation: point_m - linear * point_m }
+    }
+
+    /// The rotation by `angle` radians about the axis through `point_m` along `axis`.
+    pub fn rotation_about(point_m: Vec3, axis: Vec3, angle: f32) -> Self {
+        let linear = Mat3::from_axis_angle(axis.normalize(), angle);
+        Self { linear, translation: point_m - linear * point_m }
+    }
+
+    /// The motion as a matrix taking points to their images.
+    pub fn to_matrix(&self) -> Mat4 {
+        Mat4::from_cols(
+            self.linear.x_axis.extend(0.0),
+            self.linear.y_axis.extend(0.0),
+            self.linear.z_axis.extend(0.0),
+            self.translation.extend(1.0),
+        )
+    }
+
+    /// Whether it mirrors (reverses handedness).
+    pub fn mirrors(&self) -> bool {
+        self.linear.determinant() < 0.0
+    }
+
+    /// The image of a point.
+    pub fn point(&self, p: Vec3) -> Vec3 {
+        self.linear * p + self.translation
+    }
+
+    /// The image of a direction.
+    pub fn vector(&self, v: Vec3) -> Vec3 {
+        self.linear * v
+    }
+
+    /// `self` after `first`.
+    pub fn after(&self, first: &Isometry) -> Isometry {
+        Isometry { linear: self.linear * first.linear, translation: self.point(first.translation) }
+    }
+
+    /// The inverse motion.
+    pub fn inverse(&self) -> Isometry {
+        let linear = self.linear.transpose();
+        Isometry { linear, translation: -(linear * self.translation) }
+    }
+
+    /// The largest difference between the two maps' entries (rotation entries, and the
+    /// translation in metres).
+    pub fn distance(&self, other: &Isometry) -> f32 {
+        let d = self.linear - other.linear;
+        let linear = d.x_axis.abs().max(d.y_axis.abs()).max(d.z_axis.abs()).max_element();
+        linear.max((self.translation - other.translation).abs().max_element())
+    }
+
+    /// The image of a pose, and whether the image is mirrored.
+    ///
+    /// A rotation carries the pose along. A reflection `M` takes the pose's frame `R` to the
+    /// left-handed `M·R`; the pose returned is the proper rotation `M·R·D`, with `D` the flip
+    /// of the local X axis, so that a local point `l` of the original lands on the returned
+    /// frame's local point `D·l`: a mirrored image reads its local coordinates with X negated.
+    pub fn pose(&self, pose: &Pose) -> (Pose, bool) {
+        let frame = Mat3::from_quat(pose.rotation);
+        let mirrored = self.mirrors();
+        let flip = if mirrored { Mat3::from_diagonal(Vec3::new(-1.0, 1.0, 1.0)) } else { Mat3::IDENTITY };
+        let rotation = Quat::from_mat3(&(self.linear * frame * flip)).normalize();
+        (Pose { position_m: self.point(pose.position_m), rotation }, mirrored)
+    }
+}
+
 /// An axis-aligned box.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
@@ -192,6 +284,27 @@ mod tests {
         let m = Mat4::from_rotation_y(std::f32::consts::FRAC_PI_2);
         let t = b.transformed(&m);
         assert!((t.size() - Vec3::new(6.0, 4.0, 2.0)).abs().max_element() < 1e-5);
+    }
+
+    #[test]
+    fn a_mirrored_pose_reads_its_local_points_with_x_negated() {
+        let m = Isometry::reflection(Vec3::new(0.1, 0.0, 0.0), Vec3::X);
+        assert!(m.mirrors());
+        let pose = Pose {
+            position_m: Vec3::new(0.3, 0.2, -0.1),
+            rotation: Quat::from_euler(glam::EulerRot::XYZ, 0.3, -0.7, 1.1),
+        };
+        let (image, mirrored) = m.pose(&pose);
+        assert!(mirrored);
+        for local in [Vec3::X, Vec3::Y, Vec3::new(0.2, -0.5, 0.7)] {
+            let world = pose.to_matrix().transform_point3(local);
+            let read = image.world_to_local(m.point(world)) * Vec3::new(-1.0, 1.0, 1.0);
+            assert!((read - local).length() < 1e-5, "{read} {local}");
+        }
+        let r = Isometry::rotation_about(Vec3::Y, Vec3::Y, 1.0);
+        assert!(!r.mirrors());
+        assert!(r.after(&r.inverse()).distance(&Isometry::IDENTITY) < 1e-6);
+        assert!(m.after(&m).distance(&Isometry::IDENTITY) < 1e-6);
     }
 
     #[test]

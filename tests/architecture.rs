@@ -91,6 +91,20 @@ const RULES: &[(&str, &[&str])] = &[
         ],
     ),
     (
+        "parts",
+        &[
+            "crate::render",
+            "crate::xr",
+            "crate::input",
+            "crate::app",
+            "crate::scene",
+            "ash",
+            "openxr",
+            "hidapi",
+            "gilrs",
+        ],
+    ),
+    (
         "render",
         &[
             "crate::field",

@@ -77,6 +77,18 @@ fn toothpaste_stroke_matches_golden() {
     golden_case("toothpaste", "scenes/tests/toothpaste.toml", None);
 }
 
+/// A stroke mirrored across x = 0, with the mirror plane drawn faintly through the clay.
+#[test]
+fn mirror_stroke_matches_golden() {
+    golden_case("mirror-stroke", "scenes/tests/mirror-stroke.toml", None);
+}
+
+/// A groove carved five times about the vertical axis, which is drawn as a line.
+#[test]
+fn radial_stroke_matches_golden() {
+    golden_case("radial-stroke", "scenes/tests/radial-stroke.toml", None);
+}
+
 /// The same stroke with a tool editing the level its size chooses, on a lattice fine enough
 /// that it edits level 2: coarse clay meshed on the finest lattice, closed and in the same
 /// place as the fine stroke. Its highlights show the level's 2 mm cells as a faint grid: the

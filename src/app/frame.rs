@@ -1,7 +1,7 @@
 //! Building the renderer's per-frame snapshot from the scene and the playback state.
 
 use super::glyphs::tool_glyph;
-use crate::math::Vec4;
+use crate::math::{Aabb, Vec3, Vec4};
 use crate::render::{Frame, Light, Material, Stage};
 use crate::scene::{Attachment, Scene, SceneLight, SceneToolShape};
 use crate::tool::ToolShape;
@@ -14,6 +14,32 @@ pub fn lattice_glyphs(playback: &super::playback::Playback<'_>) -> Vec<crate::re
         .filter(|(scene, _)| scene.show)
         .flat_map(|(_, lattice)| super::glyphs::lattice_glyphs(lattice.volume(), iso))
         .collect()
+}
+
+/// The glyphs of the symmetry `playback`'s strokes act through, over the scene's initial
+/// clay (or its stage, or 20 cm about the symmetry's centre), and the images of the scripted
+/// hands' tools; none without symmetry.
+pub fn symmetry_glyphs(playback: &super::playback::Playback<'_>) -> Vec<crate::render::ToolGlyph> {
+    let symmetry = playback.symmetry();
+    if symmetry.is_none() {
+        return Vec::new();
+    }
+    let scene = playback.scene();
+    let clay = scene.clay.iter().map(|c| c.solid.bounds()).reduce(|a, b| a.union(&b));
+    let around = clay
+        .map(|b| b.expanded(0.15 * b.size().max_element()))
+        .or(scene.stage.map(|s| Aabb { min: s.min_m, max: s.max_m }))
+        .unwrap_or(Aabb::from_centre_half(symmetry.frame.position_m, Vec3::splat(0.1)));
+    let mut glyphs = super::glyphs::symmetry_glyphs(symmetry, around);
+    // The scripted hands' tools at their images, fainter than the tools themselves.
+    for (tool, pose) in playback.hands() {
+        let t = &scene.tools[tool];
+        let colour = Vec4::from(t.colour).truncate().extend(0.5 * t.glyph_opacity);
+        for image in playback.images().iter().skip(1) {
+            glyphs.push(tool_glyph(&scene_tool_shape(&t.shape), image.pose(&pose).0, t.scale, colour));
+        }
+    }
+    glyphs
 }
 
 /// Resolves the scene's lights into world space for the current viewer.
@@ -91,7 +117,6 @@ pub fn build_frame(scene: &Scene, hands: &[(usize, crate::math::Pose)], show_too
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::Vec3;
 
     #[test]
     fn viewer_lights_follow_the_viewer() {

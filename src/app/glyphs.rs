@@ -91,11 +91,14 @@ pub enum Button {
     Save,
     /// Save and end the headset session.
     Quit,
+    /// Step the symmetry: off, mirror X, mirror X and Z, radial 6, kaleidoscope, off.
+    Symmetry,
 }
 
 impl Button {
     /// The buttons in their row, from the grip's −X to its +X.
-    pub const ALL: [Button; 5] = [Button::Undo, Button::Redo, Button::Recentre, Button::Save, Button::Quit];
+    pub const ALL: [Button; 6] =
+        [Button::Symmetry, Button::Undo, Button::Redo, Button::Recentre, Button::Save, Button::Quit];
 
     /// What the button is called.
     pub fn name(self) -> &'static str {
@@ -105,13 +108,14 @@ impl Button {
             Button::Recentre => "recentre",
             Button::Save => "save",
             Button::Quit => "quit",
+            Button::Symmetry => "symmetry",
         }
     }
 
     /// The button's centre in the room for the palette of the hand at `grip`.
     pub fn centre(self, grip: Pose) -> Vec3 {
         let i = Button::ALL.iter().position(|b| *b == self).unwrap_or(0) as f32;
-        let x = (i - 2.0) * BUTTON_STEP_M;
+        let x = (i - 0.5 * (Button::ALL.len() - 1) as f32) * BUTTON_STEP_M;
         grip.position_m + grip.rotation * Vec3::new(x, PALETTE_ABOVE_M, -BUTTON_AHEAD_M)
     }
 
@@ -134,6 +138,7 @@ impl Button {
             Button::Recentre => (GlyphShape::Torus { tube: 0.35 }, [0.3, 0.5, 1.0]),
             Button::Save => (GlyphShape::Box, [0.3, 0.85, 0.35]),
             Button::Quit => (GlyphShape::Box, [0.9, 0.2, 0.2]),
+            Button::Symmetry => (GlyphShape::Cylinder, [0.45, 0.7, 1.0]),
         };
         let (size, opacity) = if pointed { (1.3 * BUTTON_RADIUS_M, 1.0) } else { (BUTTON_RADIUS_M, 0.75) };
         // The ring faces the viewer: its axis along the grip's Z.
@@ -152,7 +157,7 @@ impl Button {
 }
 
 /// The palette's buttons for the hand at `grip`, `pointed` drawn as pointed at.
-pub fn buttons(grip: Pose, pointed: Option<Button>) -> [ToolGlyph; 5] {
+pub fn buttons(grip: Pose, pointed: Option<Button>) -> [ToolGlyph; 6] {
     Button::ALL.map(|b| b.glyph(grip, pointed == Some(b)))
 }
 
@@ -227,6 +232,29 @@ pub fn lattice_glyphs(volume: &crate::spline::SplineVolume, iso: f64) -> Vec<Too
                 }
             }
         }
+    }
+    glyphs
+}
+
+/// The colour of the symmetry's planes and axis: a faint cool blue.
+pub const SYMMETRY_COLOUR: Vec4 = Vec4::new(0.45, 0.7, 1.0, 0.14);
+
+/// The glyphs of a symmetry over the world box `around`: each mirror plane as a thin square
+/// through the symmetry's centre spanning the box, the radial axis as a line through it.
+pub fn symmetry_glyphs(symmetry: &crate::parts::Symmetry, around: crate::math::Aabb) -> Vec<ToolGlyph> {
+    let half = 0.5 * around.size().max_element().max(1e-3);
+    // The square lies where the box is, moved onto the plane.
+    let mut glyphs = Vec::new();
+    for (point, normal) in symmetry.planes() {
+        let middle = around.centre() - normal * normal.dot(around.centre() - point);
+        let turn = crate::math::Quat::from_rotation_arc(Vec3::Z, normal);
+        let model = Mat4::from_scale_rotation_translation(Vec3::new(half, half, 0.002 * half), turn, middle);
+        glyphs.push(ToolGlyph { shape: GlyphShape::Box, model, colour: SYMMETRY_COLOUR });
+    }
+    if let Some((point, axis)) = symmetry.radial_axis() {
+        let middle = point + axis * axis.dot(around.centre() - point);
+        let colour = SYMMETRY_COLOUR.truncate().extend(0.5);
+        glyphs.push(segment(middle - axis * 1.2 * half, middle + axis * 1.2 * half, 0.006 * half, colour));
     }
     glyphs
 }
@@ -352,8 +380,9 @@ mod tests {
             assert!(local.z < -PALETTE_AHEAD_M - 2.0 * BUTTON_REACH_M, "{local}");
         }
         let pointed = buttons(grip, Some(Button::Save));
-        assert_eq!(pointed[3].colour.w, 1.0);
-        assert!(pointed.iter().filter(|g| g.colour.w < 1.0).count() == 4);
+        let save = Button::ALL.iter().position(|b| *b == Button::Save).unwrap();
+        assert_eq!(pointed[save].colour.w, 1.0);
+        assert!(pointed.iter().filter(|g| g.colour.w < 1.0).count() == Button::ALL.len() - 1);
         // Between two buttons, the nearer one is pointed at.
         let between = Button::Undo.centre(grip).lerp(Button::Redo.centre(grip), 0.4);
         assert_eq!(Button::at(grip, between), Some(Button::Undo));

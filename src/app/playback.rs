@@ -11,7 +11,8 @@ use std::sync::Arc;
 
 use crate::clay::{window_around, Clay, ClayParams, ClayTool};
 use crate::lattice::{volume_at, Lattice, LatticeError};
-use crate::math::{Aabb, Vec3};
+use crate::math::{Aabb, Isometry, Vec3};
+use crate::parts::Symmetry;
 use crate::scene::{Hand, HandState, Key, Scene, SceneLattice, SceneTool, SceneToolShape};
 use crate::tool::{
     rasterize_solid, rasterize_solid_in_slabs, Action, Freeform, Stroke, Tool, ToolFrame, ToolShape,
@@ -25,8 +26,9 @@ const CLAY_MARGIN_VOXELS: i32 = 12;
 #[derive(Debug)]
 struct Push {
     clay: Clay,
-    /// Per clay tool: the hand holding it (`None`: the table) and the scene tool index.
-    bodies: Vec<(Option<Hand>, usize)>,
+    /// Per clay tool: the hand holding it (`None`: the table), the scene tool index, and the
+    /// symmetry's image of the hand it is (the identity for the hand's own tool).
+    bodies: Vec<(Option<Hand>, usize, Isometry)>,
 }
 
 /// The clay and the hands' strokes at the current time of a scene's timeline.
@@ -49,6 +51,9 @@ pub struct Playback<'s> {
     live: Option<[Option<HandState>; 2]>,
     /// Per scene lattice: still to open, open, or applied.
     lattices: Vec<LatticeState>,
+    /// The symmetry strokes and pushes act through, and its images.
+    symmetry: Symmetry,
+    images: Vec<Isometry>,
 }
 
 /// Where a scene's lattice stands on the timeline.
@@ -134,6 +139,8 @@ impl<'s> Playback<'s> {
             autosave,
             live: None,
             lattices: scene.lattices.iter().map(|_| LatticeState::Waiting).collect(),
+            symmetry: scene.symmetry,
+            images: scene.symmetry.images(),
         };
         // Keys at time 0 with their action on stamp at once.
         playback.step_to(0.0);
@@ -282,7 +289,7 @@ impl<'s> Playback<'s> {
                     self.field.begin_stroke();
                     self.owns_stroke = true;
                 }
-                let mut s = Stroke::new(self.tools[during.tool].clone());
+                let mut s = Stroke::with_images(self.tools[during.tool].clone(), &self.images);
                 s.advance(&mut self.field, at_start.pose, 0.0);
                 *stroke = Some((during.tool, s));
             }
@@ -369,22 +376,35 @@ impl<'s> Playback<'s> {
         // A scripted support holds while its hand holds it still; once the hand moves it or
         // lets go, it holds no more. A live hand (a controller) is never perfectly still: its
         // support stays where it was put for as long as the hand keeps it on.
+        let let_go: Vec<(Hand, usize)> = bodies
+            .iter()
+            .enumerate()
+            .filter_map(|(i, &(hand, tool, image))| {
+                let hand = hand?;
+                (image == Isometry::IDENTITY
+                    && self.tools[tool].action == Action::Support
+                    && !self.held_still(hand, tool, now[i], previous, t))
+                .then_some((hand, tool))
+            })
+            .collect();
+        // A support's images go with it.
         let released: Vec<usize> = bodies
             .iter()
             .enumerate()
-            .filter_map(|(i, &(hand, tool))| {
-                let hand = hand?;
-                (self.tools[tool].action == Action::Support
-                    && !self.held_still(hand, tool, now[i], previous, t))
-                .then_some(i)
-            })
+            .filter_map(|(i, &(hand, tool, _))| let_go.contains(&(hand?, tool)).then_some(i))
             .collect();
         let poses: Vec<Pose> = bodies
             .iter()
             .zip(now)
-            .map(|(&(hand, tool), now)| {
+            .map(|(&(hand, tool, image), now)| {
                 let placed = self.live.is_some() && self.tools[tool].action == Action::Support;
-                hand.filter(|_| !placed).and_then(|h| self.state_at(h, t)).map_or(now, |s| s.pose)
+                hand.filter(|_| !placed).and_then(|h| self.state_at(h, t)).map_or(now, |s| {
+                    if image == Isometry::IDENTITY {
+                        s.pose
+                    } else {
+                        image.pose(&s.pose).0
+                    }
+                })
             })
             .collect();
         let Some(push) = self.push.as_mut() else { return };
@@ -498,8 +518,13 @@ impl<'s> Playback<'s> {
                 _ => continue,
             };
             let shape = crate::clay::ClayShape::Tool { shape: tool.shape.clone(), scale: tool.scale };
-            tools.push(ClayTool { shape, pose: state.pose, support });
-            bodies.push((Some(hand), state.tool));
+            let first = reach.len();
+            for &image in &self.images {
+                let (pose, mirrored) =
+                    if image == Isometry::IDENTITY { (state.pose, false) } else { image.pose(&state.pose) };
+                tools.push(ClayTool { shape: shape.clone(), pose, support, mirrored });
+                bodies.push((Some(hand), state.tool, image));
+            }
             // The window holds every pose this hand's keys give the tool.
             let half = tool.half_extents_m() / tool.scale + Vec3::splat(scene.voxel_size_m * 4.0);
             for key in self.keys(hand).iter().filter(|k| k.tool == state.tool) {
@@ -511,10 +536,15 @@ impl<'s> Playback<'s> {
                 reach.push(ToolFrame::new(state.pose, tool.scale).world_bounds(room));
             }
             reach.push(ToolFrame::new(state.pose, tool.scale).world_bounds(half));
+            // The images' paths are the images of the hand's.
+            let own: Vec<Aabb> = reach[first..].to_vec();
+            for image in self.images.iter().skip(1) {
+                reach.extend(own.iter().map(|b| b.transformed(&image.to_matrix())));
+            }
         }
         if let Some(y) = scene.virtual_clay.table_y_m {
             tools.push(ClayTool::table(Vec3::new(0.0, y, 0.0)));
-            bodies.push((None, usize::MAX));
+            bodies.push((None, usize::MAX, Isometry::IDENTITY));
         }
         let (mut lo, mut hi) = window_around(&self.field, &reach, CLAY_MARGIN_VOXELS);
         if let Some(y) = scene.virtual_clay.table_y_m {
@@ -546,6 +576,22 @@ impl<'s> Playback<'s> {
         &self.tools
     }
 
+    /// The symmetry the hands' strokes and pushes act through.
+    pub fn symmetry(&self) -> &Symmetry {
+        &self.symmetry
+    }
+
+    /// Changes the symmetry: the strokes and pushes that start from now on act through it.
+    pub fn set_symmetry(&mut self, symmetry: Symmetry) {
+        self.symmetry = symmetry;
+        self.images = symmetry.images();
+    }
+
+    /// The images of the symmetry, the identity first.
+    pub fn images(&self) -> &[Isometry] {
+        &self.images
+    }
+
     /// The stroke a hand is drawing, if its action is on.
     pub fn stroke(&self, hand: Hand) -> Option<&Stroke> {
         self.strokes[slot(hand)].as_ref().map(|(_, s)| s)
@@ -563,7 +609,7 @@ impl<'s> Playback<'s> {
         let state = self.state_at(hand, self.time_s)?;
         let placed = self.live.is_some() && state.active && self.tools[state.tool].action == Action::Support;
         let put = self.push.as_ref().filter(|_| placed).and_then(|push| {
-            let body = push.bodies.iter().position(|&b| b == (Some(hand), state.tool))?;
+            let body = push.bodies.iter().position(|&b| b == (Some(hand), state.tool, Isometry::IDENTITY))?;
             push.clay.poses().get(body).copied()
         });
         Some((state.tool, put.unwrap_or(state.pose)))

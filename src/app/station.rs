@@ -44,6 +44,7 @@ use crate::io::autosave::{Autosave, AutosaveConfig};
 use crate::io::StoredView;
 use crate::math::{Pose, Quat, Vec2, Vec3, Vec4};
 use crate::mesh::Mesher;
+use crate::parts::SymmetrySwitch;
 use crate::render::{Light, Presented, Renderer, RendererDesc, ValidationLog};
 use crate::scene::ScreenCalibration;
 use crate::scene::{line_column, FileError, Scene};
@@ -484,6 +485,8 @@ pub struct Station<'s> {
     tracked_for_s: Option<f32>,
     /// Each eye gets the other's image.
     swap_eyes: bool,
+    /// The symmetry the desk tool and the scene's hands act through.
+    symmetry: SymmetrySwitch,
     /// The interlace parity is the calibration's flipped.
     parity_flipped: bool,
     /// The monitor's resolution as the window system gives it (when the calibration does not).
@@ -599,6 +602,7 @@ impl<'s> Station<'s> {
             monitor_px: None,
             tracked_for_s: None,
             swap_eyes: scene.display.swap_eyes,
+            symmetry: SymmetrySwitch::new(scene.symmetry),
             parity_flipped: false,
             head: None,
             auto_convergence: None,
@@ -950,6 +954,14 @@ impl<'s> Station<'s> {
                     false => "eyes as rendered: the left eye's image goes to the left eye".to_owned(),
                 });
             }
+            StationAction::ToggleSymmetry | StationAction::NextSymmetry => {
+                let symmetry = match action {
+                    StationAction::ToggleSymmetry => self.symmetry.toggle(),
+                    _ => self.symmetry.next_choice(),
+                };
+                self.playback.set_symmetry(symmetry);
+                self.messages.push(format!("symmetry {}", symmetry.describe()));
+            }
             StationAction::FlipParity => {
                 self.parity_flipped = !self.parity_flipped;
                 let parity = self.display().1;
@@ -1048,12 +1060,16 @@ impl<'s> Station<'s> {
         let voxel_mm = (field.level_transform(level).voxel_size_m * 10_000.0).round() / 10.0;
         let mut lines = vec![
             format!(
-                "tool {}: {} {} mm, {}, {} mm voxels",
+                "tool {}: {} {} mm, {}, {} mm voxels{}",
                 self.tool_index + 1,
                 shape_name(&self.desk_tool.shape),
                 (self.desk_tool.size_m() * 1000.0).round(),
                 self.desk_tool.action.name(),
-                voxel_mm
+                voxel_mm,
+                match self.playback.symmetry() {
+                    s if s.is_none() => String::new(),
+                    s => format!(", {}", s.describe()),
+                }
             ),
             format!(
                 "{}: convergence {:.2} m, eyes {:.0} mm",
@@ -1509,11 +1525,12 @@ impl<'s> Station<'s> {
         self.playback.advance_to(t, |_| {});
         let applying = self.holding(StationAction::Apply) || self.device_apply;
         let acting = self.acting_tool();
+        let images = self.playback.images().to_vec();
         let field = self.playback.field_mut();
         if applying {
             if self.stroke.is_none() {
                 field.begin_stroke();
-                let mut s = Stroke::new(acting);
+                let mut s = Stroke::with_images(acting, &images);
                 s.advance(field, pose, 0.0);
                 self.stroke = Some(s);
             }
@@ -1555,6 +1572,7 @@ impl<'s> Station<'s> {
         }
         let mut frame = build_frame(&self.view, &self.playback.hands(), true);
         frame.tools.extend(super::frame::lattice_glyphs(&self.playback));
+        frame.tools.extend(super::frame::symmetry_glyphs(&self.playback));
         if self.lights_follow_viewer {
             // The scene's lights, carried along with the viewer's turn about the target.
             let pivot = self.scene.rig.target_m;
@@ -1601,6 +1619,11 @@ impl<'s> Station<'s> {
         let tool = &self.desk_tool;
         let colour = Vec4::from(tool.colour).truncate().extend(0.35);
         frame.tools.push(tool_glyph(&tool.shape, pose, tool.scale, colour));
+        // Its images under the symmetry, fainter.
+        for image in self.playback.images().iter().skip(1) {
+            let ghost = colour.truncate().extend(0.5 * colour.w);
+            frame.tools.push(tool_glyph(&tool.shape, image.pose(&pose).0, tool.scale, ghost));
+        }
         let second = self.desk.poses.get(Target::SecondTool);
         if second != self.home.get(Target::SecondTool) {
             // The second tool, once a device has moved it: the desk tool's shape and size, in blue.
@@ -2044,6 +2067,7 @@ impl ApplicationHandler for WindowApp<'_, '_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::IVec3;
     use crate::mesh::remesh_dirty;
     use crate::stereo::BudgetMode;
 
@@ -2085,6 +2109,16 @@ mod tests {
     fn ball_scene() -> Scene {
         let text = "[[tool]]\nname = \"ball\"\nshape = \"sphere\"\nradius_m = 0.03\naction = \"add\"\n";
         Scene::parse(text, "ball", None).unwrap()
+    }
+
+    /// Holds the sculpt key for `frames` frames, then one frame released.
+    fn sculpt_for(station: &mut Station<'_>, frames: usize) {
+        station.key(KeyCode::Space, true);
+        for _ in 0..frames {
+            station.step(SCRIPTED_STEP_S, |_| {});
+        }
+        station.key(KeyCode::Space, false);
+        station.step(SCRIPTED_STEP_S, |_| {});
     }
 
     fn small_station(scene: &Scene) -> Station<'_> {
@@ -2176,6 +2210,42 @@ mod tests {
         }
         station.step(SCRIPTED_STEP_S, |_| {});
         assert!((station.view.rig.convergence_m - 0.5 * rig.far_m).abs() < 1e-4);
+    }
+
+    #[test]
+    fn the_symmetry_keys_mirror_the_desk_stroke_and_undo_takes_back_both_sides() {
+        let scene = ball_scene();
+        let mut station = small_station(&scene);
+        station.key(KeyCode::KeyY, true);
+        station.key(KeyCode::KeyY, false);
+        assert!(station.messages.iter().any(|m| m == "symmetry mirror x"), "{:?}", station.messages);
+        assert!(station.hud_lines()[0].ends_with(", mirror x"), "{:?}", station.hud_lines());
+        // A stroke to the right of the plane x = 0 through the scene's centre.
+        station.mouse.tool_position_m = Vec3::new(0.06, 0.0, 0.0);
+        let frame = station.step(SCRIPTED_STEP_S, |_| {});
+        assert!(frame.tools.len() >= 3, "the tool, its mirror image and the plane are drawn");
+        sculpt_for(&mut station, 3);
+        let field = station.playback.field();
+        let t = *field.transform();
+        let at = |x: f32| field.density(t.world_to_index(Vec3::new(x, 0.0, 0.0)).round().as_ivec3());
+        assert!(at(0.06) > 0.9 && at(-0.06) > 0.9, "both sides: {} {}", at(0.06), at(-0.06));
+        let reach = t.metres_to_voxels(0.1) as i32;
+        for i in (1..reach).step_by(3) {
+            for j in (-reach..reach).step_by(5) {
+                let (p, q) = (IVec3::new(i, j, 0), IVec3::new(-i, j, 0));
+                assert_eq!(field.density(p), field.density(q), "the sides differ at {p}");
+            }
+        }
+        station.act(StationAction::Undo);
+        assert_eq!(station.playback.field().mass(), 0.0, "one undo takes back both sides");
+        // Shift+Y steps on to mirror X and Z: four images of one stroke.
+        station.set_modifiers(Modifiers { shift: true, ..Modifiers::default() });
+        station.key(KeyCode::KeyY, true);
+        station.key(KeyCode::KeyY, false);
+        assert_eq!(station.playback.images().len(), 4);
+        station.set_modifiers(Modifiers::default());
+        station.key(KeyCode::KeyY, true);
+        assert_eq!(station.playback.images().len(), 1, "Y switches it off");
     }
 
     #[test]
@@ -2552,12 +2622,7 @@ mod tests {
                 station.key(KeyCode::KeyT, false);
             }
             let shown = station.hud_lines()[0].clone();
-            station.key(KeyCode::Space, true);
-            for _ in 0..3 {
-                station.step(SCRIPTED_STEP_S, |_| {});
-            }
-            station.key(KeyCode::Space, false);
-            station.step(SCRIPTED_STEP_S, |_| {});
+            sculpt_for(&mut station, 3);
             let field = station.playback.field();
             assert!(field.mass() > 0.0, "the stroke added clay");
             let levels: Vec<usize> =
@@ -2838,12 +2903,7 @@ mod tests {
         let scene = ball_scene();
         let blocked = dir.join("not-a-folder").join("ball.argile");
         let mut station = Station::new(&scene, KeyBindings::shipped(), (64, 64), blocked.clone());
-        station.key(KeyCode::Space, true);
-        for _ in 0..3 {
-            station.step(SCRIPTED_STEP_S, |_| {});
-        }
-        station.key(KeyCode::Space, false);
-        station.step(SCRIPTED_STEP_S, |_| {});
+        sculpt_for(&mut station, 3);
         let mass = station.field().mass();
         assert!(mass > 0.0);
 

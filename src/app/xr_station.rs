@@ -17,7 +17,9 @@
 //! - A / B (X / Y on the left hand): undo / redo;
 //! - left squeeze: grab the sculpture; both squeezes: turn, move and scale it;
 //! - left menu: recentre the sculpture in front of the head;
-//! - the palette's buttons (undo, redo, recentre, save, quit), in front of the left
+//! - left thumbstick click: symmetry on or off; X: the next symmetry (mirror X, mirror X and
+//!   Z, radial 6, a kaleidoscope); every stroke and push then acts at its images too;
+//! - the palette's buttons (symmetry, undo, redo, recentre, save, quit), in front of the left
 //!   controller: touch one with the right controller and pull the trigger. Every profile
 //!   has a trigger, so each of these is reachable on every controller.
 
@@ -34,6 +36,7 @@ use crate::io::autosave::AutosaveConfig;
 use crate::io::Sculpt;
 use crate::math::{Pose, Vec3};
 use crate::mesh::{MeshDiff, Mesher};
+use crate::parts::{Symmetry, SymmetrySwitch};
 use crate::render::{Frame, ToolGlyph};
 use crate::scene::{Hand, HandState as PlaybackHand, Scene};
 use crate::tool::{Action, Stroke, Tool, ToolShape, HAND_SIZE_SAMPLES};
@@ -168,6 +171,8 @@ pub struct XrSculptor<'s> {
     times: (f64, f64),
     /// The palette button the tool hand points at.
     pointed: Option<Button>,
+    /// The symmetry the strokes and pushes act through.
+    symmetry: SymmetrySwitch,
     /// The quit button was pressed.
     quit: bool,
     /// Messages for the user.
@@ -206,6 +211,7 @@ impl<'s> XrSculptor<'s> {
             scene_toml: None,
             times: (0.0, 0.0),
             pointed: None,
+            symmetry: SymmetrySwitch::new(scene.symmetry),
             quit: false,
             messages: Vec::new(),
             mesher: Mesher::default(),
@@ -325,6 +331,10 @@ impl<'s> XrSculptor<'s> {
                 Err(e) => self.messages.push(format!("cannot save the sculpt: {e:#}")),
             },
             Some(Button::Quit) => self.quit = true,
+            Some(Button::Symmetry) => {
+                let symmetry = self.symmetry.step();
+                self.set_symmetry(symmetry);
+            }
             None => {}
         }
         pointed.is_some()
@@ -367,6 +377,25 @@ impl<'s> XrSculptor<'s> {
         if input.hands[o].menu && !self.previous[o].menu {
             self.placement = recentred(self.scene.rig.target_m, input.head);
         }
+        let (other, other_before) = (input.hands[o], self.previous[o]);
+        if other.thumbstick_click && !other_before.thumbstick_click {
+            let symmetry = self.symmetry.toggle();
+            self.set_symmetry(symmetry);
+        } else if other.primary && !other_before.primary {
+            let symmetry = self.symmetry.next_choice();
+            self.set_symmetry(symmetry);
+        }
+    }
+
+    /// Strokes and pushes from now on act through `symmetry`; the user is told.
+    fn set_symmetry(&mut self, symmetry: Symmetry) {
+        self.playback.set_symmetry(symmetry);
+        self.messages.push(format!("symmetry {}", symmetry.describe()));
+    }
+
+    /// The symmetry strokes act through now.
+    pub fn symmetry(&self) -> &Symmetry {
+        self.playback.symmetry()
     }
 
     /// Grips: one hand drags and turns the sculpture, two also scale it.
@@ -442,12 +471,13 @@ impl<'s> XrSculptor<'s> {
         } else {
             self.touching = false;
         }
+        let images = self.playback.images().to_vec();
         let field = self.playback.field_mut();
         match (applying_stroke, tool_pose) {
             (true, Some(pose)) => {
                 if self.stroke.is_none() {
                     field.begin_stroke();
-                    let mut s = Stroke::new(tool.clone());
+                    let mut s = Stroke::with_images(tool.clone(), &images);
                     s.advance(field, pose, 0.0);
                     self.stroke = Some(s);
                 }
@@ -503,7 +533,13 @@ impl XrSculptor<'_> {
             };
             let colour = action_colour(&tool.action).extend(if applying { 0.6 } else { 0.35 });
             frame.tools.push(tool_glyph(&tool.shape, pose, tool.scale, colour));
+            // Its images under the symmetry, fainter, with the planes and the axis.
+            for image in self.playback.images().iter().skip(1) {
+                let ghost = colour.truncate().extend(0.5 * colour.w);
+                frame.tools.push(tool_glyph(&tool.shape, image.pose(&pose).0, tool.scale, ghost));
+            }
         }
+        frame.tools.extend(super::frame::symmetry_glyphs(&self.playback));
         let other = if self.dominant == 0 { Hand::Right } else { Hand::Left };
         if let Some((i, pose)) = self.playback.hand(other) {
             let t = &tools[i];
@@ -1031,6 +1067,45 @@ mod tests {
         let mut again = before.clone();
         crate::xr::carry_held(&mut again, &out.held, &out.placement, [l, r], [None, None]);
         assert_eq!(again, before);
+    }
+
+    #[test]
+    fn the_other_hands_thumbstick_and_the_palette_switch_the_symmetry_and_strokes_follow_it() {
+        let scene = ball();
+        let mut s = sculptor(&scene, false);
+        let rest = HandState::default();
+        let click = HandState { thumbstick_click: true, ..rest };
+        frame(&mut s, [click, rest]);
+        assert_eq!(s.symmetry().describe(), "mirror x");
+        assert!(s.messages.iter().any(|m| m == "symmetry mirror x"), "{:?}", s.messages);
+        // Carve right of the mirror plane: the left side is carved too.
+        let room = Vec3::new(0.02, 1.3, -0.41);
+        let p = s.placement.matrix().inverse().transform_point3(room);
+        let mirrored = Vec3::new(-p.x, p.y, p.z);
+        assert!(p.x > 0.01 && density(&s, p) > 0.5 && density(&s, mirrored) > 0.5, "{p}");
+        let carving = HandState { grip: at(room.x, room.y, room.z), trigger: 1.0, ..rest };
+        for _ in 0..3 {
+            frame(&mut s, [rest, carving]);
+        }
+        assert!(density(&s, p) < 0.5 && density(&s, mirrored) < 0.5, "both sides carved");
+        frame(&mut s, [rest, HandState { grip: at(0.0, 1.3, -0.2), ..rest }]);
+        frame(&mut s, [rest, HandState { grip: at(0.0, 1.3, -0.2), primary: true, ..rest }]);
+        assert!(density(&s, p) > 0.5 && density(&s, mirrored) > 0.5, "one undo restores both");
+        // X steps to the next symmetry; the palette's symmetry button steps on from there.
+        frame(&mut s, [HandState { primary: true, ..rest }, rest]);
+        assert_eq!(s.symmetry().describe(), "mirror x+z");
+        let palette = Pose { position_m: Vec3::new(-0.1, 1.6, -0.1), rotation: Quat::IDENTITY };
+        let on = HandState {
+            grip: Some(Pose { position_m: Button::Symmetry.centre(palette), ..palette }),
+            ..rest
+        };
+        let left = HandState { grip: Some(palette), ..rest };
+        frame(&mut s, [left, on]);
+        frame(&mut s, [left, HandState { trigger: 1.0, ..on }]);
+        assert_eq!(s.symmetry().describe(), "radial 6 about y");
+        // The mirror planes and the ghost tools are drawn while it is on.
+        let (f, _) = s.frame(&[left, rest], Some((Pose::default(), false)), &s.tool().clone());
+        assert_eq!(f.tools.len(), 1 + 5 + 1, "the tool, five images and the axis");
     }
 
     #[test]

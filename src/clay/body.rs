@@ -42,22 +42,30 @@ pub struct ClayTool {
     /// A support: held still, whatever poses the simulation is given for it; its cells anchor
     /// the clay (displacement 0) until it is let go ([`super::Clay::release`]).
     pub support: bool,
+    /// A mirror image of the tool (a symmetry's image): its poses read local X negated
+    /// (see [`ToolFrame::mirrored`]).
+    pub mirrored: bool,
 }
 
 impl ClayTool {
     /// A moving tool.
     pub fn pusher(shape: ToolShape, scale: Vec3, pose: Pose) -> Self {
-        Self { shape: ClayShape::Tool { shape, scale }, pose, support: false }
+        Self { shape: ClayShape::Tool { shape, scale }, pose, support: false, mirrored: false }
     }
 
     /// A static support of a tool's shape.
     pub fn support(shape: ToolShape, scale: Vec3, pose: Pose) -> Self {
-        Self { shape: ClayShape::Tool { shape, scale }, pose, support: true }
+        Self { shape: ClayShape::Tool { shape, scale }, pose, support: true, mirrored: false }
     }
 
     /// A table under the clay: the plane through `point_m` facing up (+Y), a support.
     pub fn table(point_m: Vec3) -> Self {
-        Self { shape: ClayShape::Plane, pose: Pose { position_m: point_m, ..Pose::default() }, support: true }
+        Self {
+            shape: ClayShape::Plane,
+            pose: Pose { position_m: point_m, ..Pose::default() },
+            support: true,
+            mirrored: false,
+        }
     }
 }
 
@@ -219,7 +227,7 @@ impl Body {
 
     fn frame(&self, pose: Pose) -> ToolFrame {
         match &self.tool.shape {
-            ClayShape::Tool { scale, .. } => ToolFrame::new(pose, *scale),
+            ClayShape::Tool { scale, .. } => ToolFrame::with_mirror(pose, *scale, self.tool.mirrored),
             ClayShape::Plane => ToolFrame::new(pose, Vec3::ONE),
         }
     }

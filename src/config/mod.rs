@@ -81,6 +81,10 @@ pub enum StationAction {
     PointerToward,
     /// Open a sculpt file: the newest in the open folder, then each older one in turn.
     Open,
+    /// Switch the symmetry (the scene's, or a mirror across X) on or off.
+    ToggleSymmetry,
+    /// Step to the next symmetry: mirror X, mirror X and Z, radial 6, a kaleidoscope.
+    NextSymmetry,
     /// Held: the clutch is lifted: the mouse's 3D cursor moves without the tool; released, the
     /// tool follows the pointer's motion from where it is, scaled by the mouse's clutch gain.
     Clutch,
@@ -118,6 +122,8 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("pointer-toward", StationAction::PointerToward),
     ("open", StationAction::Open),
     ("clutch", StationAction::Clutch),
+    ("toggle-symmetry", StationAction::ToggleSymmetry),
+    ("next-symmetry", StationAction::NextSymmetry),
 ];
 
 impl StationAction {

@@ -43,6 +43,7 @@ pub(super) struct SceneFile {
     pub lattice: Vec<Spanned<super::lattice::LatticeFile>>,
     #[serde(default)]
     pub lattice_key: Vec<Spanned<super::lattice::LatticeKeyFile>>,
+    pub symmetry: Option<Spanned<super::symmetry::SymmetryFile>>,
 }
 
 /// `[input]`: the desk input settings file the scene asks for.

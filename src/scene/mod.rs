@@ -12,6 +12,7 @@ mod finite;
 mod head;
 mod lattice;
 mod screen;
+mod symmetry;
 mod timeline;
 mod tool;
 
@@ -28,6 +29,7 @@ pub use tool::SceneToolShape;
 
 use crate::field::Colour;
 use crate::math::{Pose, Quat, Vec3};
+use crate::parts::Symmetry;
 use crate::stereo::display::{DisplayMode, Parity};
 use crate::stereo::{HeadTrackedRig, Placement, StereoRig};
 use crate::tool::{Action, CsgOp, PlacedSolid, Solid};
@@ -268,6 +270,8 @@ pub struct Scene {
     pub input_settings: Option<std::path::PathBuf>,
     /// The lattices opened over the clay, shaped by their keys and applied (`[[lattice]]`).
     pub lattices: Vec<SceneLattice>,
+    /// The mirror planes and radial copies every tool acts through (`[symmetry]`).
+    pub symmetry: Symmetry,
 }
 
 /// The virtual clay's settings: its fluidity, its step, and what holds it besides the tools.
@@ -855,6 +859,7 @@ fn resolve(
     }
     let timeline = Timeline::new(keys, step_s).map_err(|(i, msg)| at(Some(file.key[i].span()), msg))?;
     let lattices = lattice::resolve_lattices(&file.lattice, &file.lattice_key, field_voxel, at)?;
+    let symmetry = symmetry::resolve_symmetry(file.symmetry.as_ref(), at)?;
     // The timeline lasts until its last key, the lattices' included.
     let lattice_end = lattices.iter().map(|l| l.apply_s).fold(0.0f32, f32::max);
 
@@ -997,6 +1002,7 @@ fn resolve(
         virtual_clay,
         input_settings,
         lattices,
+        symmetry,
     })
 }
 

@@ -411,3 +411,27 @@ fn bad_lattices_and_keys_are_refused_where_they_are() {
         assert!(e.starts_with(place) && e.contains(words), "{text:?}: {e}");
     }
 }
+
+#[test]
+fn symmetry_is_read_with_its_frame_and_bad_symmetries_are_refused() {
+    assert!(Scene::parse("", "t.toml", None).unwrap().symmetry.is_none());
+    let text = "[symmetry]\nmirror = [\"x\", \"Z\"]\nradial = 3\naxis = \"y\"\ncentre_m = [0.1, 0.0, 0.0]\n";
+    let s = Scene::parse(text, "t.toml", None).unwrap().symmetry;
+    assert_eq!(s.mirror, [true, false, true]);
+    assert_eq!((s.radial, s.axis), (3, crate::parts::Axis::Y));
+    assert_eq!(s.frame.position_m, Vec3::new(0.1, 0.0, 0.0));
+    assert_eq!(s.images().len(), 12);
+    let cases = [
+        ("[symmetry]\nmirror = [\"w\"]\n", "not \"w\""),
+        ("[symmetry]\nmirror = [\"x\", \"x\"]\n", "twice"),
+        ("[symmetry]\nradial = 0\n", "1 to 64"),
+        ("[symmetry]\nradial = 65\n", "1 to 64"),
+        ("[symmetry]\naxis = \"up\"\n", "axis must be"),
+        ("[symmetry]\ncentre_m = [0.0, 200.0, 0.0]\n", "within ±100 m"),
+        ("[symmetry]\nplanes = 2\n", "unknown field"),
+    ];
+    for (text, words) in cases {
+        let e = Scene::parse(text, "t.toml", None).unwrap_err().to_string();
+        assert!(e.starts_with("t.toml:") && e.contains(words), "{text:?}: {e}");
+    }
+}

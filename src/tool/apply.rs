@@ -109,10 +109,8 @@ fn footprint_banded(
     let world = frame.world_bounds(local_half);
     let lo = t.world_to_index(world.min).ceil().as_ivec3();
     let hi = t.world_to_index(world.max).floor().as_ivec3();
-    let inv = frame.pose.rotation.inverse();
-    let to_local = |index: IVec3| frame.world_to_local(t.index_to_world(index.as_vec3()));
-    let origin = to_local(lo);
-    let step = [Vec3::X, Vec3::Y, Vec3::Z].map(|axis| inv * (axis * h) / frame.scale);
+    let origin = frame.world_to_local(t.index_to_world(lo.as_vec3()));
+    let step = [Vec3::X, Vec3::Y, Vec3::Z].map(|axis| frame.world_vector_to_local(axis * h));
     Footprint { lo, hi, origin, step, local_half, band_local }
 }
 
@@ -193,7 +191,19 @@ fn lerp_colour(c: &mut Colour, to: Colour, t: f32) {
 /// that read the neighbours (smoothing, inflation) edit no coarser than the finest clay under
 /// the tool.
 pub fn apply_tool(field: &mut Field, tool: &Tool, pose: Pose, dt_s: f32) -> StampCounters {
-    let frame = ToolFrame::new(pose, tool.scale);
+    apply_tool_mirrored(field, tool, pose, false, dt_s)
+}
+
+/// [`apply_tool`] of the tool's mirror image when `mirrored` (the pose as
+/// [`crate::math::Isometry::pose`] gives it): an asymmetric shape acts reflected.
+pub fn apply_tool_mirrored(
+    field: &mut Field,
+    tool: &Tool,
+    pose: Pose,
+    mirrored: bool,
+    dt_s: f32,
+) -> StampCounters {
+    let frame = ToolFrame::with_mirror(pose, tool.scale, mirrored);
     let level = tool.level_samples.map_or(0, |n| edit_level_for(field, tool.size_m(), n));
     if let (ToolShape::Solid(Solid::Sphere { radius_m }), Action::Add | Action::Remove) =
         (&tool.shape, tool.action)

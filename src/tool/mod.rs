@@ -19,7 +19,9 @@ mod stamp;
 mod stroke;
 
 pub use action::Action;
-pub use apply::{apply_tool, edit_level_for, StampCounters, HAND_SIZE_SAMPLES, MAX_SIZE_SAMPLES};
+pub use apply::{
+    apply_tool, apply_tool_mirrored, edit_level_for, StampCounters, HAND_SIZE_SAMPLES, MAX_SIZE_SAMPLES,
+};
 pub use deform::{DeformError, Deformation, FIELD_VALUE_RANGE};
 pub use shape::{PlacedSolid, Solid};
 pub use shapes::{wyvill, Ellipsoid, Falloff, Freeform, ToolFrame, ToolShape};

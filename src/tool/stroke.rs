@@ -9,10 +9,10 @@
 //! ```
 
 use super::action::Action;
-use super::apply::{apply_tool, StampCounters};
+use super::apply::{apply_tool, apply_tool_mirrored, StampCounters};
 use super::shapes::ToolShape;
 use crate::field::{Colour, Field};
-use crate::math::{Pose, Vec3};
+use crate::math::{Isometry, Pose, Vec3};
 
 /// The time step of rate actions, seconds: they act once per tick of held time, whatever the
 /// caller's frame rate. 1/120 s keeps an inflating surface well under a voxel per tick at
@@ -69,6 +69,8 @@ impl Tool {
 #[derive(Clone, Debug)]
 pub struct Stroke {
     tool: Tool,
+    /// The symmetry's images other than the identity: every stamp also acts at each.
+    images: Vec<Isometry>,
     last_stamp: Option<Pose>,
     last_pose: Option<Pose>,
     since_tick_s: f64,
@@ -82,6 +84,7 @@ impl Stroke {
     pub fn new(tool: Tool) -> Self {
         Self {
             tool,
+            images: Vec::new(),
             last_stamp: None,
             last_pose: None,
             since_tick_s: 0.0,
@@ -89,6 +92,14 @@ impl Stroke {
             last_counters: StampCounters::default(),
             total: StampCounters::default(),
         }
+    }
+
+    /// Starts a stroke whose every stamp also acts at the images of its pose under `images`
+    /// (a symmetry's images; the identity among them is the stroke itself).
+    pub fn with_images(tool: Tool, images: &[Isometry]) -> Self {
+        let mut stroke = Self::new(tool);
+        stroke.images = images.iter().copied().filter(|i| i.distance(&Isometry::IDENTITY) > 1e-6).collect();
+        stroke
     }
 
     /// The stroke's tool.
@@ -168,7 +179,11 @@ impl Stroke {
     }
 
     fn stamp(&mut self, field: &mut Field, at: Pose, dt_s: f32) {
-        let c = apply_tool(field, &self.tool, at, dt_s);
+        let mut c = apply_tool(field, &self.tool, at, dt_s);
+        for image in &self.images {
+            let (pose, mirrored) = image.pose(&at);
+            c += apply_tool_mirrored(field, &self.tool, pose, mirrored, dt_s);
+        }
         self.last_counters = c;
         self.total += c;
         self.last_stamp = Some(at);

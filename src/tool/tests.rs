@@ -366,3 +366,59 @@ fn a_freeform_copy_used_as_a_tool_reproduces_its_source() {
     let ratio = g.mass() / source.mass();
     assert!((ratio - 2.0).abs() < 0.05, "ratio {ratio}");
 }
+
+#[test]
+fn a_mirrored_image_of_an_asymmetric_tool_is_its_reflection_not_a_turn() {
+    // An L of clay: a bar along +X and one along +Y, copied as a freeform tool.
+    let mut source = Field::new(VOXEL_M, 0.5);
+    let bar = |half: Vec3, at: Vec3| PlacedSolid {
+        solid: Solid::Box { half_m: half },
+        pose: Pose { position_m: at, ..Pose::default() },
+        scale: 1.0,
+    };
+    rasterize_solid(
+        &mut source,
+        &bar(Vec3::new(0.006, 0.002, 0.002), Vec3::new(0.004, 0.0, 0.0)),
+        CsgOp::Union,
+        [1.0; 4],
+    );
+    rasterize_solid(
+        &mut source,
+        &bar(Vec3::new(0.002, 0.004, 0.002), Vec3::new(0.0, 0.003, 0.0)),
+        CsgOp::Union,
+        [1.0; 4],
+    );
+    let tool = Tool::new(
+        ToolShape::Freeform(Arc::new(Freeform::from_field(&source, IVec3::splat(-12), IVec3::splat(12)))),
+        Action::Add,
+        [1.0; 4],
+    );
+    let pose = Pose {
+        position_m: Vec3::new(0.02, 0.003, -0.004),
+        rotation: Quat::from_euler(glam::EulerRot::XYZ, 0.4, -0.9, 0.3),
+    };
+    let mirror = crate::math::Isometry::reflection(Vec3::ZERO, Vec3::X);
+    let (image, mirrored) = mirror.pose(&pose);
+    assert!(mirrored);
+    let stamp = |at: Pose, mirrored: bool| {
+        let mut f = Field::new(VOXEL_M, 0.5);
+        apply_tool_mirrored(&mut f, &tool, at, mirrored, 0.0);
+        f
+    };
+    let (original, reflected, turned) = (stamp(pose, false), stamp(image, true), stamp(image, false));
+    let (mut same, mut differ) = (0, 0);
+    for k in -16..=16 {
+        for j in -16..=16 {
+            for i in 4..=36 {
+                let d = original.density(IVec3::new(i, j, k));
+                // The reflection: the same clay at the mirrored lattice point, within rounding.
+                assert!((reflected.density(IVec3::new(-i, j, k)) - d).abs() < 0.02, "at {i} {j} {k}");
+                same += usize::from(d > 0.5);
+                differ += usize::from((turned.density(IVec3::new(-i, j, k)) > 0.5) != (d > 0.5));
+            }
+        }
+    }
+    assert!(same > 100, "the tool deposits clay: {same}");
+    // Turned instead of reflected, the L would lie the other way round.
+    assert!(differ > same / 4, "{differ} of {same} samples differ when turned");
+}

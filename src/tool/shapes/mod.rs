@@ -92,18 +92,41 @@ pub struct ToolFrame {
     pub pose: Pose,
     /// Scale along the local X, Y and Z axes, applied before the pose.
     pub scale: Vec3,
+    /// A mirror image of the tool: local coordinates are read with X negated (see
+    /// [`crate::math::Isometry::pose`]), so that an asymmetric shape appears reflected.
+    pub mirrored: bool,
 }
 
 impl ToolFrame {
     /// A frame at `pose` with scale `scale`.
     pub fn new(pose: Pose, scale: Vec3) -> Self {
-        Self { pose, scale }
+        Self { pose, scale, mirrored: false }
+    }
+
+    /// A frame at `pose` with scale `scale`, mirrored or not.
+    pub fn with_mirror(pose: Pose, scale: Vec3, mirrored: bool) -> Self {
+        Self { pose, scale, mirrored }
     }
 
     /// Takes a world point into the tool's local (unscaled) frame.
     #[inline]
     pub fn world_to_local(&self, world_m: Vec3) -> Vec3 {
-        self.pose.world_to_local(world_m) / self.scale
+        self.flip(self.pose.world_to_local(world_m)) / self.scale
+    }
+
+    /// Takes a world direction (or difference of points) into the local frame.
+    #[inline]
+    pub fn world_vector_to_local(&self, world: Vec3) -> Vec3 {
+        self.flip(self.pose.rotation.inverse() * world) / self.scale
+    }
+
+    #[inline]
+    fn flip(&self, v: Vec3) -> Vec3 {
+        if self.mirrored {
+            Vec3::new(-v.x, v.y, v.z)
+        } else {
+            v
+        }
     }
 
     /// The smallest scale factor: local distances times it bound world distances from below.
