@@ -171,6 +171,7 @@ fn render_over(
         if capture.show_tools {
             frame.tools.extend(super::frame::lattice_glyphs(&playback));
             frame.tools.extend(super::frame::symmetry_glyphs(&playback));
+            frame.tools.extend(super::frame::region_glyphs(&playback));
         }
         if let (Some(head), Some(rig)) = (&viewed.head, viewed.head_tracked_rig()) {
             frame.views = rig.views(&head.pose_at(capture.time_s));

@@ -16,6 +16,20 @@ pub fn lattice_glyphs(playback: &super::playback::Playback<'_>) -> Vec<crate::re
         .collect()
 }
 
+/// The colour regions being carried are drawn in: a faint warm yellow.
+pub const REGION_COLOUR: Vec4 = Vec4::new(0.95, 0.82, 0.35, 0.2);
+
+/// The regions the scene's region tools are carrying now (and their images), where the hand
+/// has taken them.
+pub fn region_glyphs(playback: &super::playback::Playback<'_>) -> Vec<crate::render::ToolGlyph> {
+    playback
+        .moving_regions()
+        .filter(|(sr, _)| sr.show)
+        .flat_map(|(_, drag)| drag.carried_regions())
+        .map(|r| tool_glyph(&r.shape, r.frame.pose, r.frame.scale, REGION_COLOUR))
+        .collect()
+}
+
 /// The glyphs of the symmetry `playback`'s strokes act through, over the scene's initial
 /// clay (or its stage, or 20 cm about the symmetry's centre), and the images of the scripted
 /// hands' tools; none without symmetry.

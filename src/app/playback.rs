@@ -12,11 +12,22 @@ use std::sync::Arc;
 use crate::clay::{window_around, Clay, ClayParams, ClayTool};
 use crate::lattice::{volume_at, Lattice, LatticeError};
 use crate::math::{Aabb, Isometry, Vec3};
-use crate::parts::Symmetry;
-use crate::scene::{Hand, HandState, Key, Scene, SceneLattice, SceneTool, SceneToolShape};
+use crate::parts::{copy_repeated, inflate, RegionDrag, RegionOp, Symmetry};
+use crate::scene::{
+    Hand, HandState, Key, RegionAction, Scene, SceneLattice, SceneRegion, SceneTool, SceneToolShape,
+};
 use crate::tool::{
     rasterize_solid, rasterize_solid_in_slabs, Action, Freeform, Stroke, Tool, ToolFrame, ToolShape,
 };
+
+/// What a scene's region tool is called in messages.
+fn region_name(r: &SceneRegion) -> &'static str {
+    match r.action {
+        RegionAction::Drag(op) => op.name(),
+        RegionAction::Inflate(d) if d > 0.0 => "inflate",
+        RegionAction::Inflate(_) => "deflate",
+    }
+}
 
 /// Lattice points of room the virtual clay's window keeps around the tools' paths and the
 /// clay they touch.
@@ -51,9 +62,20 @@ pub struct Playback<'s> {
     live: Option<[Option<HandState>; 2]>,
     /// Per scene lattice: still to open, open, or applied.
     lattices: Vec<LatticeState>,
+    /// Per scene region tool: still to act, moving, or done.
+    regions: Vec<RegionState>,
     /// The symmetry strokes and pushes act through, and its images.
     symmetry: Symmetry,
     images: Vec<Isometry>,
+}
+
+/// Where a scene's region tool stands on the timeline.
+#[derive(Debug)]
+enum RegionState {
+    Waiting,
+    /// Carried along its motion over its duration.
+    Moving(Box<RegionDrag>),
+    Done,
 }
 
 /// Where a scene's lattice stands on the timeline.
@@ -139,6 +161,7 @@ impl<'s> Playback<'s> {
             autosave,
             live: None,
             lattices: scene.lattices.iter().map(|_| LatticeState::Waiting).collect(),
+            regions: scene.regions.iter().map(|_| RegionState::Waiting).collect(),
             symmetry: scene.symmetry,
             images: scene.symmetry.images(),
         };
@@ -164,6 +187,11 @@ impl<'s> Playback<'s> {
         for state in &mut self.lattices {
             if matches!(state, LatticeState::Open(..)) {
                 *state = LatticeState::Closed;
+            }
+        }
+        for state in &mut self.regions {
+            if matches!(state, RegionState::Moving(..)) {
+                *state = RegionState::Done;
             }
         }
         let keys: Vec<_> = self.field.covered_keys().into_iter().chain(field.covered_keys()).collect();
@@ -264,6 +292,11 @@ impl<'s> Playback<'s> {
                 next = next.min(t);
             }
         }
+        for r in &self.scene.regions {
+            if let Some(t) = [r.time_s, r.end_s()].into_iter().filter(|&t| t > self.time_s).reduce(f32::min) {
+                next = next.min(t);
+            }
+        }
         self.step_to(next);
         next
     }
@@ -299,12 +332,14 @@ impl<'s> Playback<'s> {
         }
         self.step_clay(previous, t);
         self.step_lattices(t);
-        // The hands' strokes, pushes and open lattices form one undo step while any of them
-        // acts. A stroke someone else opened on the field (the station's desk tool) is theirs
-        // to close.
+        self.step_regions(t);
+        // The hands' strokes, pushes, open lattices and moving regions form one undo step while
+        // any of them acts. A stroke someone else opened on the field (the station's desk
+        // tool) is theirs to close.
         let drawing = self.strokes.iter().any(Option::is_some)
             || self.push.is_some()
-            || self.lattices.iter().any(|l| matches!(l, LatticeState::Open(..)));
+            || self.lattices.iter().any(|l| matches!(l, LatticeState::Open(..)))
+            || self.regions.iter().any(|r| matches!(r, RegionState::Moving(..)));
         if drawing && !self.field.in_stroke() {
             self.field.begin_stroke();
             self.owns_stroke = true;
@@ -456,6 +491,63 @@ impl<'s> Playback<'s> {
                 *state = LatticeState::Closed;
             }
         }
+    }
+
+    /// Starts the scene's region tools whose time has come and carries the moving ones along
+    /// their motions. Each is part of the undo step the timeline draws then (its own, unless
+    /// the hands are drawing or another region is moving). A region tool that cannot act (its
+    /// copy of the clay would be too large) stops with a warning.
+    fn step_regions(&mut self, t: f32) {
+        let scene = self.scene;
+        for (state, sr) in self.regions.iter_mut().zip(&scene.regions) {
+            let warn = |e: crate::parts::RegionError| {
+                eprintln!(
+                    "warning: {}: the {} at {} s stops at {t} s: {e}",
+                    scene.source,
+                    region_name(sr),
+                    sr.time_s
+                );
+                RegionState::Done
+            };
+            if matches!(state, RegionState::Waiting) && t >= sr.time_s {
+                let alone = !self.field.in_stroke();
+                if alone {
+                    self.field.begin_stroke();
+                }
+                *state = match sr.action {
+                    RegionAction::Inflate(distance_m) => {
+                        inflate(&mut self.field, &sr.region, distance_m, &self.images);
+                        RegionState::Done
+                    }
+                    RegionAction::Drag(RegionOp::Copy) if sr.count > 1 => {
+                        copy_repeated(&mut self.field, &sr.region, sr.motion, sr.count, &self.images)
+                            .map_or_else(warn, |_| RegionState::Done)
+                    }
+                    RegionAction::Drag(op) => {
+                        RegionDrag::start(&self.field, sr.region.clone(), op, &self.images)
+                            .map_or_else(warn, |d| RegionState::Moving(Box::new(d)))
+                    }
+                };
+                if alone {
+                    self.owns_stroke = true;
+                }
+            }
+            let RegionState::Moving(drag) = state else { continue };
+            let s = if sr.duration_s > 0.0 { ((t - sr.time_s) / sr.duration_s).clamp(0.0, 1.0) } else { 1.0 };
+            match drag.update(&mut self.field, sr.motion.fraction(s)) {
+                Ok(_) if s < 1.0 => {}
+                Ok(_) => *state = RegionState::Done,
+                Err(e) => *state = warn(e),
+            }
+        }
+    }
+
+    /// The scene's region tools moving now, with their scene entries.
+    pub fn moving_regions(&self) -> impl Iterator<Item = (&'s SceneRegion, &RegionDrag)> + '_ {
+        self.regions.iter().zip(&self.scene.regions).filter_map(|(state, sr)| match state {
+            RegionState::Moving(d) => Some((sr, &**d)),
+            _ => None,
+        })
     }
 
     /// Writes into the clay what the open lattices changed since they last wrote: call before

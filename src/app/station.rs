@@ -1573,6 +1573,7 @@ impl<'s> Station<'s> {
         let mut frame = build_frame(&self.view, &self.playback.hands(), true);
         frame.tools.extend(super::frame::lattice_glyphs(&self.playback));
         frame.tools.extend(super::frame::symmetry_glyphs(&self.playback));
+        frame.tools.extend(super::frame::region_glyphs(&self.playback));
         if self.lights_follow_viewer {
             // The scene's lights, carried along with the viewer's turn about the target.
             let pivot = self.scene.rig.target_m;

@@ -17,6 +17,7 @@
 //! - after every edit, the dirty set holds every brick whose mesh reads a changed sample.
 
 mod brick;
+mod dense;
 mod history;
 mod levels;
 mod sample;
@@ -27,6 +28,7 @@ pub use brick::{
     BrickKey, Colour, LevelKey, Quantum, BRICK_SIZE, BRICK_VOLUME, DEFAULT_COLOUR, DENSITY_ONE,
     DENSITY_TOLERANCE, LEVELS, MESHED_LEVELS,
 };
+pub use dense::{DenseCopy, TiledCopy, TiledReader};
 pub use history::{HistoryConfig, HistoryError, HistoryStats, BRICK_BYTES};
 pub use levels::{COLOUR_DETAIL_TOLERANCE, DETAIL_TOLERANCE};
 pub use sample::FieldReader;

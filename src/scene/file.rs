@@ -44,6 +44,8 @@ pub(super) struct SceneFile {
     #[serde(default)]
     pub lattice_key: Vec<Spanned<super::lattice::LatticeKeyFile>>,
     pub symmetry: Option<Spanned<super::symmetry::SymmetryFile>>,
+    #[serde(default)]
+    pub region: Vec<Spanned<super::region::RegionFile>>,
 }
 
 /// `[input]`: the desk input settings file the scene asks for.

@@ -11,6 +11,7 @@ mod file;
 mod finite;
 mod head;
 mod lattice;
+mod region;
 mod screen;
 mod symmetry;
 mod timeline;
@@ -21,6 +22,7 @@ use std::path::{Path, PathBuf};
 pub use colour::{parse_hex, SceneColour};
 pub use head::{HeadKey, HeadPath};
 pub use lattice::{SceneLattice, MAX_WEIGHT};
+pub use region::{RegionAction, SceneRegion, MAX_COPIES, MAX_INFLATION_M};
 pub use screen::{
     DisplayCalibration, ScreenCalibration, TrackerCalibration, TrackerZero, SHIPPED_SCREEN_TOML,
 };
@@ -272,6 +274,8 @@ pub struct Scene {
     pub lattices: Vec<SceneLattice>,
     /// The mirror planes and radial copies every tool acts through (`[symmetry]`).
     pub symmetry: Symmetry,
+    /// Region tools on the timeline, in time order (`[[region]]`).
+    pub regions: Vec<SceneRegion>,
 }
 
 /// The virtual clay's settings: its fluidity, its step, and what holds it besides the tools.
@@ -860,8 +864,13 @@ fn resolve(
     let timeline = Timeline::new(keys, step_s).map_err(|(i, msg)| at(Some(file.key[i].span()), msg))?;
     let lattices = lattice::resolve_lattices(&file.lattice, &file.lattice_key, field_voxel, at)?;
     let symmetry = symmetry::resolve_symmetry(file.symmetry.as_ref(), at)?;
-    // The timeline lasts until its last key, the lattices' included.
-    let lattice_end = lattices.iter().map(|l| l.apply_s).fold(0.0f32, f32::max);
+    let regions = region::resolve_regions(&file.region, field_voxel, at)?;
+    // The timeline lasts until its last key, the lattices' and the region tools' included.
+    let lattice_end = lattices
+        .iter()
+        .map(|l| l.apply_s)
+        .chain(regions.iter().map(SceneRegion::end_s))
+        .fold(0.0f32, f32::max);
 
     let mut captures: Vec<Capture> = Vec::new();
     for spanned in &file.capture {
@@ -1003,6 +1012,7 @@ fn resolve(
         input_settings,
         lattices,
         symmetry,
+        regions,
     })
 }
 
