@@ -506,6 +506,20 @@ fn lattice_bars_match_golden_through_their_timeline() {
     golden_timeline_case("scenes/lattice-bars.toml");
 }
 
+/// A figure's arm bent up (half way, its grab ball drawn), a block carried onto its head (half
+/// way, its region drawn), then everything done: the arm bent, the head inflated, the other
+/// arm deflated, the block on the head, turned.
+#[test]
+fn region_tools_match_golden_through_their_timeline() {
+    golden_timeline_case("scenes/region-tools.toml");
+}
+
+/// Hua–Qin's copy and compose: one chair, a 3 × 3 grid of it.
+#[test]
+fn region_grid_matches_golden() {
+    golden_case("region-grid", "scenes/region-grid.toml", Some((256, 256)));
+}
+
 #[test]
 fn push_print_matches_golden_through_its_timeline() {
     golden_timeline_case("scenes/push-print.toml");

@@ -435,3 +435,36 @@ fn symmetry_is_read_with_its_frame_and_bad_symmetries_are_refused() {
         assert!(e.starts_with("t.toml:") && e.contains(words), "{text:?}: {e}");
     }
 }
+
+#[test]
+fn regions_are_read_in_time_order_and_bad_ones_are_refused_where_they_are() {
+    let text = "[[region]]\ntime_s = 2.0\nop = \"inflate\"\ncentre_m = [0.0, 0.0, 0.0]\nradius_m = 0.02\ndistance_m = 0.002\n\
+                [[region]]\ntime_s = 1.0\nop = \"copy\"\ncentre_m = [0.0, 0.0, 0.0]\nhalf_m = [0.01, 0.01, 0.01]\nmove_m = [0.03, 0.0, 0.0]\ncount = 3\n";
+    let s = Scene::parse(text, "t.toml", None).unwrap();
+    assert_eq!(s.regions.len(), 2);
+    assert_eq!(s.regions[0].action, crate::scene::RegionAction::Drag(crate::parts::RegionOp::Copy));
+    assert_eq!(s.regions[0].count, 3);
+    assert_eq!(s.regions[1].action, crate::scene::RegionAction::Inflate(0.002));
+    let head = "[[region]]\ntime_s = 1.0\ncentre_m = [0.0, 0.0, 0.0]\n";
+    let cases = [
+        ("op = \"twist\"\nhalf_m = [0.01, 0.01, 0.01]\n", "not \"twist\""),
+        ("op = \"move\"\nhalf_m = [0.01, 0.01, 0.01]\n", "needs move_m or turn_deg"),
+        ("op = \"move\"\nmove_m = [0.01, 0.0, 0.0]\n", "either half_m"),
+        ("op = \"move\"\nhalf_m = [0.01, 0.0, 0.01]\nmove_m = [0.01, 0.0, 0.0]\n", "positive lengths"),
+        ("op = \"inflate\"\nradius_m = 0.01\n", "needs distance_m"),
+        ("op = \"deflate\"\nradius_m = 0.01\ndistance_m = 0.5\n", "at most 0.1"),
+        (
+            "op = \"inflate\"\nradius_m = 0.01\ndistance_m = 0.001\nmove_m = [0.01, 0.0, 0.0]\n",
+            "takes no move_m",
+        ),
+        ("op = \"move\"\nradius_m = 0.01\nmove_m = [0.01, 0.0, 0.0]\ncount = 2\n", "count is for copy"),
+        ("op = \"copy\"\nradius_m = 0.01\nmove_m = [0.01, 0.0, 0.0]\ncount = 0\n", "1 to 64"),
+        ("op = \"move\"\nhalf_m = [1.0, 1.0, 1.0]\nmove_m = [0.01, 0.0, 0.0]\n", "may copy"),
+        ("op = \"move\"\nradius_m = 0.01\nmove_m = [0.01, 0.0, 0.0]\nspin = 1\n", "unknown field"),
+    ];
+    for (body, words) in cases {
+        let text = format!("{head}{body}");
+        let e = Scene::parse(&text, "t.toml", None).unwrap_err().to_string();
+        assert!(e.starts_with("t.toml:") && e.contains(words), "{body:?}: {e}");
+    }
+}
