@@ -69,6 +69,11 @@ pub enum Workload {
     /// an interior control point the re-evaluation of the clay over the box that drag
     /// changed, then its write into the field.
     LatticeDrag,
+    /// A box region of 64³ lattice points of 1 mm clay (a ball filling it) carried and turned
+    /// by a hand over frames: each frame's update of the drag, which resamples the region's
+    /// source and every place it passes from the clay as it was (the bound: one VR
+    /// frame, 11.1 ms).
+    RegionMove,
     /// The headset frame against the OpenXR test runtime (built with
     /// `cargo build -p argile-xr-test-runtime`): from `xrWaitFrame` returning to `xrEndFrame`
     /// returning while the right controller carves the default scene, split into the frame's
@@ -78,7 +83,7 @@ pub enum Workload {
 
 impl Workload {
     /// Every workload, in the order `argile bench` runs them.
-    pub const ALL: [Workload; 16] = [
+    pub const ALL: [Workload; 17] = [
         Workload::Stamp,
         Workload::StampCarve,
         Workload::StampAdaptive,
@@ -94,6 +99,7 @@ impl Workload {
         Workload::LoadLarge,
         Workload::ClayBend,
         Workload::LatticeDrag,
+        Workload::RegionMove,
         Workload::FrameXr,
     ];
 }
@@ -123,6 +129,10 @@ pub struct BenchSize {
     pub lattice_side_voxels: i32,
     /// Timed drags of the lattice workload.
     pub lattice_drags: usize,
+    /// Side of the region workload's box, lattice points.
+    pub region_side: i32,
+    /// Timed frames of the region workload.
+    pub region_frames: usize,
 }
 
 impl BenchSize {
@@ -139,6 +149,8 @@ impl BenchSize {
         clay_steps: 60,
         lattice_side_voxels: 128,
         lattice_drags: 11,
+        region_side: 64,
+        region_frames: 45,
     };
     /// A small run that checks the workloads work (not for figures).
     pub const QUICK: BenchSize = BenchSize {
@@ -153,6 +165,8 @@ impl BenchSize {
         clay_steps: 4,
         lattice_side_voxels: 24,
         lattice_drags: 2,
+        region_side: 16,
+        region_frames: 3,
     };
 }
 
@@ -187,6 +201,7 @@ pub fn run(workloads: &[Workload], size: BenchSize, mut emit: impl FnMut(Value))
             Workload::LoadLarge => super::bench_io::load_large(size, &mut emit)?,
             Workload::ClayBend => bench_clay_bend(size, &mut emit),
             Workload::LatticeDrag => bench_lattice_drag(size, &mut emit)?,
+            Workload::RegionMove => bench_region_move(size, &mut emit)?,
             Workload::FrameXr => super::xr_station::bench_frame_xr(size.image_px, size.frames, &mut emit)?,
         }
     }
@@ -776,6 +791,58 @@ fn bench_lattice_drag(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<(
     Ok(())
 }
 
+fn bench_region_move(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> {
+    use crate::math::{Pose, Quat};
+    use crate::parts::{Motion, Region, RegionDrag, RegionOp};
+    use crate::tool::{rasterize_solid, CsgOp, PlacedSolid, Solid, SOLID_BAND_VOXELS};
+
+    let h = 0.001;
+    // The box's lattice points: side + 1 across, with the band's half inside it.
+    let half = 0.5 * (size.region_side as f32 - 1.0 - SOLID_BAND_VOXELS) * h;
+    let mut field = Field::new(h, 0.5);
+    let ball = Solid::Sphere { radius_m: 0.9 * half };
+    rasterize_solid(
+        &mut field,
+        &PlacedSolid { solid: ball, pose: Pose::default(), scale: 1.0 },
+        CsgOp::Union,
+        [0.7, 0.4, 0.2, 1.0],
+    );
+    let region = Region::boxed(Pose::default(), Vec3::splat(half));
+    let start = Instant::now();
+    field.begin_stroke();
+    let mut drag = RegionDrag::start(&field, region, RegionOp::Move, &[])?;
+    let start_ms = start.elapsed().as_secs_f64() * 1e3;
+    let (mut update_ms, mut written) = (Vec::new(), 0u64);
+    let mut copied = 0u64;
+    for frame in 0..size.region_frames {
+        // A hand carrying the region 2 mm a frame along a gentle arc, turning it as it goes.
+        let s = (frame + 1) as f32;
+        let motion = Motion {
+            translation_m: Vec3::new(0.002 * s, 0.0005 * s, 0.0),
+            rotation: Quat::from_rotation_y(0.01 * s),
+            ..Motion::still(Vec3::ZERO)
+        };
+        let t = Instant::now();
+        let stats = drag.update(&mut field, motion)?;
+        update_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        written = stats.written;
+        copied = stats.copied;
+    }
+    field.end_stroke();
+    emit(json!({
+        "workload": "region-move",
+        "region_points": size.region_side.pow(3),
+        "frames": size.region_frames,
+        "threads": rayon::current_num_threads(),
+        "start_ms": start_ms,
+        "written_per_frame": written,
+        "copied_points": copied,
+        "update_ms_median": median(update_ms.clone()),
+        "update_ms_max": update_ms.iter().copied().fold(0.0, f64::max),
+    }));
+    Ok(())
+}
+
 /// Copies of `mesh` on a square grid on the XZ plane until the total reaches `triangles`.
 fn replicate(mesh: &MeshDiff, triangles: usize, spacing_m: f32) -> (MeshDiff, f32) {
     let per_copy = mesh.upserted_triangles().max(1);
@@ -1094,6 +1161,16 @@ mod tests {
             assert!(l["us_per_frame_median"].as_f64().unwrap() > 0.0);
             assert!(l["tool_moved_m"].as_f64().unwrap() > 0.0, "the SpaceMice moved the tool: {l}");
         }
+    }
+
+    #[test]
+    fn the_region_workload_reports_its_updates() {
+        let mut lines = Vec::new();
+        run(&[Workload::RegionMove], BenchSize::QUICK, |v| lines.push(v)).unwrap();
+        let l = &lines[0];
+        assert_eq!(l["workload"], "region-move");
+        assert!(l["written_per_frame"].as_u64().unwrap() > 4096, "{l}");
+        assert!(l["update_ms_median"].as_f64().unwrap() > 0.0, "{l}");
     }
 
     #[test]
