@@ -44,7 +44,7 @@ use crate::io::autosave::{Autosave, AutosaveConfig};
 use crate::io::StoredView;
 use crate::math::{Pose, Quat, Vec2, Vec3, Vec4};
 use crate::mesh::Mesher;
-use crate::parts::SymmetrySwitch;
+use crate::parts::{inflate, Motion, Region, RegionDrag, RegionOp, SymmetrySwitch};
 use crate::render::{Light, Presented, Renderer, RendererDesc, ValidationLog};
 use crate::scene::ScreenCalibration;
 use crate::scene::{line_column, FileError, Scene};
@@ -487,6 +487,8 @@ pub struct Station<'s> {
     swap_eyes: bool,
     /// The symmetry the desk tool and the scene's hands act through.
     symmetry: SymmetrySwitch,
+    /// The region the desk tool carries, copies or bends, and the tool's pose when it grabbed.
+    region_drag: Option<(RegionDrag, Pose)>,
     /// The interlace parity is the calibration's flipped.
     parity_flipped: bool,
     /// The monitor's resolution as the window system gives it (when the calibration does not).
@@ -603,6 +605,7 @@ impl<'s> Station<'s> {
             tracked_for_s: None,
             swap_eyes: scene.display.swap_eyes,
             symmetry: SymmetrySwitch::new(scene.symmetry),
+            region_drag: None,
             parity_flipped: false,
             head: None,
             auto_convergence: None,
@@ -881,6 +884,7 @@ impl<'s> Station<'s> {
             StationAction::Quit => self.quit = true,
             StationAction::Undo => {
                 self.stroke = None;
+                self.region_drag = None;
                 match field.undo() {
                     Ok(true) => {
                         self.playback.journal();
@@ -954,6 +958,23 @@ impl<'s> Station<'s> {
                     false => "eyes as rendered: the left eye's image goes to the left eye".to_owned(),
                 });
             }
+            StationAction::InflateRegion | StationAction::DeflateRegion => {
+                const STEP_M: f32 = 0.001;
+                let distance = if action == StationAction::InflateRegion { STEP_M } else { -STEP_M };
+                let region = Region::of_tool(&self.desk_tool, self.desk.poses.get(Target::Tool));
+                let images = self.playback.images().to_vec();
+                let field = self.playback.field_mut();
+                if !field.in_stroke() {
+                    field.begin_stroke();
+                    let c = inflate(field, &region, distance, &images);
+                    field.end_stroke();
+                    self.playback.journal();
+                    self.unsaved_strokes += 1;
+                    if c.dirtied == 0 {
+                        self.messages.push("no clay surface within the tool to inflate or deflate".into());
+                    }
+                }
+            }
             StationAction::ToggleSymmetry | StationAction::NextSymmetry => {
                 let symmetry = match action {
                     StationAction::ToggleSymmetry => self.symmetry.toggle(),
@@ -1000,6 +1021,9 @@ impl<'s> Station<'s> {
             }
             StationAction::Apply
             | StationAction::Clutch
+            | StationAction::GrabRegion
+            | StationAction::CopyRegion
+            | StationAction::BendRegion
             | StationAction::PointerLeft
             | StationAction::PointerRight
             | StationAction::PointerUp
@@ -1390,6 +1414,7 @@ impl<'s> Station<'s> {
         let sculpt = crate::io::read_file_within(path, &super::budget::sculpt_limit(), &mut |_| {})?;
         let same_scene = sculpt.scene_toml.is_some() && sculpt.scene_toml == self.scene_toml;
         self.stroke = None;
+        self.region_drag = None;
         // The tools first: the autosave session started on the new clay stores them.
         if same_scene && self.playback.restore_tools(&sculpt.tools) > 0 {
             let stored = self.playback.tools().get(self.tool_index).map(|t| t.shape.clone());
@@ -1473,6 +1498,51 @@ impl<'s> Station<'s> {
         }
     }
 
+    /// The region tools held at the desk: the region of the tool's shape grabbed when a region
+    /// key goes down, carried (or copied, or bent) with the tool each frame, one undo step
+    /// when the key comes up. Not while the tool is applied.
+    fn carry_region(&mut self, pose: Pose, applying: bool, images: &[crate::math::Isometry]) {
+        let held = [
+            (StationAction::GrabRegion, RegionOp::Move),
+            (StationAction::CopyRegion, RegionOp::Copy),
+            (StationAction::BendRegion, RegionOp::Bend),
+        ]
+        .into_iter()
+        .find(|&(a, _)| self.holding(a))
+        .map(|(_, op)| op)
+        .filter(|_| !applying);
+        let field = self.playback.field_mut();
+        let failed = match (held, &mut self.region_drag) {
+            (Some(op), None) if !field.in_stroke() => {
+                match RegionDrag::start(field, Region::of_tool(&self.desk_tool, pose), op, images) {
+                    Ok(drag) => {
+                        field.begin_stroke();
+                        self.region_drag = Some((drag, pose));
+                        None
+                    }
+                    Err(e) => Some(format!("cannot {} the region: {e}", op.name())),
+                }
+            }
+            (Some(_), Some((drag, grab))) => drag
+                .update(field, Motion::between(*grab, pose))
+                .err()
+                .map(|e| format!("the region stops: {e}")),
+            (None, Some(_)) => {
+                self.region_drag = None;
+                field.end_stroke();
+                self.playback.journal();
+                self.unsaved_strokes += 1;
+                None
+            }
+            _ => None,
+        };
+        if let Some(message) = failed {
+            if self.messages.last() != Some(&message) {
+                self.messages.push(message);
+            }
+        }
+    }
+
     fn holding(&self, action: StationAction) -> bool {
         self.held.iter().any(|&k| self.bindings.held_action(k) == Some(action))
     }
@@ -1543,6 +1613,7 @@ impl<'s> Station<'s> {
             self.unsaved_strokes += 1;
             self.confirm_open = None;
         }
+        self.carry_region(pose, applying, &images);
 
         self.times.tools_ms = ms_since(tools_started);
         self.feel_contact(pose, dt_s);
@@ -1574,6 +1645,14 @@ impl<'s> Station<'s> {
         frame.tools.extend(super::frame::lattice_glyphs(&self.playback));
         frame.tools.extend(super::frame::symmetry_glyphs(&self.playback));
         frame.tools.extend(super::frame::region_glyphs(&self.playback));
+        if let Some((drag, _)) = &self.region_drag {
+            let carried = drag.carried_regions();
+            frame.tools.extend(
+                carried
+                    .iter()
+                    .map(|r| tool_glyph(&r.shape, r.frame.pose, r.frame.scale, super::frame::REGION_COLOUR)),
+            );
+        }
         if self.lights_follow_viewer {
             // The scene's lights, carried along with the viewer's turn about the target.
             let pivot = self.scene.rig.target_m;
@@ -2247,6 +2326,67 @@ mod tests {
         station.set_modifiers(Modifiers::default());
         station.key(KeyCode::KeyY, true);
         assert_eq!(station.playback.images().len(), 1, "Y switches it off");
+    }
+
+    #[test]
+    fn the_region_keys_carry_copy_bend_and_inflate_the_clay_under_the_tool_each_one_undo_step() {
+        let scene = ball_scene();
+        let mut station = small_station(&scene);
+        station.mouse.tool_position_m = Vec3::ZERO;
+        sculpt_for(&mut station, 2);
+        let ball = station.playback.field().clone();
+        let mass = ball.mass();
+        let at = |station: &Station<'_>, p: Vec3| {
+            let f = station.playback.field();
+            f.density(f.transform().world_to_index(p).round().as_ivec3())
+        };
+        assert!(at(&station, Vec3::ZERO) > 0.9);
+        // G held: the ball's region is carried 8 cm along X with the tool.
+        let carry = |station: &mut Station<'_>, key: KeyCode| {
+            station.mouse.tool_position_m = Vec3::ZERO;
+            station.key(key, true);
+            station.step(SCRIPTED_STEP_S, |_| {});
+            for x in [0.03, 0.06, 0.08] {
+                station.mouse.tool_position_m = Vec3::new(x, 0.0, 0.0);
+                let frame = station.step(SCRIPTED_STEP_S, |_| {});
+                assert!(!frame.tools.is_empty(), "the carried region is drawn");
+            }
+            station.key(key, false);
+            station.step(SCRIPTED_STEP_S, |_| {});
+        };
+        carry(&mut station, KeyCode::KeyG);
+        assert!(at(&station, Vec3::ZERO) < 0.1 && at(&station, Vec3::new(0.08, 0.0, 0.0)) > 0.9, "moved");
+        let moved = station.playback.field().mass();
+        assert!((moved - mass).abs() < 1e-3 * mass, "{mass} → {moved}");
+        station.act(StationAction::Undo);
+        assert!(station.playback.field().same_samples(&ball), "one undo takes the move back");
+        // K held: a copy goes with the tool; the ball stays.
+        carry(&mut station, KeyCode::KeyK);
+        assert!(at(&station, Vec3::ZERO) > 0.9 && at(&station, Vec3::new(0.08, 0.0, 0.0)) > 0.9, "copied");
+        station.act(StationAction::Undo);
+        assert!(station.playback.field().same_samples(&ball));
+        // I and Shift+I: the surface within the tool grows, then shrinks.
+        station.mouse.tool_position_m = Vec3::new(0.03, 0.0, 0.0);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        station.act(StationAction::InflateRegion);
+        assert!(station.playback.field().mass() > mass, "inflated");
+        station.act(StationAction::DeflateRegion);
+        station.act(StationAction::DeflateRegion);
+        assert!(station.playback.field().mass() < mass, "deflated");
+        for _ in 0..3 {
+            station.act(StationAction::Undo);
+        }
+        assert!(station.playback.field().same_samples(&ball), "one undo step each");
+        // B held at the ball's edge: the clay there follows the tool out.
+        station.mouse.tool_position_m = Vec3::new(0.03, 0.0, 0.0);
+        station.key(KeyCode::KeyB, true);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        station.mouse.tool_position_m = Vec3::new(0.05, 0.0, 0.0);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        station.key(KeyCode::KeyB, false);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert!(at(&station, Vec3::new(0.045, 0.0, 0.0)) > 0.5, "the edge was pulled out");
+        assert!(at(&station, Vec3::new(-0.025, 0.0, 0.0)) > 0.5, "the far side stays");
     }
 
     #[test]

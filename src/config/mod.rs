@@ -85,6 +85,18 @@ pub enum StationAction {
     ToggleSymmetry,
     /// Step to the next symmetry: mirror X, mirror X and Z, radial 6, a kaleidoscope.
     NextSymmetry,
+    /// Held: the region of the tool's shape, grabbed where the tool is, is carried and turned
+    /// with it; what it leaves is empty, what it lands on unites with it.
+    GrabRegion,
+    /// Held: a copy of the region of the tool's shape is carried with the tool.
+    CopyRegion,
+    /// Held: the clay within the tool's size of where it grabbed follows it with a smooth
+    /// falloff (a bend).
+    BendRegion,
+    /// Grow the clay's surface within the tool's shape by a millimetre.
+    InflateRegion,
+    /// Shrink the clay's surface within the tool's shape by a millimetre.
+    DeflateRegion,
     /// Held: the clutch is lifted: the mouse's 3D cursor moves without the tool; released, the
     /// tool follows the pointer's motion from where it is, scaled by the mouse's clutch gain.
     Clutch,
@@ -124,6 +136,11 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("clutch", StationAction::Clutch),
     ("toggle-symmetry", StationAction::ToggleSymmetry),
     ("next-symmetry", StationAction::NextSymmetry),
+    ("grab-region", StationAction::GrabRegion),
+    ("copy-region", StationAction::CopyRegion),
+    ("bend-region", StationAction::BendRegion),
+    ("inflate-region", StationAction::InflateRegion),
+    ("deflate-region", StationAction::DeflateRegion),
 ];
 
 impl StationAction {
