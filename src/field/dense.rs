@@ -146,43 +146,18 @@ impl TiledCopy {
     /// Reads from `field` every tile over `lo ..= hi` not held yet; returns how many it read.
     /// `field` must still hold the clay as it was wherever the copy holds nothing.
     pub fn take(&mut self, field: &Field, lo: IVec3, hi: IVec3) -> usize {
-        if hi.cmplt(lo).any() {
-            return 0;
+        let missing: Vec<IVec3> = tiles_over(lo, hi).filter(|k| !self.index.contains_key(k)).collect();
+        for &key in &missing {
+            let lo = key * TILE;
+            self.index.insert(key, self.tiles.len());
+            self.tiles.push(DenseCopy::read(field, lo, lo + IVec3::splat(TILE - 1)));
         }
-        let (a, b) = (tile_of(lo), tile_of(hi));
-        let mut read = 0;
-        for z in a.z..=b.z {
-            for y in a.y..=b.y {
-                for x in a.x..=b.x {
-                    let key = IVec3::new(x, y, z);
-                    if self.index.contains_key(&key) {
-                        continue;
-                    }
-                    let lo = key * TILE;
-                    self.index.insert(key, self.tiles.len());
-                    self.tiles.push(DenseCopy::read(field, lo, lo + IVec3::splat(TILE - 1)));
-                    read += 1;
-                }
-            }
-        }
-        read
+        missing.len()
     }
 
     /// The tiles `take` would read for `lo ..= hi` that are not held yet.
     pub fn missing(&self, lo: IVec3, hi: IVec3) -> usize {
-        if hi.cmplt(lo).any() {
-            return 0;
-        }
-        let (a, b) = (tile_of(lo), tile_of(hi));
-        let mut n = 0;
-        for z in a.z..=b.z {
-            for y in a.y..=b.y {
-                for x in a.x..=b.x {
-                    n += usize::from(!self.index.contains_key(&IVec3::new(x, y, z)));
-                }
-            }
-        }
-        n
+        tiles_over(lo, hi).filter(|k| !self.index.contains_key(k)).count()
     }
 
     /// The lattice points held.
@@ -227,6 +202,15 @@ impl TiledReader<'_> {
             (t.density(p), t.colour(p))
         })
     }
+}
+
+/// The keys of the tiles over `lo ..= hi` (none when the box is empty).
+fn tiles_over(lo: IVec3, hi: IVec3) -> impl Iterator<Item = IVec3> {
+    let (a, b) = (tile_of(lo), tile_of(hi));
+    let empty = hi.cmplt(lo).any();
+    (a.z..=b.z)
+        .flat_map(move |z| (a.y..=b.y).flat_map(move |y| (a.x..=b.x).map(move |x| IVec3::new(x, y, z))))
+        .filter(move |_| !empty)
 }
 
 #[inline]
