@@ -131,6 +131,11 @@ impl Isometry {
         )
     }
 
+    /// Whether it is the identity, within 1e-6 in every entry.
+    pub fn is_identity(&self) -> bool {
+        self.distance(&Isometry::IDENTITY) <= 1e-6
+    }
+
     /// Whether it mirrors (reverses handedness).
     pub fn mirrors(&self) -> bool {
         self.linear.determinant() < 0.0

@@ -155,9 +155,14 @@ impl TiledCopy {
         missing.len()
     }
 
-    /// The tiles `take` would read for `lo ..= hi` that are not held yet.
-    pub fn missing(&self, lo: IVec3, hi: IVec3) -> usize {
-        tiles_over(lo, hi).filter(|k| !self.index.contains_key(k)).count()
+    /// The tiles `take` would read for the boxes `(lo, hi)` that are not held yet, each once.
+    pub fn missing(&self, boxes: &[(IVec3, IVec3)]) -> usize {
+        let keys: std::collections::HashSet<IVec3> = boxes
+            .iter()
+            .flat_map(|&(lo, hi)| tiles_over(lo, hi))
+            .filter(|k| !self.index.contains_key(k))
+            .collect();
+        keys.len()
     }
 
     /// The lattice points held.
@@ -250,7 +255,11 @@ mod tests {
         let mut f = Field::new(0.001, 0.5);
         f.edit_box(IVec3::splat(-20), IVec3::splat(20), true, |p, d, _| *d = (p.x + 20) as f32 / 40.0);
         let mut copy = TiledCopy::new();
-        assert_eq!(copy.missing(IVec3::splat(-1), IVec3::splat(1)), 8);
+        assert_eq!(
+            copy.missing(&[(IVec3::splat(-1), IVec3::splat(1)), (IVec3::ZERO, IVec3::ONE)]),
+            8,
+            "shared tiles once"
+        );
         assert_eq!(copy.take(&f, IVec3::splat(-1), IVec3::splat(1)), 8);
         assert_eq!(copy.take(&f, IVec3::ZERO, IVec3::splat(15)), 0, "held already");
         let points = [IVec3::new(-16, 3, 0), IVec3::new(15, -16, 15), IVec3::new(7, 0, 0)];

@@ -286,7 +286,7 @@ impl RegionDrag {
         let t = *field.transform();
         let band_m = SOLID_BAND_VOXELS * t.voxel_size_m;
         let mut isometries = vec![Isometry::IDENTITY];
-        isometries.extend(images.iter().filter(|i| i.distance(&Isometry::IDENTITY) > 1e-6));
+        isometries.extend(images.iter().filter(|i| !i.is_identity()));
         let boxes: Vec<(IVec3, IVec3)> =
             isometries.iter().map(|i| lattice_box(field, region.image(i).bounds(band_m), 1)).collect();
         let points: usize = boxes.iter().map(|&(lo, hi)| box_points(lo, hi)).sum();
@@ -312,11 +312,6 @@ impl RegionDrag {
         })
     }
 
-    /// The operation.
-    pub fn op(&self) -> RegionOp {
-        self.op
-    }
-
     /// The region carried (the first image).
     pub fn region(&self) -> &Region {
         &self.images[0].region
@@ -325,11 +320,6 @@ impl RegionDrag {
     /// The region's images other than itself.
     pub fn image_regions(&self) -> impl Iterator<Item = &Region> + '_ {
         self.images.iter().skip(1).map(|i| &i.region)
-    }
-
-    /// The motion last applied.
-    pub fn motion(&self) -> Option<Motion> {
-        self.motion
     }
 
     /// The region and its images where the hand has carried them (a bend's: its grab ball),
@@ -383,8 +373,11 @@ impl RegionDrag {
             reach.push(lattice_box(field, bounds, 1));
             reach.push(lattice_box(field, landed, 1));
         }
-        let boxes: Vec<(IVec3, IVec3)> = reach.iter().chain(&self.written).copied().collect();
-        let missing: usize = boxes.iter().map(|&(lo, hi)| self.originals.missing(lo, hi)).sum();
+        // The region's own place is in both every frame: each box once.
+        let mut boxes: Vec<(IVec3, IVec3)> = reach.iter().chain(&self.written).copied().collect();
+        boxes.sort_by_key(|&(lo, hi)| (lo.to_array(), hi.to_array()));
+        boxes.dedup();
+        let missing = self.originals.missing(&boxes);
         let sources: usize = self.images.iter().map(|i| i.source.len()).sum();
         let points = self.originals.points() + missing * TiledCopy::TILE_POINTS + sources;
         if points > MAX_REGION_POINTS {
@@ -587,7 +580,7 @@ pub fn inflate(field: &mut Field, region: &Region, distance_m: f32, images: &[Is
     let tool = Tool { scale: region.frame.scale, ..Tool::new(region.shape.clone(), action, [1.0; 4]) };
     let dt = distance_m.abs() / ticks as f32;
     let mut placed = vec![(region.frame.pose, region.frame.mirrored)];
-    for image in images.iter().filter(|i| i.distance(&Isometry::IDENTITY) > 1e-6) {
+    for image in images.iter().filter(|i| !i.is_identity()) {
         let r = region.image(image);
         placed.push((r.frame.pose, r.frame.mirrored));
     }

@@ -98,7 +98,7 @@ impl Stroke {
     /// (a symmetry's images; the identity among them is the stroke itself).
     pub fn with_images(tool: Tool, images: &[Isometry]) -> Self {
         let mut stroke = Self::new(tool);
-        stroke.images = images.iter().copied().filter(|i| i.distance(&Isometry::IDENTITY) > 1e-6).collect();
+        stroke.images = images.iter().copied().filter(|i| !i.is_identity()).collect();
         stroke
     }
 
