@@ -520,6 +520,20 @@ fn region_grid_matches_golden() {
     golden_case("region-grid", "scenes/region-grid.toml", Some((256, 256)));
 }
 
+/// A figure of three parts at three resolutions (a plinth at 2 mm, a body at 1 mm, a head at
+/// 0.5 mm placed at 1.4 times its size and turned), a band of clay laid on the head part by a
+/// world-space tool.
+#[test]
+fn parts_figure_matches_golden() {
+    golden_case("parts-figure", "scenes/parts-figure.toml", Some((256, 256)));
+}
+
+/// A difference part drilling a hole through two others of different resolutions.
+#[test]
+fn parts_hole_matches_golden() {
+    golden_case("parts-hole", "scenes/parts-hole.toml", Some((256, 256)));
+}
+
 #[test]
 fn push_print_matches_golden_through_its_timeline() {
     golden_timeline_case("scenes/push-print.toml");

@@ -139,11 +139,25 @@ const TRIANGLES_PER_SURFACE_VOXEL: f64 = 3.0;
 pub const MESH_BYTES_PER_SURFACE_VOXEL: f64 = TRIANGLES_PER_SURFACE_VOXEL * (12.0 + 20.0) * 2.0;
 
 /// The estimate of what a scene's initial clay takes, with its mesh: the cost of rasterising
-/// each solid it adds (a solid carved away takes nothing more), summed.
+/// each solid it adds (a solid carved away takes nothing more) at its part's voxel, summed;
+/// where the parts are composed, each visible part's solids again, at the voxel of the
+/// composition's level it is sampled on (see [`crate::parts::Composition`]).
 pub fn scene_clay_cost(scene: &Scene) -> RasterCost {
     let mut cost = RasterCost::default();
-    for p in scene.clay.iter().filter(|p| p.op == CsgOp::Union) {
-        cost += rasterize_cost(&p.solid, scene.voxel_size_m);
+    let adding = || scene.clay.iter().filter(|p| p.op == CsgOp::Union);
+    for p in adding() {
+        cost += rasterize_cost(&p.solid, scene.parts[p.part].voxel_size_m);
+    }
+    let composed = scene.parts.len() > 1 || scene.parts.iter().any(|p| !p.placement.is_identity());
+    let world_voxel = |p: &crate::scene::ScenePart| p.voxel_size_m * p.placement.scale;
+    let finest = scene.parts.iter().filter(|p| p.visible).map(world_voxel).reduce(f32::min);
+    if let (true, Some(finest)) = (composed, finest) {
+        for p in adding().filter(|p| scene.parts[p.part].visible) {
+            let part = &scene.parts[p.part];
+            let level =
+                (world_voxel(part) / finest).log2().floor().clamp(0.0, crate::field::MESHED_LEVELS as f32);
+            cost += rasterize_cost(&p.solid, finest * level.exp2() / part.placement.scale);
+        }
     }
     cost
 }

@@ -105,6 +105,7 @@ pub fn test_pattern(calibration: &ScreenCalibration, width_px: u32) -> TestPatte
             scale: 1.0,
         },
         op: CsgOp::Union,
+        part: 0,
         colour: colour.extend(1.0).to_array(),
     };
     for i in 1..GRID_COLUMNS {
@@ -151,6 +152,7 @@ impl Marker {
                 scale: 1.0,
             },
             op: CsgOp::Union,
+            part: 0,
             colour: self.colour.extend(1.0).to_array(),
         });
         self

@@ -136,7 +136,7 @@ fn render_over(
         Some(field) => Playback::on_field(&scene, field, &[], start),
         None => Playback::new_autosaved(&scene, start)?,
     };
-    let initial = mesh_all(playback.field());
+    let initial = mesh_all(playback.surface());
     playback.field_mut().take_dirty();
     let clay = initial.upserted_bounds();
     // The views' copy of the scene, whose interaxial the parallax budget may lower.
@@ -165,7 +165,7 @@ fn render_over(
             break;
         }
         playback.sync_lattices();
-        let diff = mesher.remesh_dirty(playback.field_mut());
+        let diff = mesher.remesh_dirty(playback.surface());
         renderer.apply(diff)?;
         let mut frame = build_frame(&viewed, &playback.hands(), capture.show_tools);
         if capture.show_tools {

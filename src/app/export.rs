@@ -30,7 +30,8 @@ pub(super) fn end_s(scene: &Scene) -> f32 {
     scene.captures.iter().map(|c| c.time_s).fold(scene.timeline.duration_s(), f32::max)
 }
 
-/// `scene`'s clay at the end of its timeline (after its last key and capture).
+/// `scene`'s surface at the end of its timeline (after its last key and capture): its clay,
+/// or the composition of its parts.
 pub fn final_field(scene: &Scene) -> Field {
     played_to_end(Playback::new(scene))
 }
@@ -38,7 +39,7 @@ pub fn final_field(scene: &Scene) -> Field {
 /// The clay of `playback` at the end of its scene's timeline.
 fn played_to_end(mut playback: Playback<'_>) -> Field {
     playback.advance_to(end_s(playback.scene()), |_| {});
-    playback.into_field()
+    playback.into_surface()
 }
 
 /// The surface of `field`, welded into one indexed mesh; chunks in key order, so the same

@@ -39,7 +39,11 @@ pub fn symmetry_glyphs(playback: &super::playback::Playback<'_>) -> Vec<crate::r
         return Vec::new();
     }
     let scene = playback.scene();
-    let clay = scene.clay.iter().map(|c| c.solid.bounds()).reduce(|a, b| a.union(&b));
+    let clay = scene
+        .clay
+        .iter()
+        .map(|c| scene.parts[c.part].placement.world_box(c.solid.bounds()))
+        .reduce(|a, b| a.union(&b));
     let around = clay
         .map(|b| b.expanded(0.15 * b.size().max_element()))
         .or(scene.stage.map(|s| Aabb { min: s.min_m, max: s.max_m }))

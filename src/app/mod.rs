@@ -2,6 +2,7 @@
 //!
 //! The only module that knows every other; the CLI in `main.rs` is a thin shell over it.
 
+mod assembly;
 mod autosave;
 pub mod bench;
 mod bench_io;
@@ -20,6 +21,7 @@ mod station;
 mod xr_station;
 
 pub use crate::io::write_atomically;
+pub use assembly::Assembly;
 pub use autosave::{
     autosave_root, close_session, recover_and_report, recover_sessions, recovered_dir,
     remove_stale_spill_folders, start_autosave, RecoveredSculpt, RecoveryCount,

@@ -9,6 +9,7 @@ use crate::io::StoredTool;
 use crate::math::Pose;
 use std::sync::Arc;
 
+use super::assembly::{image_in_part, Assembly};
 use crate::clay::{window_around, Clay, ClayParams, ClayTool};
 use crate::lattice::{volume_at, Lattice, LatticeError};
 use crate::math::{Aabb, Isometry, Vec3};
@@ -46,11 +47,16 @@ struct Push {
 #[derive(Debug)]
 pub struct Playback<'s> {
     scene: &'s Scene,
+    /// The first part's clay: the one the desk, the headset, pushes, lattices and region tools
+    /// act on.
     field: Field,
+    /// The other parts, every part's layout and their composition.
+    assembly: Assembly,
     /// The scene's tools, built once the initial clay is laid (freeform tools copy it).
     tools: Vec<Tool>,
-    /// The stroke each hand is drawing (left, right), with its tool index.
-    strokes: [Option<(usize, Stroke)>; 2],
+    /// The stroke each hand is drawing (left, right), with its tool index and the part it acts
+    /// on.
+    strokes: [Option<(usize, usize, Stroke)>; 2],
     /// Whether the field's open stroke is the hands' (opened here).
     owns_stroke: bool,
     /// The push the hands' push and support tools drive, while one pushes.
@@ -103,14 +109,14 @@ impl<'s> Playback<'s> {
     /// The scene at time 0: its initial clay, rasterised into a new field, whatever it costs
     /// (for scenes known to be small; a user's scene goes through [`Playback::build`]).
     pub fn new(scene: &'s Scene) -> Self {
-        let mut field = empty_field(scene);
+        let mut fields: Vec<Field> = (0..scene.parts.len()).map(|p| empty_field(scene, p)).collect();
         for primitive in &scene.clay {
-            rasterize_solid(&mut field, &primitive.solid, primitive.op, primitive.colour);
+            rasterize_solid(&mut fields[primitive.part], &primitive.solid, primitive.op, primitive.colour);
         }
-        Self::on_field(scene, field, &[], |_, _| None)
+        Self::on_parts(scene, fields, &[], |_, _| None)
     }
 
-    /// The scene at time 0, its initial clay built by [`initial_clay`]: refused over the
+    /// The scene at time 0, its initial clay built by [`initial_parts`]: refused over the
     /// memory budget, with progress, and broken off by a stopping signal.
     pub fn build(scene: &'s Scene) -> Result<Self> {
         Self::new_autosaved(scene, |_, _| None)
@@ -129,13 +135,13 @@ impl<'s> Playback<'s> {
         restore_tools(&mut self.tools, stored)
     }
 
-    /// The scene at time 0, its initial clay built by [`initial_clay`], with autosave started
+    /// The scene at time 0, its initial clay built by [`initial_parts`], with autosave started
     /// by `start` on it, before the first stroke; every stroke that ends is then journaled.
     pub fn new_autosaved(
         scene: &'s Scene,
         start: impl FnOnce(&mut Field, &[StoredTool]) -> Option<Autosave>,
     ) -> Result<Self> {
-        Ok(Self::on_field(scene, initial_clay(scene)?, &[], start))
+        Ok(Self::on_parts(scene, initial_parts(scene)?, &[], start))
     }
 
     /// The scene at time 0 over `field` (a sculpt opened from a file) instead of its initial
@@ -143,16 +149,38 @@ impl<'s> Playback<'s> {
     /// autosave started by `start` on it (given the scene's freeform tools, for its snapshots).
     pub fn on_field(
         scene: &'s Scene,
-        mut field: Field,
+        field: Field,
         stored: &[StoredTool],
         start: impl FnOnce(&mut Field, &[StoredTool]) -> Option<Autosave>,
     ) -> Self {
+        // The other parts, as the scene makes them.
+        let mut fields: Vec<Field> = (0..scene.parts.len()).map(|p| empty_field(scene, p)).collect();
+        for primitive in scene.clay.iter().filter(|c| c.part > 0) {
+            rasterize_solid(&mut fields[primitive.part], &primitive.solid, primitive.op, primitive.colour);
+        }
+        fields[0] = field;
+        Self::on_parts(scene, fields, stored, start)
+    }
+
+    /// The scene at time 0 over `fields`, one per part of the scene, as [`Playback::on_field`]
+    /// does over the first.
+    fn on_parts(
+        scene: &'s Scene,
+        mut fields: Vec<Field>,
+        stored: &[StoredTool],
+        start: impl FnOnce(&mut Field, &[StoredTool]) -> Option<Autosave>,
+    ) -> Self {
+        assert_eq!(fields.len(), scene.parts.len(), "a field per part");
+        let others = fields.split_off(1);
+        let mut field = fields.pop().expect("the first part");
+        let assembly = Assembly::new(scene.parts.clone(), others, &field);
         let mut tools: Vec<Tool> = scene.tools.iter().map(|t| build_tool(t, &field)).collect();
         restore_tools(&mut tools, stored);
         let autosave = start(&mut field, &stored_tools(&tools));
         let mut playback = Self {
             scene,
             field,
+            assembly,
             tools,
             strokes: [None, None],
             owns_stroke: false,
@@ -218,6 +246,55 @@ impl<'s> Playback<'s> {
     /// The clay, ending the playback.
     pub fn into_field(self) -> Field {
         self.field
+    }
+
+    /// The sculpt's parts: their layouts and the fields of all but the first.
+    pub fn assembly(&self) -> &Assembly {
+        &self.assembly
+    }
+
+    /// The surface drawn, measured and exported, brought up to date: the first part's clay
+    /// where it is the whole sculpt, else the composition of every part (see [`Assembly`]).
+    /// Its dirty set says what to re-mesh.
+    pub fn surface(&mut self) -> &mut Field {
+        self.assembly.surface(&mut self.field)
+    }
+
+    /// The surface as it was last brought up to date by [`Playback::surface`].
+    pub fn surface_now(&self) -> &Field {
+        self.assembly.surface_now(&self.field)
+    }
+
+    /// The surface, up to date, ending the playback.
+    pub fn into_surface(mut self) -> Field {
+        let _ = self.surface();
+        let Playback { field, assembly, .. } = self;
+        assembly.into_surface(field)
+    }
+
+    /// Takes back the newest step of the sculpt, in every part it changed; returns whether
+    /// there was one.
+    pub fn undo(&mut self) -> Result<bool, crate::field::HistoryError> {
+        self.close_steps();
+        self.assembly.undo(&mut self.field)
+    }
+
+    /// Puts back the newest step undone; returns whether there was one.
+    pub fn redo(&mut self) -> bool {
+        self.close_steps();
+        self.assembly.redo(&mut self.field)
+    }
+
+    /// Ends the hands' strokes and closes the steps they hold open on every part, as undo
+    /// closes an open stroke before taking back the newest.
+    fn close_steps(&mut self) {
+        self.strokes = [None, None];
+        if self.owns_stroke {
+            self.field.end_stroke();
+            self.owns_stroke = false;
+        }
+        self.assembly.end_strokes();
+        self.journal();
     }
 
     /// The clay's matter: the field's mass, plus what a push in progress holds beyond the
@@ -313,21 +390,35 @@ impl<'s> Playback<'s> {
             };
             let stroke = &mut self.strokes[slot(hand)];
             let active = during.active || (t == previous && at_end.active);
-            if !active || self.tools[during.tool].action.is_clay_body() {
+            let part = during.part.min(self.assembly.parts().len() - 1);
+            if !active || self.tools[during.tool].action.is_clay_body() || self.assembly.parts()[part].locked
+            {
                 *stroke = None;
                 continue;
             }
-            if stroke.as_ref().is_none_or(|(tool, _)| *tool != during.tool) {
-                if !self.field.in_stroke() {
-                    self.field.begin_stroke();
-                    self.owns_stroke = true;
+            // In a part placed in the world, the tool acts in the part's frame.
+            let frame = self.assembly.frame_of(part);
+            let local = |pose: Pose| frame.map_or(pose, |f| f.local_pose(pose));
+            if stroke.as_ref().is_none_or(|(tool, on, _)| (*tool, *on) != (during.tool, part)) {
+                let field = self.assembly.field_mut(&mut self.field, part);
+                if !field.in_stroke() {
+                    field.begin_stroke();
+                    self.owns_stroke |= part == 0;
                 }
-                let mut s = Stroke::with_images(self.tools[during.tool].clone(), &self.images);
-                s.advance(&mut self.field, at_start.pose, 0.0);
-                *stroke = Some((during.tool, s));
+                let mut tool = self.tools[during.tool].clone();
+                let images: Vec<Isometry> = match frame {
+                    Some(f) => {
+                        tool.scale /= f.scale;
+                        self.images.iter().map(|i| image_in_part(i, &f)).collect()
+                    }
+                    None => self.images.clone(),
+                };
+                let mut s = Stroke::with_images(tool, &images);
+                s.advance(field, local(at_start.pose), 0.0);
+                *stroke = Some((during.tool, part, s));
             }
-            if let Some((_, s)) = stroke {
-                s.advance(&mut self.field, at_end.pose, t - previous);
+            if let Some((_, part, s)) = stroke {
+                s.advance(self.assembly.field_mut(&mut self.field, *part), local(at_end.pose), t - previous);
             }
         }
         self.step_clay(previous, t);
@@ -350,12 +441,17 @@ impl<'s> Playback<'s> {
                 a.record(&mut self.field);
             }
         }
+        if !drawing {
+            self.assembly.end_strokes();
+            self.assembly.note_steps(&self.field);
+        }
         self.time_s = t;
     }
 
     /// Journals the strokes finished on the field since the last record (a stroke drawn on
     /// the field by someone else, an undo, a redo), if autosave runs.
     pub fn journal(&mut self) {
+        self.assembly.note_steps(&self.field);
         if let Some(a) = &mut self.autosave {
             a.record(&mut self.field);
         }
@@ -686,7 +782,7 @@ impl<'s> Playback<'s> {
 
     /// The stroke a hand is drawing, if its action is on.
     pub fn stroke(&self, hand: Hand) -> Option<&Stroke> {
-        self.strokes[slot(hand)].as_ref().map(|(_, s)| s)
+        self.strokes[slot(hand)].as_ref().map(|(_, _, s)| s)
     }
 
     /// Where each hand holds which tool now: `(tool index, pose)` for the hands with keys (or
@@ -708,9 +804,10 @@ impl<'s> Playback<'s> {
     }
 }
 
-/// An empty field of the scene's voxel size and iso-level, with the station's history.
-fn empty_field(scene: &Scene) -> Field {
-    let mut field = Field::new(scene.voxel_size_m, scene.iso);
+/// An empty field for the scene's part `part`: its voxel size, the scene's iso-level, the
+/// station's history.
+fn empty_field(scene: &Scene, part: usize) -> Field {
+    let mut field = Field::new(scene.parts[part].voxel_size_m, scene.iso);
     field.set_history_config(super::history_config());
     field
 }
@@ -724,10 +821,10 @@ const LONG_BUILD_POINTS: f64 = 5e7;
 /// it builds and shows its progress on the terminal; a stopping signal (SIGINT, SIGTERM or
 /// SIGHUP, where the station handles them) breaks it off between two slabs of bricks, with an
 /// error that says so (nothing has been sculpted yet: nothing is lost).
-pub fn initial_clay(scene: &Scene) -> Result<Field> {
+pub fn initial_parts(scene: &Scene) -> Result<Vec<Field>> {
     let cost = super::budget::scene_clay_cost(scene);
     super::budget::admit_scene(scene, &cost)?;
-    let mut field = empty_field(scene);
+    let mut fields: Vec<Field> = (0..scene.parts.len()).map(|p| empty_field(scene, p)).collect();
     let long = cost.points > LONG_BUILD_POINTS;
     if long {
         eprintln!(
@@ -753,7 +850,7 @@ pub fn initial_clay(scene: &Scene) -> Result<Field> {
             }
         };
         let whole = rasterize_solid_in_slabs(
-            &mut field,
+            &mut fields[primitive.part],
             &primitive.solid,
             primitive.op,
             primitive.colour,
@@ -770,7 +867,7 @@ pub fn initial_clay(scene: &Scene) -> Result<Field> {
         }
     }
     bar.finish_and_clear();
-    Ok(field)
+    Ok(fields)
 }
 
 /// The freeform tools among `tools`, as a sculpt stores them (each with its index).

@@ -879,13 +879,12 @@ impl<'s> Station<'s> {
     }
 
     fn act(&mut self, action: StationAction) {
-        let field = self.playback.field_mut();
         match action {
             StationAction::Quit => self.quit = true,
             StationAction::Undo => {
                 self.stroke = None;
                 self.region_drag = None;
-                match field.undo() {
+                match self.playback.undo() {
                     Ok(true) => {
                         self.playback.journal();
                         self.unsaved_strokes += 1;
@@ -895,7 +894,7 @@ impl<'s> Station<'s> {
                 }
             }
             StationAction::Redo => {
-                if field.redo() {
+                if self.playback.redo() {
                     self.playback.journal();
                     self.unsaved_strokes += 1;
                 } else {
@@ -1621,7 +1620,7 @@ impl<'s> Station<'s> {
         // Field → mesh → renderer.
         let mesh_started = Instant::now();
         self.playback.sync_lattices();
-        let diff = self.mesher.remesh_dirty(self.playback.field_mut());
+        let diff = self.mesher.remesh_dirty(self.playback.surface());
         if !diff.is_empty() {
             for key in &diff.removed {
                 self.chunk_bounds.remove(key);
@@ -1740,7 +1739,7 @@ impl<'s> Station<'s> {
         };
         let contact = driven.map_or(Contact::default(), |(pose, stroking)| {
             let (touching, density) =
-                contact_under(self.playback.field(), pose, self.desk_tool.half_extents_m());
+                contact_under(self.playback.surface_now(), pose, self.desk_tool.half_extents_m());
             Contact { touching, density, stroking }
         });
         let feedback = self.feedback.get_or_insert_with(|| {

@@ -283,7 +283,7 @@ impl<'s> XrSculptor<'s> {
 
     fn undo(&mut self) {
         self.end_stroke();
-        match self.playback.field_mut().undo() {
+        match self.playback.undo() {
             Ok(true) => self.playback.journal(),
             Ok(false) => self.messages.push("nothing to undo".into()),
             Err(e) => self.messages.push(format!("undo failed: {e}")),
@@ -292,7 +292,7 @@ impl<'s> XrSculptor<'s> {
 
     fn redo(&mut self) {
         self.end_stroke();
-        if self.playback.field_mut().redo() {
+        if self.playback.redo() {
             self.playback.journal();
         } else {
             self.messages.push("nothing to redo".into());
@@ -439,13 +439,13 @@ impl<'s> XrSculptor<'s> {
         let pushing_tool = self.tool_index.filter(|_| self.tool.action == Action::Push);
         let mut live = [None, None];
         if let (Some(tool), Some(pose)) = (pushing_tool, tool_pose) {
-            live[self.dominant] = Some(PlaybackHand { tool, pose, active: applying });
+            live[self.dominant] = Some(PlaybackHand { tool, pose, active: applying, part: 0 });
         }
         let other = input.hands[1 - self.dominant];
         if let (Some(tool), Some(grip)) = (self.support, other.grip) {
             let active = other.trigger >= TRIGGER_ON && self.grab.is_none();
             let pose = self.placement.pose_to_world(grip);
-            live[1 - self.dominant] = Some(PlaybackHand { tool, pose, active });
+            live[1 - self.dominant] = Some(PlaybackHand { tool, pose, active, part: 0 });
         }
         self.playback.set_live_hands(live);
         self.time_s += dt_s;
@@ -455,7 +455,7 @@ impl<'s> XrSculptor<'s> {
         let tool = self.acting_tool(hand.trigger.clamp(0.0, 1.0));
         let side = if self.dominant == 0 { Hand::Left } else { Hand::Right };
         if let Some(pose) = tool_pose {
-            let density = contact_density(self.playback.field(), pose, tool.half_extents_m());
+            let density = contact_density(self.playback.surface_now(), pose, tool.half_extents_m());
             let touching = density >= TOUCH_DENSITY;
             if touching && !self.touching {
                 haptics.push(Haptic { hand: side, amplitude: TOUCH_PULSE.0, duration_ns: TOUCH_PULSE.1 });
@@ -496,7 +496,7 @@ impl<'s> XrSculptor<'s> {
         let tools_ms = started.elapsed().as_secs_f64() * 1e3;
         let meshing = std::time::Instant::now();
         self.playback.sync_lattices();
-        let diff = self.mesher.remesh_dirty(self.playback.field_mut());
+        let diff = self.mesher.remesh_dirty(self.playback.surface());
         if !diff.is_empty() {
             apply(diff);
         }
@@ -712,7 +712,7 @@ pub fn run_xr(
                             back.runtime()
                         );
                         validation = back.renderer().validation_log();
-                        let diff = sculptor.mesher.mesh_all(sculptor.playback.field());
+                        let diff = sculptor.mesher.mesh_all(sculptor.playback.surface());
                         if let Err(e) = back.renderer_mut().apply(diff) {
                             break Err(
                                 anyhow::Error::new(e).context("cannot draw the sculpt in the new session")

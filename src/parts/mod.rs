@@ -9,11 +9,17 @@
 //! [`RegionDrag`] carries, copies or bends a selected region of the clay, resampling it from
 //! its state when the drag started; [`inflate`] grows or shrinks the surface within one.
 //!
+//! A sculpt is built of parts: fields of their own, each placed in the world ([`Placement`])
+//! and composed with the parts before it by a [`Csg`] operator into the one surface drawn and
+//! exported ([`Composition`]).
+//!
 //! Depends on `math`, `field` and `tool`.
 
+mod part;
 mod region;
 mod symmetry;
 
+pub use part::{part_bounds, Composition, Csg, PartView, Placement, PlacementError, SCALE_RANGE};
 pub use region::{
     copy_repeated, inflate, Motion, Region, RegionDrag, RegionError, RegionOp, RegionStats, MAX_REGION_POINTS,
 };

@@ -46,6 +46,8 @@ pub(super) struct SceneFile {
     pub symmetry: Option<Spanned<super::symmetry::SymmetryFile>>,
     #[serde(default)]
     pub region: Vec<Spanned<super::region::RegionFile>>,
+    #[serde(default)]
+    pub part: Vec<Spanned<super::part::PartFile>>,
 }
 
 /// `[input]`: the desk input settings file the scene asks for.
@@ -351,6 +353,7 @@ pub(super) struct ClaySpec {
     pub minor_radius_m: Option<f32>,
     pub length_m: Option<f32>,
     pub thickness_m: Option<f32>,
+    pub part: Option<String>,
 }
 
 #[derive(Deserialize, Clone, Copy, PartialEq, Eq, Debug)]
@@ -497,6 +500,7 @@ pub(super) struct KeySpec {
     pub rotation_deg: [f32; 3],
     #[serde(default)]
     pub active: bool,
+    pub part: Option<String>,
 }
 
 fn right() -> HandSpec {

@@ -11,6 +11,7 @@ mod file;
 mod finite;
 mod head;
 mod lattice;
+mod part;
 mod region;
 mod screen;
 mod symmetry;
@@ -22,6 +23,7 @@ use std::path::{Path, PathBuf};
 pub use colour::{parse_hex, SceneColour};
 pub use head::{HeadKey, HeadPath};
 pub use lattice::{SceneLattice, MAX_WEIGHT};
+pub use part::{ScenePart, MAX_PARTS, MAX_PART_NAME};
 pub use region::{RegionAction, SceneRegion, MAX_COPIES, MAX_INFLATION_M};
 pub use screen::{
     DisplayCalibration, ScreenCalibration, TrackerCalibration, TrackerZero, SHIPPED_SCREEN_TOML,
@@ -81,6 +83,9 @@ pub struct ClayPrimitive {
     pub op: CsgOp,
     /// Linear RGBA.
     pub colour: Colour,
+    /// The part it is clay of (an index into [`Scene::parts`]); the solid is placed in that
+    /// part's own frame.
+    pub part: usize,
 }
 
 /// What a light is attached to.
@@ -276,6 +281,9 @@ pub struct Scene {
     pub symmetry: Symmetry,
     /// Region tools on the timeline, in time order (`[[region]]`).
     pub regions: Vec<SceneRegion>,
+    /// The parts the sculpt is built of, in composition order (`[[part]]`; one whole part
+    /// without it). Region tools, lattices and pushed clay act on the first.
+    pub parts: Vec<ScenePart>,
 }
 
 /// The virtual clay's settings: its fluidity, its step, and what holds it besides the tools.
@@ -614,6 +622,7 @@ fn resolve(
         far_m: c.far_m,
     };
 
+    let parts = part::resolve_parts(&file.part, field_voxel, at)?;
     let mut clay = Vec::with_capacity(file.clay.len());
     for spanned in &file.clay {
         let span = spanned.span();
@@ -646,7 +655,8 @@ fn resolve(
             OpSpec::Difference => CsgOp::Difference,
         };
         let pose = Pose { position_m: Vec3::from(spec.position_m), rotation: rotation(spec.rotation_deg) };
-        clay.push(ClayPrimitive { solid: PlacedSolid { solid, pose, scale: spec.scale }, op, colour });
+        let part = part::part_index(&parts, spec.part.as_deref(), span, at)?;
+        clay.push(ClayPrimitive { solid: PlacedSolid { solid, pose, scale: spec.scale }, op, colour, part });
     }
 
     let mut lights = Vec::new();
@@ -843,12 +853,20 @@ fn resolve(
             file::HandSpec::Left => Hand::Left,
             file::HandSpec::Right => Hand::Right,
         };
+        let part = part::part_index(&parts, k.part.as_deref(), span, at)?;
+        if k.active && parts[part].locked {
+            return Err(at(
+                Some(file.key[keys.len()].span()),
+                format!("part \"{}\" is locked: no tool acts on it", parts[part].name),
+            ));
+        }
         keys.push(Key {
             time_s: k.time_s,
             hand,
             tool,
             pose: Pose { position_m: Vec3::from(k.position_m), rotation: rotation(k.rotation_deg) },
             active: k.active,
+            part,
         });
     }
     let step = &file.timeline.step_s;
@@ -1013,6 +1031,7 @@ fn resolve(
         lattices,
         symmetry,
         regions,
+        parts,
     })
 }
 

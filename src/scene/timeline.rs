@@ -34,6 +34,8 @@ pub struct Key {
     pub pose: Pose,
     /// Whether the action is on from this key to the next of the same hand.
     pub active: bool,
+    /// The part the tool acts on (an index into the scene's parts).
+    pub part: usize,
 }
 
 /// What a hand does at a given time.
@@ -45,6 +47,8 @@ pub struct HandState {
     pub pose: Pose,
     /// Whether the action is on.
     pub active: bool,
+    /// The part the tool acts on.
+    pub part: usize,
 }
 
 /// The keys of both hands, each hand's sorted by time.
@@ -103,9 +107,9 @@ impl Timeline {
     pub fn state_at(&self, hand: Hand, t: f32) -> Option<HandState> {
         let keys = self.keys(hand);
         Some(match locate(keys, t, |k| k.time_s)? {
-            Span::Rest(k) => HandState { tool: k.tool, pose: k.pose, active: false },
+            Span::Rest(k) => HandState { tool: k.tool, pose: k.pose, active: false, part: k.part },
             Span::Between(k, next, u) => {
-                HandState { tool: k.tool, pose: k.pose.lerp(&next.pose, u), active: k.active }
+                HandState { tool: k.tool, pose: k.pose.lerp(&next.pose, u), active: k.active, part: k.part }
             }
         })
     }
@@ -144,6 +148,7 @@ mod tests {
             hand: Hand::Right,
             tool: 0,
             pose: Pose { position_m: Vec3::new(x, 0.0, 0.0), ..Pose::default() },
+            part: 0,
             active,
         }
     }

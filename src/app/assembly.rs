@@ -1,0 +1,220 @@
+//! The sculpt's parts as a session holds them: the first part's field lives in the playback
+//! (the desk's and the headset's tools, pushed clay, lattices and region tools act on it); the
+//! other parts' fields, every part's placement, operator and visibility, the composition the
+//! mesher reads, and the sculpt-wide undo order live here.
+//!
+//! Each part's field keeps its own undo history; a sculpt step (a stroke, a push, a region
+//! tool) may change several parts at once, so the steps are logged in the order they close,
+//! each with the parts it changed, and undo takes back the newest step in every part it
+//! changed.
+
+use crate::field::{Field, HistoryError, BRICK_SIZE};
+use crate::math::{IVec3, Isometry, Mat3};
+use crate::parts::{Composition, PartView, Placement};
+use crate::scene::ScenePart;
+
+/// The parts beyond the first, every part's layout, the composition and the undo order.
+#[derive(Debug)]
+pub struct Assembly {
+    parts: Vec<ScenePart>,
+    /// The fields of parts 1.. (part 0's is the playback's).
+    others: Vec<Field>,
+    composition: Option<Composition>,
+    /// Closed sculpt steps, oldest first: the parts each changed.
+    undo: Vec<Vec<usize>>,
+    redo: Vec<Vec<usize>>,
+    /// Per part, the undo steps its field held when last looked at.
+    seen: Vec<usize>,
+}
+
+/// Undo steps a field has recorded and not taken back (dropped ones included, so that the
+/// count only grows with new steps).
+fn steps(field: &Field) -> usize {
+    let s = field.history_stats();
+    s.undo_in_memory + s.undo_on_disk + s.dropped
+}
+
+impl Assembly {
+    /// The parts `parts` describes, `others` holding the fields of all but the first.
+    pub fn new(parts: Vec<ScenePart>, others: Vec<Field>, first: &Field) -> Self {
+        debug_assert_eq!(parts.len(), others.len() + 1);
+        let seen = std::iter::once(first).chain(&others).map(steps).collect();
+        Self { parts, others, composition: None, undo: Vec::new(), redo: Vec::new(), seen }
+    }
+
+    /// The parts' layouts, in composition order.
+    pub fn parts(&self) -> &[ScenePart] {
+        &self.parts
+    }
+
+    /// The fields of the parts after the first.
+    pub fn others(&self) -> &[Field] {
+        &self.others
+    }
+
+    /// Part `part`'s field (`first` is part 0's).
+    pub fn field<'a>(&'a self, first: &'a Field, part: usize) -> &'a Field {
+        if part == 0 {
+            first
+        } else {
+            &self.others[part - 1]
+        }
+    }
+
+    /// Part `part`'s field, mutably (`first` is part 0's).
+    pub fn field_mut<'a>(&'a mut self, first: &'a mut Field, part: usize) -> &'a mut Field {
+        if part == 0 {
+            first
+        } else {
+            &mut self.others[part - 1]
+        }
+    }
+
+    /// Every part's field with its layout, as the composition reads them.
+    fn views<'a>(&'a self, first: &'a Field) -> Vec<PartView<'a>> {
+        views(&self.parts, &self.others, first)
+    }
+
+    /// Where a tool acting on part `part` acts, when that part is not at rest in the world: its
+    /// placement (the tool's pose and size go into the part's frame through it).
+    pub fn frame_of(&self, part: usize) -> Option<Placement> {
+        let p = self.parts[part].placement;
+        (!p.is_identity()).then_some(p)
+    }
+
+    /// The surface the mesher reads, brought up to date with every part's changes: the first
+    /// part's field where it is the whole sculpt, else the composition (re-made where the
+    /// parts changed, whole where their layout did). Its dirty set says what to re-mesh.
+    pub fn surface<'a>(&'a mut self, first: &'a mut Field) -> &'a mut Field {
+        let needed = Composition::needed(&self.views(first));
+        if !needed {
+            if let Some(old) = self.composition.take() {
+                redraw_over(first, old.field());
+            }
+            return first;
+        }
+        let mut changed = Vec::new();
+        for part in 0..self.parts.len() {
+            let field = self.field_mut(first, part);
+            changed.extend(
+                field
+                    .drain_dirty()
+                    .map(|k| (part, k * BRICK_SIZE, k * BRICK_SIZE + IVec3::splat(BRICK_SIZE - 1))),
+            );
+        }
+        let views = views(&self.parts, &self.others, first);
+        match &mut self.composition {
+            Some(c) if c.fits(&views) => c.update(&views, &changed),
+            slot => {
+                let mut fresh = Composition::build(&views);
+                // What was drawn before (the first part alone, or an older layout) is drawn again.
+                match slot.as_ref() {
+                    Some(old) => redraw_over(fresh.field_mut(), old.field()),
+                    None => redraw_over(fresh.field_mut(), first),
+                }
+                *slot = Some(fresh);
+            }
+        }
+        self.composition.as_mut().map_or(first, Composition::field_mut)
+    }
+
+    /// The surface as last brought up to date by [`Assembly::surface`], ending the assembly.
+    pub fn into_surface(self, first: Field) -> Field {
+        match self.composition {
+            Some(c) => c.into_field(),
+            None => first,
+        }
+    }
+
+    /// The surface as last brought up to date by [`Assembly::surface`].
+    pub fn surface_now<'a>(&'a self, first: &'a Field) -> &'a Field {
+        self.composition.as_ref().map_or(first, Composition::field)
+    }
+
+    /// Logs the sculpt step that has just closed on any part's field (the parts whose fields
+    /// recorded a new step); a new step clears the redo order.
+    pub fn note_steps(&mut self, first: &Field) {
+        let now: Vec<usize> = std::iter::once(first).chain(&self.others).map(steps).collect();
+        let grown: Vec<usize> = (0..now.len()).filter(|&i| now[i] > self.seen[i]).collect();
+        self.seen = now;
+        if !grown.is_empty() {
+            self.undo.push(grown);
+            self.redo.clear();
+        }
+    }
+
+    /// Takes back the newest sculpt step in every part it changed (the first part's newest step
+    /// when none is logged). Returns whether there was one.
+    pub fn undo(&mut self, first: &mut Field) -> Result<bool, HistoryError> {
+        self.note_steps(first);
+        let parts = self.undo.pop().unwrap_or_else(|| vec![0]);
+        let mut any = false;
+        for &part in &parts {
+            any |= self.field_mut(first, part).undo()?;
+        }
+        if any {
+            self.redo.push(parts);
+        }
+        self.seen = std::iter::once(&*first).chain(&self.others).map(steps).collect();
+        Ok(any)
+    }
+
+    /// Puts back the newest step undone. Returns whether there was one.
+    pub fn redo(&mut self, first: &mut Field) -> bool {
+        self.note_steps(first);
+        let parts = self.redo.pop().unwrap_or_else(|| vec![0]);
+        let mut any = false;
+        for &part in &parts {
+            any |= self.field_mut(first, part).redo();
+        }
+        if any {
+            self.undo.push(parts);
+        }
+        self.seen = std::iter::once(&*first).chain(&self.others).map(steps).collect();
+        any
+    }
+
+    /// Closes the strokes open on the parts after the first.
+    pub fn end_strokes(&mut self) {
+        for field in &mut self.others {
+            if field.in_stroke() {
+                field.end_stroke();
+            }
+        }
+    }
+}
+
+/// Every part's field with its layout, as the composition reads them.
+fn views<'a>(parts: &'a [ScenePart], others: &'a [Field], first: &'a Field) -> Vec<PartView<'a>> {
+    parts
+        .iter()
+        .enumerate()
+        .map(|(i, p)| PartView {
+            field: if i == 0 { first } else { &others[i - 1] },
+            placement: p.placement,
+            op: p.op,
+            visible: p.visible,
+        })
+        .collect()
+}
+
+/// Marks dirty in `field` every brick `drawn` holds, so that what was drawn of it is re-meshed
+/// (and removed where `field` holds nothing there).
+fn redraw_over(field: &mut Field, drawn: &Field) {
+    for key in drawn.covered_keys() {
+        let lo = key * BRICK_SIZE;
+        field.mark_dirty(lo, lo + IVec3::splat(BRICK_SIZE - 1));
+    }
+}
+
+/// A world symmetry image as it acts in the frame of a part placed at `placement`:
+/// `placement⁻¹ ∘ image ∘ placement`.
+pub fn image_in_part(image: &Isometry, placement: &Placement) -> Isometry {
+    let r = Mat3::from_quat(placement.rotation);
+    let r_inv = r.transpose();
+    let t = placement.translation_m;
+    Isometry {
+        linear: r_inv * image.linear * r,
+        translation: r_inv * (image.linear * t + image.translation - t) / placement.scale,
+    }
+}

@@ -1,0 +1,228 @@
+//! Parts: a figure of three parts at three resolutions, a difference part drilling through two
+//! others, tools acting on one part through its placement, sculpt-wide undo across parts, any
+//! composition meshing closed and consistently oriented, and bad parts refused at their line.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use argile::app::{welded_surface, Playback};
+use argile::field::{Field, FieldReader};
+use argile::math::{Pose, Quat, Vec3};
+use argile::parts::{Composition, Csg, PartView, Placement};
+use argile::scene::{Scene, Timeline};
+use argile::tool::{rasterize_solid, CsgOp, PlacedSolid, Solid};
+use proptest::prelude::*;
+
+fn scene(name: &str) -> Scene {
+    Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name))
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn density(field: &Field, world_m: Vec3) -> f32 {
+    FieldReader::new(field).density_world(world_m)
+}
+
+/// Every directed edge once and its reverse once: closed, edge-manifold, consistently oriented;
+/// every position finite.
+fn assert_closed_and_oriented(field: &Field, what: &str) -> usize {
+    let mesh = welded_surface(field);
+    assert!(mesh.positions.iter().flatten().all(|c| c.is_finite()), "{what}: a vertex is not finite");
+    let mut edges = HashMap::<(u32, u32), u32>::new();
+    for t in mesh.indices.chunks_exact(3) {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            *edges.entry((a, b)).or_default() += 1;
+        }
+    }
+    for (&(a, b), &n) in &edges {
+        assert_eq!(n, 1, "{what}: edge {a}-{b} used {n} times");
+        assert_eq!(edges.get(&(b, a)), Some(&1), "{what}: edge {a}-{b} has no reverse: a hole");
+    }
+    mesh.triangle_count()
+}
+
+#[test]
+fn a_figure_of_three_parts_keeps_each_at_its_resolution_and_meshes_closed() {
+    let scene = scene("parts-figure.toml");
+    assert_eq!(scene.parts.iter().map(|p| p.name.as_str()).collect::<Vec<_>>(), ["plinth", "body", "head"]);
+    let mut playback = Playback::new(&scene);
+    playback.advance_to(1.0, |_| {});
+    let parts = playback.assembly();
+    assert_eq!(parts.others()[1].transform().voxel_size_m, 0.0005, "the head keeps its own voxel");
+    let surface = playback.into_surface();
+    // The head's world voxel (0.5 mm × 1.4) is the finest: the composition's; the plinth's
+    // 2 mm sits on a coarser level.
+    assert!((surface.transform().voxel_size_m - 0.0007).abs() < 1e-7);
+    assert!(surface.level_brick_count(1) > 0, "the plinth on a coarser level");
+    for (what, at) in [
+        ("plinth", Vec3::new(0.035, 0.007, 0.02)),
+        ("body", Vec3::new(0.0, 0.04, 0.0)),
+        ("head", Vec3::new(0.0, 0.078, 0.0)),
+        (
+            "head's nose, turned 30° and scaled 1.4",
+            Quat::from_rotation_y(30f32.to_radians()) * Vec3::new(0.0, 0.0, 0.0126) + Vec3::Y * 0.078,
+        ),
+    ] {
+        assert!(density(&surface, at) > 0.5, "{what} at {at}");
+    }
+    assert!(
+        density(&surface, Vec3::new(0.0, 0.078, 0.0125)) < 0.5,
+        "the head is not where its nose would be unturned"
+    );
+    let triangles = assert_closed_and_oriented(&surface, "figure");
+    assert!(triangles > 10_000, "{triangles} triangles");
+}
+
+#[test]
+fn a_tool_on_one_part_acts_in_its_frame_and_leaves_the_others() {
+    let scene = scene("parts-figure.toml");
+    let mut bare = scene.clone();
+    bare.timeline = Timeline::new(Vec::new(), scene.timeline.step_s()).unwrap();
+    let before = Playback::new(&bare);
+    let mut after = Playback::new(&scene);
+    after.advance_to(1.0, |_| {});
+    assert!(after.field().same_samples(before.field()), "the plinth is untouched");
+    assert!(
+        after.assembly().others()[0].same_samples(&before.assembly().others()[0]),
+        "the body is untouched"
+    );
+    let (head_before, head_after) = (&before.assembly().others()[1], &after.assembly().others()[1]);
+    assert!(head_after.mass() > head_before.mass(), "the band is laid on the head");
+    // At a key's world position, the band is clay of the head, in its frame.
+    let placement = scene.parts[2].placement;
+    let key = Vec3::new(0.0, 0.0815, 0.0118);
+    let local = placement.local_point(key);
+    let index = head_after.transform().world_to_index(local);
+    assert!(FieldReader::new(head_after).density_at(index) > 0.5);
+    assert!(FieldReader::new(head_before).density_at(index) < 0.5);
+    // The tool's world size holds in the head's frame: a 2.5 mm ball is 2.5 / 1.4 mm there, so
+    // the band's clay is about what a stroke of the same tool lays in the world.
+    let added =
+        (head_after.mass() - head_before.mass()) * f64::from(head_after.transform().voxel_size_m).powi(3);
+    let world_added = added * f64::from(placement.scale).powi(3);
+    assert!(world_added > 1e-7 && world_added < 1e-6, "{world_added} m³ of band");
+}
+
+#[test]
+fn a_difference_part_drills_through_two_others_and_hidden_it_leaves_them_whole() {
+    let scene = scene("parts-hole.toml");
+    let surface = argile::app::final_field(&scene);
+    let hole = Vec3::new(0.0, 0.045, 0.0);
+    assert!(density(&surface, hole) < 0.5, "the hole through wall and pillar");
+    assert!(density(&surface, hole + Vec3::Z * 0.017) < 0.5, "through the pillar's front");
+    assert!(density(&surface, hole + Vec3::new(0.0, 0.012, 0.0)) > 0.5, "clay beside the hole");
+    assert_closed_and_oriented(&surface, "drilled");
+    let mut hidden = scene.clone();
+    hidden.parts[2].visible = false;
+    let whole = argile::app::final_field(&hidden);
+    assert!(density(&whole, hole) > 0.5, "hidden, the drill cuts nothing");
+}
+
+#[test]
+fn undo_takes_back_a_step_on_another_part_and_gives_the_sculpt_back_bit_for_bit() {
+    let scene = scene("parts-figure.toml");
+    let mut bare = scene.clone();
+    bare.timeline = Timeline::new(Vec::new(), scene.timeline.step_s()).unwrap();
+    let start = Playback::new(&bare).into_surface();
+    let mut playback = Playback::new(&scene);
+    playback.advance_to(1.0, |_| {});
+    assert!(!playback.surface().same_samples(&start));
+    assert!(playback.undo().unwrap(), "the band is one step");
+    assert!(playback.surface().same_samples(&start), "undo gives the sculpt back");
+    assert!(!playback.undo().unwrap(), "nothing more to undo");
+    assert!(playback.redo());
+    assert!(!playback.surface().same_samples(&start), "redo lays the band again");
+}
+
+fn ball_part(voxel_m: f32, radius_m: f32, at: Vec3) -> Field {
+    let mut field = Field::new(voxel_m, 0.5);
+    let solid = PlacedSolid {
+        solid: Solid::Sphere { radius_m },
+        pose: Pose { position_m: at, rotation: Quat::IDENTITY },
+        scale: 1.0,
+    };
+    rasterize_solid(&mut field, &solid, CsgOp::Union, [0.7, 0.5, 0.3, 1.0]);
+    field
+}
+
+fn box_part(voxel_m: f32, half_m: Vec3) -> Field {
+    let mut field = Field::new(voxel_m, 0.5);
+    let solid = PlacedSolid { solid: Solid::Box { half_m }, pose: Pose::default(), scale: 1.0 };
+    rasterize_solid(&mut field, &solid, CsgOp::Union, [0.3, 0.5, 0.7, 1.0]);
+    field
+}
+
+prop_compose! {
+    fn a_part()(
+        ball in any::<bool>(),
+        size in 0.004f32..0.012,
+        voxel in prop::sample::select(vec![0.001f32, 0.0015, 0.002]),
+        at in prop::array::uniform3(-0.008f32..0.008),
+        turn in prop::array::uniform3(-3.2f32..3.2),
+        scale in 0.6f32..1.8,
+        op in prop::sample::select(Csg::ALL.to_vec()),
+    ) -> (Field, Placement, Csg) {
+        let field = if ball { ball_part(voxel, size, Vec3::ZERO) } else { box_part(voxel, Vec3::new(size, 0.7 * size, 0.5 * size)) };
+        let rotation = Quat::from_rotation_x(turn[0]) * Quat::from_rotation_y(turn[1]) * Quat::from_rotation_z(turn[2]);
+        (field, Placement::new(rotation, Vec3::from(at), scale).unwrap(), op)
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 12, ..ProptestConfig::default() })]
+    /// Any parts, placed anywhere, at any scale and resolution, composed by any operators:
+    /// the surface is closed and consistently oriented, and every sample is a density.
+    #[test]
+    fn any_composition_meshes_closed_and_consistently_oriented(parts in prop::collection::vec(a_part(), 1..4)) {
+        let views: Vec<PartView<'_>> = parts
+            .iter()
+            .enumerate()
+            .map(|(i, (field, placement, op))| PartView {
+                field,
+                placement: *placement,
+                op: if i == 0 { Csg::Union } else { *op },
+                visible: true,
+            })
+            .collect();
+        let composition = Composition::build(&views);
+        for (_, brick) in composition.field().shared_bricks() {
+            prop_assert!(brick.densities().all(|d| d.is_finite() && (0.0..=1.0).contains(&d)));
+        }
+        assert_closed_and_oriented(composition.field(), "composition");
+    }
+}
+
+fn refused(toml: &str) -> String {
+    match Scene::parse(toml, "bad.toml", None) {
+        Ok(_) => panic!("accepted:\n{toml}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn bad_parts_are_refused_at_their_line_with_what_is_wrong() {
+    let part = |extra: &str| format!("[[part]]\nname = \"a\"\n\n[[part]]\nname = \"b\"\n{extra}\n");
+    for (toml, says) in [
+        (part("scale = 0.0"), "scale 0 is not a positive finite number"),
+        (part("scale = -2.0"), "scale -2 is not a positive finite number"),
+        (part("op = \"xor\""), "op must be \"union\", \"difference\" or \"intersection\""),
+        (part("voxel_size_m = 0.5"), "voxel_size_m must be between"),
+        (part("scale = 0.001"), "in the world, outside"),
+        ("[[part]]\nname = \"a\"\n[[part]]\nname = \"a\"\n".to_owned(), "given to two parts"),
+        ("[[part]]\nname = \"\"\n".to_owned(), "name must be 1 to"),
+        (
+            format!("{}[[clay]]\npart = \"c\"\nshape = \"sphere\"\nradius_m = 0.01\n", part("")),
+            "no part named \"c\" (parts: a, b)",
+        ),
+        (
+            format!(
+                "{}[[tool]]\nname = \"t\"\nshape = \"sphere\"\nradius_m = 0.01\naction = \"add\"\n\n[[key]]\ntime_s = 0.0\ntool = \"t\"\npart = \"b\"\nposition_m = [0.0, 0.0, 0.0]\nactive = true\n",
+                part("locked = true")
+            ),
+            "part \"b\" is locked",
+        ),
+    ] {
+        let message = refused(&toml);
+        assert!(message.contains(says), "{message}\n  should say: {says}");
+        assert!(message.contains("bad.toml:"), "names the file and line: {message}");
+    }
+}
