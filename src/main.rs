@@ -573,7 +573,7 @@ fn station(
                 .transpose()?,
         };
         let written = match sculpt {
-            Some(s) => app::render_sculpt(&scene, s.field, &options)?,
+            Some(s) => app::render_sculpt(&scene, s.field, s.others, &options)?,
             None => app::render_scene_autosaved(
                 &scene,
                 &options,
@@ -626,7 +626,7 @@ fn render(
         // Nothing is sculpted while rendering a sculpt: there is nothing to autosave.
         let (mut scene, sculpt) = app::open_sculpt(scene)?;
         scene.display.swap_eyes |= swap_eyes;
-        print_written(&app::render_sculpt(&scene, sculpt.field, &options)?);
+        print_written(&app::render_sculpt(&scene, sculpt.field, sculpt.others, &options)?);
         return Ok(());
     }
     let text = argile::io::text::read_text(scene, argile::io::text::SCENE_LIMIT)

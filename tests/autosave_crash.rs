@@ -336,3 +336,141 @@ fn a_recovery_that_cannot_save_says_so_fails_and_keeps_the_session() {
     assert!(strokes >= 1 && load_sculpt(&path).is_ok());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+const PART_STROKES: usize = 16;
+
+/// A sculpt of two parts — a slab at rest at 1 mm, a ball at 2 mm placed turned and scaled —
+/// with strokes alternately on each.
+fn parts_scene_text() -> String {
+    let mut text = String::from(
+        "[field]\nvoxel_size_m = 0.001\n[timeline]\nstep_s = 0.01\n\
+         [[part]]\nname = \"slab\"\n\
+         [[part]]\nname = \"ball\"\nvoxel_size_m = 0.002\nposition_m = [0.0, 0.03, 0.0]\nrotation_deg = [0.0, 30.0, 0.0]\nscale = 1.5\n\
+         [[clay]]\npart = \"slab\"\nshape = \"box\"\nposition_m = [0.0, -0.01, 0.0]\nsize_m = [0.12, 0.02, 0.12]\n\
+         [[clay]]\npart = \"ball\"\nshape = \"sphere\"\nradius_m = 0.015\n\
+         [[tool]]\nname = \"add\"\nradius_m = 0.008\naction = \"add\"\ncolour = \"#c04020\"\n\
+         [[tool]]\nname = \"carve\"\nradius_m = 0.006\naction = \"remove\"\n",
+    );
+    for i in 0..PART_STROKES {
+        let t0 = i as f32 * 0.1;
+        let (part, y) = if i % 2 == 0 { ("slab", 0.0) } else { ("ball", 0.03) };
+        let tool = ["add", "add", "carve", "carve"][i % 4];
+        let a = i as f32 * 0.7;
+        let (x, z) = (0.02 * a.cos(), 0.02 * a.sin());
+        text += &format!(
+            "[[key]]\ntime_s = {t0:.2}\npart = \"{part}\"\ntool = \"{tool}\"\nposition_m = [{x:.4}, {y}, {z:.4}]\nactive = true\n\
+             [[key]]\ntime_s = {:.2}\npart = \"{part}\"\ntool = \"{tool}\"\nposition_m = [{:.4}, {y}, {:.4}]\n",
+            t0 + 0.06,
+            x + 0.005,
+            z + 0.005
+        );
+    }
+    text
+}
+
+/// The parts' clay (the first, then the others) after 0, 1, 2, … completed strokes.
+fn parts_reference_states(scene: &Scene) -> Vec<(Field, Vec<Field>)> {
+    // Before any stroke: the first part as autosave starts on it, the others as the scene
+    // makes them.
+    let mut first = None;
+    let mut playback = Playback::new_autosaved(scene, |field, _| {
+        first = Some(field.clone());
+        None
+    })
+    .unwrap();
+    let mut bare = scene.clone();
+    bare.timeline = argile::scene::Timeline::new(Vec::new(), scene.timeline.step_s()).unwrap();
+    let others = Playback::new(&bare).assembly().others().to_vec();
+    let steps = |p: &Playback<'_>| {
+        let count = |f: &Field| {
+            let s = f.history_stats();
+            s.undo_in_memory + s.undo_on_disk + s.dropped
+        };
+        count(p.field()) + p.assembly().others().iter().map(count).sum::<usize>()
+    };
+    let state = |p: &Playback<'_>| (p.field().clone(), p.assembly().others().to_vec());
+    let mut states = vec![(first.expect("autosave is started on the first part"), others)];
+    let end = scene.timeline.duration_s();
+    while playback.time_s() < end {
+        playback.step_towards(end);
+        if steps(&playback) == states.len() {
+            states.push(state(&playback));
+        }
+        assert!(steps(&playback) < states.len(), "one stroke ends per step at most");
+    }
+    // The last stroke closes as the save ends it.
+    playback.close_steps();
+    if steps(&playback) == states.len() {
+        states.push(state(&playback));
+    }
+    states
+}
+
+fn same_parts(a: &argile::io::Sculpt, (field, others): &(Field, Vec<Field>)) -> bool {
+    a.field.same_samples(field)
+        && a.others.len() == others.len()
+        && a.others.iter().zip(others).all(|(x, y)| x.same_samples(y))
+}
+
+/// The same as `sigkill_at_random_points_recovers_exactly_a_completed_stroke`, for a sculpt of
+/// parts whose strokes change one part or the other: the recovered sculpt holds every part as
+/// it was after some completed stroke, never fewer than were on disk.
+#[test]
+fn sigkill_of_a_sculpt_of_parts_recovers_every_part_after_a_completed_stroke() {
+    let dir = std::env::temp_dir().join(format!("argile-crash-parts-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene_path = dir.join("parts.toml");
+    std::fs::write(&scene_path, parts_scene_text()).unwrap();
+    let scene = Scene::load(&scene_path).unwrap();
+    let states = parts_reference_states(&scene);
+    assert_eq!(states.len(), PART_STROKES + 1, "every stroke changes its part");
+
+    let start = Instant::now();
+    let (_, finished) =
+        run_and_kill(&scene_path, &dir.join("clean"), &dir.join("clean.argile"), Duration::from_secs(60));
+    let whole = start.elapsed();
+    assert!(finished);
+    let saved = load_sculpt(&dir.join("clean.argile")).unwrap();
+    assert_eq!(saved.parts.len(), 2, "the sculpt file keeps both parts");
+    assert!(same_parts(&saved, &states[PART_STROKES]), "the saved parts are the played ones");
+
+    let kills: u64 = std::env::var("ARGILE_CRASH_KILLS").ok().and_then(|k| k.parse().ok()).unwrap_or(40);
+    let mut recovered_strokes = Vec::new();
+    let out = dir.join("out.argile");
+    for seed in 0..kills {
+        let state = dir.join(format!("seed-{seed}"));
+        let kill_after = whole.mul_f64(1.05 * uniform(seed + 1000));
+        let _ = std::fs::remove_file(&out);
+        let (durable, finished) = run_and_kill(&scene_path, &state, &out, kill_after);
+        match recover(&state) {
+            None if durable > 0 => {
+                let saved = load_sculpt(&out)
+                    .unwrap_or_else(|e| panic!("seed {seed}: nothing recovered, nothing saved: {e}"));
+                assert!(same_parts(&saved, &states[PART_STROKES]), "seed {seed}");
+            }
+            None => assert!(!out.exists(), "seed {seed}: killed before any stroke was on disk"),
+            Some((path, n)) => {
+                assert!(!finished, "seed {seed}: a finished session is closed");
+                assert!(
+                    n >= durable as usize && n <= PART_STROKES,
+                    "seed {seed}: recovered stroke {n}, {durable} on disk"
+                );
+                let sculpt = load_sculpt(&path).unwrap();
+                assert!(
+                    same_parts(&sculpt, &states[n]),
+                    "seed {seed}: the recovered parts are not those after stroke {n}"
+                );
+                recovered_strokes.push(n);
+            }
+        }
+        let _ = std::fs::remove_dir_all(&state);
+    }
+    recovered_strokes.sort_unstable();
+    recovered_strokes.dedup();
+    assert!(
+        recovered_strokes.len() >= 3.min(kills as usize / 4),
+        "kills landed at several points of the session: strokes {recovered_strokes:?}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

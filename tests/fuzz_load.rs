@@ -89,7 +89,8 @@ fn seeds() -> Vec<Vec<u8>> {
         auto_convergence: true,
         display_mode: "anaglyph".into(),
     };
-    let parts = argile::io::SceneParts { toml: scene, tools: &[tool], view: Some(&view) };
+    let parts =
+        argile::io::SceneParts { toml: scene, tools: &[tool], view: Some(&view), ..Default::default() };
     out.push(argile::io::encode_sculpt(&field, parts, EncodeOptions::default(), &mut |_| {}));
     out
 }

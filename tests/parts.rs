@@ -226,3 +226,47 @@ fn bad_parts_are_refused_at_their_line_with_what_is_wrong() {
         assert!(message.contains("bad.toml:"), "names the file and line: {message}");
     }
 }
+
+#[test]
+fn a_sculpt_file_keeps_every_part_and_exports_and_renders_their_composition() {
+    let dir = std::env::temp_dir().join(format!("argile-parts-file-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/parts-figure.toml");
+    let out = dir.join("figure.argile");
+    argile::app::save_scene_sculpt(&scene_path, &out, false, None).unwrap();
+    let scene = scene("parts-figure.toml");
+    let mut played = Playback::new(&scene);
+    played.advance_to(1.0, |_| {});
+    played.close_steps();
+    let sculpt = argile::app::load_sculpt(&out).unwrap();
+    assert_eq!(sculpt.parts.iter().map(|p| p.name.as_str()).collect::<Vec<_>>(), ["plinth", "body", "head"]);
+    assert_eq!(sculpt.parts[2].scale, 1.4);
+    assert_eq!(sculpt.parts[1].op, "union");
+    assert!(sculpt.field.same_samples(played.field()), "the first part");
+    assert_eq!(sculpt.others.len(), 2);
+    for (read, made) in sculpt.others.iter().zip(played.assembly().others()) {
+        assert!(read.same_samples(made), "every other part, bit for bit");
+        assert_eq!(read.transform(), made.transform(), "at its own voxel size");
+    }
+    // Opened, it is the same sculpt: its parts placed as they were, composed the same.
+    let (opened_scene, opened) = argile::app::open_sculpt(&out).unwrap();
+    assert_eq!(opened_scene.parts, scene.parts);
+    let reopened = Playback::on_sculpt(&opened_scene, opened.field, opened.others, &[], |_, _| None);
+    assert!(reopened.into_surface().same_samples(&played.into_surface()));
+    // Exported, it is the scene's composition.
+    let (from_scene, from_file) = (dir.join("scene.obj"), dir.join("file.obj"));
+    let format = argile::mesh::export::ExportFormat::Obj;
+    argile::app::export(&scene_path, format, &from_scene, false, false).unwrap();
+    argile::app::export(&out, format, &from_file, false, false).unwrap();
+    assert_eq!(std::fs::read(&from_scene).unwrap(), std::fs::read(&from_file).unwrap());
+    // A format version without parts refuses it rather than dropping all but one.
+    let old = argile::io::EncodeOptions { version: 4, history: true };
+    let e = argile::app::convert_sculpt(&out, &dir.join("v4.argile"), old, false).unwrap_err().to_string();
+    assert!(e.contains("is a sculpt of 3 parts; format version 4 stores one"), "{e}");
+    // The lazy reader reads the parts whole with its head.
+    let lazy = argile::io::LazySculpt::open(&out).unwrap().finish(&mut |_| {}).unwrap();
+    assert_eq!(lazy.others.len(), 2);
+    assert!(lazy.others[1].same_samples(&sculpt.others[1]));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

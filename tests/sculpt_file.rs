@@ -168,8 +168,9 @@ fn convert_moves_sculpts_between_versions() {
     let (v2, v1) = (dir.join("v2.argile"), dir.join("back-to-v1.argile"));
     let out = argile(&["convert", FIXTURE_V1, v4.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(String::from_utf8_lossy(&out.stdout).contains("format version 4"));
-    assert_eq!(&std::fs::read(&v4).unwrap()[4..8], &4u32.to_le_bytes());
+    let current = argile::io::VERSION;
+    assert!(String::from_utf8_lossy(&out.stdout).contains(&format!("format version {current}")));
+    assert_eq!(&std::fs::read(&v4).unwrap()[4..8], &current.to_le_bytes());
     assert!(same_matter(&load_sculpt(&v4).unwrap().field, &fixture_field()));
     let out = argile(&["convert", v4.to_str().unwrap(), v3.to_str().unwrap(), "--format-version", "3"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -448,7 +449,7 @@ fn check_box(bytes: &[u8], lo: IVec3, hi: IVec3) -> Result<usize, TestCaseError>
 fn opening_a_sculpt_reads_its_index_and_a_box_reads_the_chunks_reaching_into_it() {
     let whole = spread_field();
     let bytes = encode(&whole, Some("# a scene\n"), &mut |_| {});
-    assert_eq!(&bytes[4..8], &4u32.to_le_bytes());
+    assert_eq!(&bytes[4..8], &argile::io::VERSION.to_le_bytes());
     let lazy = LazySculpt::from_bytes(bytes.clone(), "lazy.argile").unwrap();
     assert_eq!(lazy.scene_toml(), Some("# a scene\n"));
     assert_eq!(lazy.brick_count() as usize, whole.brick_count() + whole.level_brick_count(2));
@@ -611,7 +612,7 @@ fn info_describes_a_sculpt_from_its_index() {
     let text = String::from_utf8_lossy(&out.stdout);
     let lazy = LazySculpt::from_bytes(bytes.clone(), "spread.argile").unwrap();
     for line in [
-        format!("format version 4, {} bytes", bytes.len()),
+        format!("format version {}, {} bytes", argile::io::VERSION, bytes.len()),
         "voxels 1 mm, iso-level 0.5".to_owned(),
         "level 0 (1 mm voxels): ".to_owned(),
         "level 2 (4 mm voxels): ".to_owned(),
@@ -718,7 +719,12 @@ fn a_sculpt_keeps_the_view_it_was_saved_in_and_refuses_a_view_no_station_has() {
         display_mode: "side-by-side".into(),
     };
     let field = spread_field();
-    let parts = argile::io::SceneParts { toml: Some("# a scene\n"), tools: &[], view: Some(&view) };
+    let parts = argile::io::SceneParts {
+        toml: Some("# a scene\n"),
+        tools: &[],
+        view: Some(&view),
+        ..Default::default()
+    };
     let bytes = argile::io::encode_sculpt(&field, parts, EncodeOptions::default(), &mut |_| {});
     let back = decode(&bytes, "view.argile", &mut |_| {}).unwrap();
     assert_eq!(back.view.as_ref(), Some(&view));

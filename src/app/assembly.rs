@@ -9,8 +9,10 @@
 //! changed.
 
 use crate::field::{Field, HistoryError, BRICK_SIZE};
-use crate::math::{IVec3, Isometry, Mat3};
-use crate::parts::{Composition, PartView, Placement};
+use crate::io::autosave::Besides;
+use crate::io::{PartLayout, Sculpt};
+use crate::math::{IVec3, Isometry, Mat3, Quat, Vec3};
+use crate::parts::{Composition, Csg, PartView, Placement};
 use crate::scene::ScenePart;
 
 /// The parts beyond the first, every part's layout, the composition and the undo order.
@@ -47,9 +49,39 @@ impl Assembly {
         &self.parts
     }
 
+    /// The parts' layouts as a sculpt file stores them: none for one part at rest (the file of
+    /// a sculpt without parts).
+    pub fn layouts(&self) -> Vec<PartLayout> {
+        let rest = matches!(&self.parts[..], [p] if p.visible && !p.locked && p.op == Csg::Union && p.placement.is_identity());
+        if rest {
+            return Vec::new();
+        }
+        self.parts.iter().map(layout_of).collect()
+    }
+
     /// The fields of the parts after the first.
     pub fn others(&self) -> &[Field] {
         &self.others
+    }
+
+    /// The fields of the parts after the first, mutably (for the journal to take what changed).
+    pub fn others_mut(&mut self) -> &mut [Field] {
+        &mut self.others
+    }
+
+    /// What an autosave session's snapshots store of the parts besides the first part's clay,
+    /// with the scene's freeform `tools`.
+    pub fn besides<'a>(
+        &'a mut self,
+        tools: &'a [crate::io::StoredTool],
+        layouts: &'a [PartLayout],
+    ) -> Besides<'a> {
+        Besides { tools, layouts, others: if layouts.is_empty() { &mut [] } else { &mut self.others } }
+    }
+
+    /// The fields of the parts after the first, ending the assembly.
+    pub fn into_others(self) -> Vec<Field> {
+        self.others
     }
 
     /// Part `part`'s field (`first` is part 0's).
@@ -217,4 +249,52 @@ pub fn image_in_part(image: &Isometry, placement: &Placement) -> Isometry {
         linear: r_inv * image.linear * r,
         translation: r_inv * (image.linear * t + image.translation - t) / placement.scale,
     }
+}
+
+/// A part's layout as a sculpt file stores it.
+pub fn layout_of(p: &ScenePart) -> PartLayout {
+    PartLayout {
+        name: p.name.clone(),
+        voxel_size_m: p.voxel_size_m,
+        rotation: p.placement.rotation.to_array(),
+        translation_m: p.placement.translation_m.to_array(),
+        scale: p.placement.scale,
+        op: p.op.name().to_owned(),
+        visible: p.visible,
+        locked: p.locked,
+    }
+}
+
+/// The parts a sculpt stores (one whole part at rest, of its clay's voxel, when it stores none);
+/// `None` when a stored layout is not one a part can have (the reader refuses those).
+pub fn parts_of(sculpt: &Sculpt) -> Option<Vec<ScenePart>> {
+    if sculpt.parts.is_empty() {
+        return Some(vec![ScenePart::whole(sculpt.field.transform().voxel_size_m)]);
+    }
+    sculpt
+        .parts
+        .iter()
+        .map(|l| {
+            let placement =
+                Placement::new(Quat::from_array(l.rotation), Vec3::from(l.translation_m), l.scale).ok()?;
+            Some(ScenePart {
+                name: l.name.clone(),
+                voxel_size_m: l.voxel_size_m,
+                placement,
+                op: Csg::from_name(&l.op)?,
+                visible: l.visible,
+                locked: l.locked,
+            })
+        })
+        .collect()
+}
+
+/// The surface of a sculpt read from a file: its clay, or the composition of its parts; `None`
+/// when a stored layout is not one a part can have.
+pub fn sculpt_surface(sculpt: Sculpt) -> Option<Field> {
+    let parts = parts_of(&sculpt)?;
+    let mut assembly = Assembly::new(parts, sculpt.others, &sculpt.field);
+    let mut first = sculpt.field;
+    let _ = assembly.surface(&mut first);
+    Some(assembly.into_surface(first))
 }

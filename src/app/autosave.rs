@@ -9,8 +9,10 @@ use anyhow::{Context, Result};
 
 use super::state_dir;
 use crate::field::Field;
-use crate::io::autosave::{recover, remove_session, unclosed_sessions, Autosave, AutosaveConfig, LocalDisk};
-use crate::io::{encode_sculpt, write_atomically, EncodeOptions, StoredTool};
+use crate::io::autosave::{
+    recover, remove_session, unclosed_sessions, Autosave, AutosaveConfig, Besides, LocalDisk,
+};
+use crate::io::{encode_sculpt, write_atomically, EncodeOptions};
 
 /// The folder autosave sessions live in: `autosave/` in the state folder.
 pub fn autosave_root() -> Option<PathBuf> {
@@ -26,7 +28,7 @@ pub fn recovered_dir() -> Option<PathBuf> {
 /// warns with the reason (naming the folder) and returns `None`: the sculpt stays in memory.
 pub fn start_autosave(
     field: &mut Field,
-    (scene_toml, tools): (Option<&str>, &[StoredTool]),
+    (scene_toml, besides): (Option<&str>, Besides<'_>),
     source: &str,
     config: AutosaveConfig,
 ) -> Option<Autosave> {
@@ -34,7 +36,8 @@ pub fn start_autosave(
         tracing::warn!("autosave is off: this system names no state folder (set XDG_STATE_HOME)");
         return None;
     };
-    match Autosave::start_with_tools(&root, field, (scene_toml, tools), source, config, Arc::new(LocalDisk)) {
+    match Autosave::start_with_tools(&root, field, (scene_toml, besides), source, config, Arc::new(LocalDisk))
+    {
         Ok(a) => {
             tracing::debug!("autosave: session folder {}", a.dir().display());
             Some(a)

@@ -92,14 +92,19 @@ pub fn render_scene_autosaved(
 
 /// Renders every capture of `scene` over `field`, the clay of a sculpt opened from a file (see
 /// [`super::open_sculpt`]), instead of the scene's initial clay.
-pub fn render_sculpt(scene: &Scene, field: Field, options: &RenderOptions) -> Result<Vec<WrittenCapture>> {
-    render_over(scene, Some(field), options, None, None)
+pub fn render_sculpt(
+    scene: &Scene,
+    field: Field,
+    others: Vec<Field>,
+    options: &RenderOptions,
+) -> Result<Vec<WrittenCapture>> {
+    render_over(scene, Some((field, others)), options, None, None)
 }
 
 /// Renders the captures of `scene` over `field` when given, else over its initial clay.
 fn render_over(
     scene: &Scene,
-    field: Option<Field>,
+    field: Option<(Field, Vec<Field>)>,
     options: &RenderOptions,
     autosave: Option<AutosaveConfig>,
     scene_toml: Option<&str>,
@@ -129,11 +134,11 @@ fn render_over(
     }
     let mut renderer = renderer_for(&scene, None, options.validation, None)?;
     tracing::info!("rendering {} on {}", scene.source, renderer.device_name());
-    let start = |field: &mut Field, tools: &[crate::io::StoredTool]| {
+    let start = |field: &mut Field, tools: crate::io::autosave::Besides<'_>| {
         autosave.and_then(|config| start_autosave(field, (scene_toml, tools), &scene.source, config))
     };
     let mut playback = match field {
-        Some(field) => Playback::on_field(&scene, field, &[], start),
+        Some((field, others)) => Playback::on_sculpt(&scene, field, others, &[], start),
         None => Playback::new_autosaved(&scene, start)?,
     };
     let initial = mesh_all(playback.surface());

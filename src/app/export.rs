@@ -70,7 +70,9 @@ pub fn export(
         bail!("{} already exists; pass --force to replace it", out.display());
     }
     let mesh = if is_sculpt(input) {
-        welded_surface(&load_sculpt(input)?.field)
+        let surface = super::assembly::sculpt_surface(load_sculpt(input)?)
+            .with_context(|| format!("{}: a part's layout cannot be placed", input.display()))?;
+        welded_surface(&surface)
     } else {
         let scene = Scene::load(input)?;
         welded_surface(&played_to_end(Playback::build(&scene)?))

@@ -4,7 +4,7 @@
 use anyhow::{bail, Result};
 
 use crate::field::Field;
-use crate::io::autosave::Autosave;
+use crate::io::autosave::{Autosave, Besides};
 use crate::io::StoredTool;
 use crate::math::Pose;
 use std::sync::Arc;
@@ -139,7 +139,7 @@ impl<'s> Playback<'s> {
     /// by `start` on it, before the first stroke; every stroke that ends is then journaled.
     pub fn new_autosaved(
         scene: &'s Scene,
-        start: impl FnOnce(&mut Field, &[StoredTool]) -> Option<Autosave>,
+        start: impl FnOnce(&mut Field, Besides<'_>) -> Option<Autosave>,
     ) -> Result<Self> {
         Ok(Self::on_parts(scene, initial_parts(scene)?, &[], start))
     }
@@ -151,14 +151,36 @@ impl<'s> Playback<'s> {
         scene: &'s Scene,
         field: Field,
         stored: &[StoredTool],
-        start: impl FnOnce(&mut Field, &[StoredTool]) -> Option<Autosave>,
+        start: impl FnOnce(&mut Field, Besides<'_>) -> Option<Autosave>,
     ) -> Self {
-        // The other parts, as the scene makes them.
-        let mut fields: Vec<Field> = (0..scene.parts.len()).map(|p| empty_field(scene, p)).collect();
-        for primitive in scene.clay.iter().filter(|c| c.part > 0) {
-            rasterize_solid(&mut fields[primitive.part], &primitive.solid, primitive.op, primitive.colour);
-        }
-        fields[0] = field;
+        Self::on_sculpt(scene, field, Vec::new(), stored, start)
+    }
+
+    /// [`Playback::on_field`] over a sculpt of parts: `field` the first part's clay, `others`
+    /// the clay of the scene's other parts (a field each; the scene's own initial clay of them
+    /// when `others` does not hold one per part).
+    pub fn on_sculpt(
+        scene: &'s Scene,
+        field: Field,
+        others: Vec<Field>,
+        stored: &[StoredTool],
+        start: impl FnOnce(&mut Field, Besides<'_>) -> Option<Autosave>,
+    ) -> Self {
+        let fields = if others.len() + 1 == scene.parts.len() {
+            std::iter::once(field).chain(others).collect()
+        } else {
+            let mut fields: Vec<Field> = (0..scene.parts.len()).map(|p| empty_field(scene, p)).collect();
+            for primitive in scene.clay.iter().filter(|c| c.part > 0) {
+                rasterize_solid(
+                    &mut fields[primitive.part],
+                    &primitive.solid,
+                    primitive.op,
+                    primitive.colour,
+                );
+            }
+            fields[0] = field;
+            fields
+        };
         Self::on_parts(scene, fields, stored, start)
     }
 
@@ -168,15 +190,16 @@ impl<'s> Playback<'s> {
         scene: &'s Scene,
         mut fields: Vec<Field>,
         stored: &[StoredTool],
-        start: impl FnOnce(&mut Field, &[StoredTool]) -> Option<Autosave>,
+        start: impl FnOnce(&mut Field, Besides<'_>) -> Option<Autosave>,
     ) -> Self {
         assert_eq!(fields.len(), scene.parts.len(), "a field per part");
         let others = fields.split_off(1);
         let mut field = fields.pop().expect("the first part");
-        let assembly = Assembly::new(scene.parts.clone(), others, &field);
+        let mut assembly = Assembly::new(scene.parts.clone(), others, &field);
         let mut tools: Vec<Tool> = scene.tools.iter().map(|t| build_tool(t, &field)).collect();
         restore_tools(&mut tools, stored);
-        let autosave = start(&mut field, &stored_tools(&tools));
+        let (stored_now, layouts) = (stored_tools(&tools), assembly.layouts());
+        let autosave = start(&mut field, assembly.besides(&stored_now, &layouts));
         let mut playback = Self {
             scene,
             field,
@@ -204,8 +227,21 @@ impl<'s> Playback<'s> {
     /// session: the caller closes it, or drops it to leave it for recovery.
     pub fn replace_field(
         &mut self,
+        field: Field,
+        start: impl FnOnce(&mut Field, Besides<'_>) -> Option<Autosave>,
+    ) -> Option<Autosave> {
+        let whole = vec![crate::scene::ScenePart::whole(field.transform().voxel_size_m)];
+        self.replace_sculpt(field, whole, Vec::new(), start)
+    }
+
+    /// [`Playback::replace_field`] for a sculpt of parts: `parts` their layouts, `field` the
+    /// first one's clay and `others` the clay of the rest.
+    pub fn replace_sculpt(
+        &mut self,
         mut field: Field,
-        start: impl FnOnce(&mut Field, &[StoredTool]) -> Option<Autosave>,
+        parts: Vec<crate::scene::ScenePart>,
+        others: Vec<Field>,
+        start: impl FnOnce(&mut Field, Besides<'_>) -> Option<Autosave>,
     ) -> Option<Autosave> {
         use crate::field::BRICK_SIZE;
         self.strokes = [None, None];
@@ -222,14 +258,17 @@ impl<'s> Playback<'s> {
                 *state = RegionState::Done;
             }
         }
-        let keys: Vec<_> = self.field.covered_keys().into_iter().chain(field.covered_keys()).collect();
+        let keys: Vec<_> =
+            self.surface_now().covered_keys().into_iter().chain(field.covered_keys()).collect();
         for key in keys {
             let lo = key * BRICK_SIZE;
             field.mark_dirty(lo, lo + crate::math::IVec3::splat(BRICK_SIZE - 1));
         }
+        self.assembly = Assembly::new(parts, others, &field);
         self.field = field;
         let old = self.autosave.take();
-        self.autosave = start(&mut self.field, &stored_tools(&self.tools));
+        let (stored_now, layouts) = (stored_tools(&self.tools), self.assembly.layouts());
+        self.autosave = start(&mut self.field, self.assembly.besides(&stored_now, &layouts));
         old
     }
 
@@ -246,6 +285,13 @@ impl<'s> Playback<'s> {
     /// The clay, ending the playback.
     pub fn into_field(self) -> Field {
         self.field
+    }
+
+    /// The clay of every part, ending the playback: the first part's, the parts' layouts as a
+    /// sculpt file stores them (none for one part at rest) and the clay of the others.
+    pub fn into_parts(self) -> (Field, Vec<crate::io::PartLayout>, Vec<Field>) {
+        let layouts = self.assembly.layouts();
+        (self.field, layouts, self.assembly.into_others())
     }
 
     /// The sculpt's parts: their layouts and the fields of all but the first.
@@ -285,9 +331,9 @@ impl<'s> Playback<'s> {
         self.assembly.redo(&mut self.field)
     }
 
-    /// Ends the hands' strokes and closes the steps they hold open on every part, as undo
-    /// closes an open stroke before taking back the newest.
-    fn close_steps(&mut self) {
+    /// Ends the hands' strokes and closes the steps they hold open on every part (as undo does
+    /// before taking back the newest), journaling them.
+    pub fn close_steps(&mut self) {
         self.strokes = [None, None];
         if self.owns_stroke {
             self.field.end_stroke();
@@ -431,14 +477,16 @@ impl<'s> Playback<'s> {
             || self.push.is_some()
             || self.lattices.iter().any(|l| matches!(l, LatticeState::Open(..)))
             || self.regions.iter().any(|r| matches!(r, RegionState::Moving(..)));
+        // The step's strokes on the other parts close with it, before it is journaled.
         if drawing && !self.field.in_stroke() {
             self.field.begin_stroke();
             self.owns_stroke = true;
         } else if !drawing && self.owns_stroke {
+            self.assembly.end_strokes();
             self.field.end_stroke();
             self.owns_stroke = false;
             if let Some(a) = &mut self.autosave {
-                a.record(&mut self.field);
+                a.record_parts(&mut self.field, self.assembly.others_mut());
             }
         }
         if !drawing {
@@ -453,7 +501,7 @@ impl<'s> Playback<'s> {
     pub fn journal(&mut self) {
         self.assembly.note_steps(&self.field);
         if let Some(a) = &mut self.autosave {
-            a.record(&mut self.field);
+            a.record_parts(&mut self.field, self.assembly.others_mut());
         }
     }
 
@@ -470,7 +518,8 @@ impl<'s> Playback<'s> {
             self.field.end_stroke();
             self.strokes = [None, None];
         }
-        autosave.record(&mut self.field);
+        self.assembly.end_strokes();
+        autosave.record_parts(&mut self.field, self.assembly.others_mut());
         Some(autosave)
     }
 

@@ -70,8 +70,9 @@ pub fn save_scene_sculpt(
     }
     let session = playback.finish_autosave();
     let tools = playback.stored_tools();
-    let field = playback.into_field();
-    let scene = SceneParts { toml: Some(&text), tools: &tools, view: None };
+    let (field, layouts, others) = playback.into_parts();
+    let scene =
+        SceneParts { toml: Some(&text), tools: &tools, view: None, layouts: &layouts, others: &others };
     let bytes = encode_sculpt(&field, scene, EncodeOptions::default(), &mut |_| {});
     write_atomically(out, overwrite, |w| {
         w.write_all(&bytes).with_context(|| format!("cannot write {}", out.display()))
@@ -79,7 +80,8 @@ pub fn save_scene_sculpt(
     if let Some(session) = session {
         super::autosave::close_session(session);
     }
-    Ok(SavedSculpt { path: out.to_path_buf(), bricks: all_bricks(&field), bytes: bytes.len() })
+    let bricks = all_bricks(&field) + others.iter().map(all_bricks).sum::<usize>();
+    Ok(SavedSculpt { path: out.to_path_buf(), bricks, bytes: bytes.len() })
 }
 
 /// The bricks `field` stores, on every level.
@@ -122,6 +124,8 @@ pub fn open_sculpt(path: &Path) -> Result<(Scene, Sculpt)> {
         None => Scene::default_scene(),
     };
     scene.source = path.display().to_string();
+    scene.parts = super::assembly::parts_of(&sculpt)
+        .with_context(|| format!("{}: a part's layout cannot be placed", path.display()))?;
     scene.clay.clear();
     scene.timeline = crate::scene::Timeline::new(Vec::new(), scene.timeline.step_s())
         .expect("an empty timeline has no two keys at one time");
@@ -155,13 +159,23 @@ pub fn convert_sculpt(
         let mut playback = Playback::build(&scene)?;
         playback.advance_to(end_s(&scene), |_| {});
         let tools = playback.stored_tools();
-        Sculpt { field: playback.into_field(), scene_toml: Some(text), tools, view: None }
+        let (field, parts, others) = playback.into_parts();
+        Sculpt { field, scene_toml: Some(text), tools, view: None, parts, others }
     };
+    if options.version < 5 && !sculpt.parts.is_empty() {
+        bail!(
+            "{} is a sculpt of {} parts; format version {} stores one (versions from 5 store parts)",
+            input.display(),
+            sculpt.parts.len(),
+            options.version
+        );
+    }
     let bytes = encode_sculpt(&sculpt.field, sculpt.scene_parts(), options, &mut |_| {});
     write_atomically(out, overwrite, |w| {
         w.write_all(&bytes).with_context(|| format!("cannot write {}", out.display()))
     })?;
-    Ok(SavedSculpt { path: out.to_path_buf(), bricks: all_bricks(&sculpt.field), bytes: bytes.len() })
+    let bricks = all_bricks(&sculpt.field) + sculpt.others.iter().map(all_bricks).sum::<usize>();
+    Ok(SavedSculpt { path: out.to_path_buf(), bricks, bytes: bytes.len() })
 }
 
 /// Writes the clay of `playback` (with its undo history), the scene text it plays, the
@@ -173,7 +187,9 @@ pub(crate) fn save_playback(
     path: &Path,
 ) -> Result<()> {
     let tools = playback.stored_tools();
-    let scene = SceneParts { toml: scene_toml, tools: &tools, view };
+    let layouts = playback.assembly().layouts();
+    let others = if layouts.is_empty() { &[][..] } else { playback.assembly().others() };
+    let scene = SceneParts { toml: scene_toml, tools: &tools, view, layouts: &layouts, others };
     let bytes = encode_sculpt(playback.field(), scene, EncodeOptions::default(), &mut |_| {});
     write_atomically(path, true, |w| {
         w.write_all(&bytes).with_context(|| format!("cannot write {}", path.display()))
@@ -230,6 +246,26 @@ pub fn describe_sculpt(path: &Path) -> Result<String> {
     }
     if lazy.brick_count() == 0 {
         let _ = writeln!(out, "  no clay");
+    }
+    let (layouts, others) = lazy.parts();
+    if !layouts.is_empty() {
+        let _ = writeln!(out, "  {} parts, composed in order:", layouts.len());
+        for (i, p) in layouts.iter().enumerate() {
+            let bricks = if i == 0 { lazy.brick_count() as usize } else { all_bricks(&others[i - 1]) };
+            let _ = writeln!(
+                out,
+                "    {:?}: {}, {} mm voxels, at ({:.3}, {:.3}, {:.3}) m, scale {}, {bricks} bricks{}{}",
+                p.name,
+                p.op,
+                p.voxel_size_m * 1000.0,
+                p.translation_m[0],
+                p.translation_m[1],
+                p.translation_m[2],
+                p.scale,
+                if p.visible { "" } else { ", hidden" },
+                if p.locked { ", locked" } else { "" }
+            );
+        }
     }
     match lazy.history_size() {
         Some((0, _)) => {

@@ -541,7 +541,7 @@ impl<'s> Station<'s> {
         bindings: KeyBindings,
         window_px: (u32, u32),
         save_to: PathBuf,
-        start: impl FnOnce(&mut crate::field::Field, &[crate::io::StoredTool]) -> Option<Autosave>,
+        start: impl FnOnce(&mut crate::field::Field, crate::io::autosave::Besides<'_>) -> Option<Autosave>,
     ) -> anyhow::Result<Self> {
         let playback = Playback::new_autosaved(scene, start)?;
         Ok(Self::on_playback(scene, playback, bindings, window_px, save_to))
@@ -1428,7 +1428,9 @@ impl<'s> Station<'s> {
         }
         let restart = self.autosave_restart.clone();
         let source = path.display().to_string();
-        let old = self.playback.replace_field(sculpt.field, |field, tools| {
+        let parts = super::assembly::parts_of(&sculpt)
+            .with_context(|| format!("{}: a part's layout cannot be placed", path.display()))?;
+        let old = self.playback.replace_sculpt(sculpt.field, parts, sculpt.others, |field, tools| {
             restart.and_then(|(config, toml)| {
                 super::autosave::start_autosave(field, (toml.as_deref(), tools), &source, config)
             })
@@ -1771,7 +1773,7 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
     let window_px = options.window_px.unwrap_or((scene.output.width_px, scene.output.height_px));
     let save_to = options.save_to.clone().unwrap_or_else(|| PathBuf::from(format!("{scene_name}.argile")));
     let source = scene.source.clone();
-    let start = |field: &mut crate::field::Field, tools: &[crate::io::StoredTool]| {
+    let start = |field: &mut crate::field::Field, tools: crate::io::autosave::Besides<'_>| {
         options.autosave.clone().and_then(|config| {
             super::autosave::start_autosave(field, (options.scene_toml.as_deref(), tools), &source, config)
         })

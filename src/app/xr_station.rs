@@ -601,13 +601,13 @@ pub fn run_xr(
     let first = XrStation::start(&options.session, &environment, intensity)?;
     let save_to = options.save_to.clone().unwrap_or_else(|| PathBuf::from(format!("{scene_name}.argile")));
     let source = scene.source.clone();
-    let start = |field: &mut Field, tools: &[crate::io::StoredTool]| {
+    let start = |field: &mut Field, tools: crate::io::autosave::Besides<'_>| {
         options.autosave.clone().and_then(|config| {
             super::autosave::start_autosave(field, (options.scene_toml.as_deref(), tools), &source, config)
         })
     };
     let playback = match opened {
-        Some(sculpt) => Playback::on_field(scene, sculpt.field, &sculpt.tools, start),
+        Some(sculpt) => Playback::on_sculpt(scene, sculpt.field, sculpt.others, &sculpt.tools, start),
         None => Playback::new_autosaved(scene, start)?,
     };
     let mut sculptor = XrSculptor::new(scene, playback, save_to, options.left_handed);

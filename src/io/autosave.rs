@@ -42,7 +42,7 @@ use serde::{Deserialize, Serialize};
 
 use super::journal::{self, Reader};
 use super::process::start_token;
-use super::{decode, encode_bricks, write_atomically, SceneParts, Sculpt, StoredTool};
+use super::{decode, encode_bricks, write_atomically, PartBrick, PartLayout, SceneParts, Sculpt, StoredTool};
 use crate::field::{Brick, Field, LevelKey};
 
 /// When autosave syncs and checkpoints.
@@ -216,7 +216,30 @@ struct Shared {
     problem: Mutex<Option<String>>,
 }
 
-type Changes = Vec<(LevelKey, Option<Arc<Brick>>)>;
+type Changes = Vec<PartBrick>;
+
+/// What a session's snapshots store besides the first part's clay: the scene's freeform tools
+/// as they were copied, and for a sculpt of parts their layouts and the clay of the parts after
+/// the first (whose changes [`Autosave::record_parts`] then journals).
+#[derive(Debug, Default)]
+pub struct Besides<'a> {
+    /// The scene's freeform tools.
+    pub tools: &'a [StoredTool],
+    /// The parts' layouts (none: one part at rest).
+    pub layouts: &'a [PartLayout],
+    /// The clay of the parts after the first.
+    pub others: &'a mut [Field],
+}
+
+impl<'a> Besides<'a> {
+    /// The scene's freeform tools alone: a sculpt of one part.
+    pub fn tools(tools: &'a [StoredTool]) -> Self {
+        Self { tools, ..Self::default() }
+    }
+}
+
+/// A brick of the sculpt: its part's index (0 the first) and its key.
+type PartKey = (u16, LevelKey);
 
 enum Msg {
     Stroke(u64, Changes),
@@ -248,7 +271,7 @@ impl Autosave {
         config: AutosaveConfig,
         disk: Arc<dyn Disk>,
     ) -> Result<Self, AutosaveError> {
-        Self::start_with_tools(root, field, (scene_toml, &[]), source, config, disk)
+        Self::start_with_tools(root, field, (scene_toml, Besides::default()), source, config, disk)
     }
 
     /// [`Autosave::start`] for a scene with freeform tools (`scene`: its text and its tools as
@@ -262,7 +285,7 @@ impl Autosave {
     pub fn start_with_tools(
         root: &Path,
         field: &mut Field,
-        (scene_toml, tools): (Option<&str>, &[StoredTool]),
+        (scene_toml, Besides { tools, layouts, others }): (Option<&str>, Besides<'_>),
         source: &str,
         config: AutosaveConfig,
         disk: Arc<dyn Disk>,
@@ -276,13 +299,18 @@ impl Autosave {
         disk.write_whole(&dir.join(SESSION_FILE), &json).map_err(AutosaveError)?;
         // What strokes changed before now is in the first snapshot.
         drop(field.take_changed_bricks());
-        let mirror: HashMap<LevelKey, Arc<Brick>> =
-            field.shared_bricks().map(|(k, b)| (k, Arc::clone(b))).collect();
+        let mut mirror: HashMap<PartKey, Arc<Brick>> =
+            field.shared_bricks().map(|(k, b)| ((0, k), Arc::clone(b))).collect();
+        for (i, other) in others.iter_mut().enumerate() {
+            drop(other.take_changed_bricks());
+            mirror.extend(other.shared_bricks().map(|(k, b)| ((i as u16 + 1, k), Arc::clone(b))));
+        }
+        let layouts = layouts.to_vec();
         let tools: Arc<[StoredTool]> = Arc::from(tools);
         let first = snapshot_path(&dir, 0);
         let encoding = Instant::now();
         let (voxel_size_m, iso) = (field.transform().voxel_size_m, field.iso());
-        let bytes = snapshot_bytes((voxel_size_m, iso), mirror.iter(), scene_toml, &tools);
+        let bytes = snapshot_bytes((voxel_size_m, iso), mirror.iter(), (scene_toml, &tools), &layouts);
         let first_written = disk.write_whole(&first, &bytes).map_err(|e| format!("{e:#}"));
         tracing::debug!(
             "autosave: the first snapshot ({} bytes) took {:.1} ms",
@@ -302,6 +330,7 @@ impl Autosave {
             iso,
             scene_toml: scene_toml.map(Arc::from),
             tools,
+            layouts,
             journal: None,
             journals: Vec::new(),
             snapshots: if first_written.is_ok() { vec![(0, first)] } else { Vec::new() },
@@ -324,7 +353,16 @@ impl Autosave {
     /// it changed to the writer thread. Costs a map lookup per changed brick and no copy; does
     /// nothing when nothing changed.
     pub fn record(&mut self, field: &mut Field) {
-        let changes = field.take_changed_bricks();
+        self.record_parts(field, &mut []);
+    }
+
+    /// [`Autosave::record`] for a sculpt of parts: `first` the first part's clay, `others` the
+    /// clay of the parts after it (as the session was started with them).
+    pub fn record_parts(&mut self, first: &mut Field, others: &mut [Field]) {
+        let mut changes: Changes = first.take_changed_bricks().into_iter().map(|(k, b)| (0, k, b)).collect();
+        for (i, field) in others.iter_mut().enumerate() {
+            changes.extend(field.take_changed_bricks().into_iter().map(|(k, b)| (i as u16 + 1, k, b)));
+        }
         if changes.is_empty() {
             return;
         }
@@ -389,7 +427,8 @@ struct Journal {
 
 struct Job {
     stroke: u64,
-    bricks: Vec<(LevelKey, Arc<Brick>)>,
+    bricks: Vec<(PartKey, Arc<Brick>)>,
+    layouts: Vec<PartLayout>,
 }
 
 struct Writer {
@@ -397,11 +436,13 @@ struct Writer {
     disk: Arc<dyn Disk>,
     config: AutosaveConfig,
     shared: Arc<Shared>,
-    mirror: HashMap<LevelKey, Arc<Brick>>,
+    mirror: HashMap<PartKey, Arc<Brick>>,
     voxel_size_m: f32,
     iso: f32,
     scene_toml: Option<Arc<str>>,
     tools: Arc<[StoredTool]>,
+    /// The parts' layouts (none: one part at rest).
+    layouts: Vec<PartLayout>,
     journal: Option<Journal>,
     /// Journal files on disk (base, path), oldest first; the last one is `journal`'s.
     journals: Vec<(u64, PathBuf)>,
@@ -516,12 +557,12 @@ impl Writer {
 
     fn stroke(&mut self, n: u64, mut changes: Changes) {
         // Sorted here, not on the sculpting thread: the same strokes give the same bytes.
-        changes.sort_unstable_by_key(|(k, _)| k.sort_key());
+        changes.sort_unstable_by_key(|(p, k, _)| (*p, k.sort_key()));
         let bytes = (self.journal.is_some()).then(|| journal::record(n, &changes));
-        for (key, brick) in changes {
+        for (part, key, brick) in changes {
             match brick {
-                Some(b) => self.mirror.insert(key, b),
-                None => self.mirror.remove(&key),
+                Some(b) => self.mirror.insert((part, key), b),
+                None => self.mirror.remove(&(part, key)),
             };
         }
         self.written = n;
@@ -579,6 +620,7 @@ impl Writer {
         let job = Job {
             stroke: self.written,
             bricks: self.mirror.iter().map(|(k, b)| (*k, Arc::clone(b))).collect(),
+            layouts: self.layouts.clone(),
         };
         let (dir, disk, tx) = (self.dir.clone(), Arc::clone(&self.disk), self.tx.clone());
         let (voxel, iso, scene, tools) =
@@ -586,7 +628,7 @@ impl Writer {
         let n = job.stroke;
         let spawned = std::thread::Builder::new().name("autosave-checkpoint".into()).spawn(move || {
             let bricks = job.bricks.iter().map(|(k, b)| (k, b));
-            let bytes = snapshot_bytes((voxel, iso), bricks, scene.as_deref(), &tools);
+            let bytes = snapshot_bytes((voxel, iso), bricks, (scene.as_deref(), &tools), &job.layouts);
             let result =
                 disk.write_whole(&snapshot_path(&dir, job.stroke), &bytes).map_err(|e| format!("{e:#}"));
             let _ = tx.send(Msg::Checkpointed(job.stroke, result));
@@ -701,16 +743,23 @@ impl Writer {
     }
 }
 
-/// A snapshot of the sculpt: `bricks` in a field of `(voxel size, iso-level)`, with the scene's
-/// text and tools.
+/// A snapshot of the sculpt: `bricks` of its parts, the first in a field of `(voxel size,
+/// iso-level)`, with the scene's text and tools and the parts' `layouts`.
 fn snapshot_bytes<'b>(
     (voxel_size_m, iso): (f32, f32),
-    bricks: impl Iterator<Item = (&'b LevelKey, &'b Arc<Brick>)>,
-    scene_toml: Option<&str>,
-    tools: &[StoredTool],
+    bricks: impl Iterator<Item = (&'b PartKey, &'b Arc<Brick>)>,
+    (scene_toml, tools): (Option<&str>, &[StoredTool]),
+    layouts: &[PartLayout],
 ) -> Vec<u8> {
-    let bricks = bricks.map(|(k, b)| (*k, &**b)).collect();
-    encode_bricks(voxel_size_m, iso, bricks, SceneParts { toml: scene_toml, tools, view: None }, &mut |_| {})
+    let (mut first, mut others) = (Vec::new(), Vec::new());
+    for ((part, key), brick) in bricks {
+        match part {
+            0 => first.push((*key, &**brick)),
+            p => others.push((u32::from(*p), *key, &**brick)),
+        }
+    }
+    let scene = SceneParts { toml: scene_toml, tools, layouts, ..SceneParts::default() };
+    encode_bricks(voxel_size_m, iso, first, scene, others, &mut |_| {})
 }
 
 /// A session folder found at start.
@@ -854,10 +903,25 @@ pub fn recover(dir: &Path) -> Result<Recovered, RecoveryError> {
             if record.stroke <= strokes {
                 continue;
             }
-            for (key, brick) in record.bricks {
+            // A stroke of a part the snapshot does not hold ends what can be recovered.
+            if let Some((part, ..)) =
+                record.bricks.iter().find(|(p, ..)| usize::from(*p) > sculpt.others.len())
+            {
+                discarded.get_or_insert(format!(
+                    "{}: stroke {} changes part {part}, which its snapshot does not hold",
+                    path.display(),
+                    record.stroke
+                ));
+                break;
+            }
+            for (part, key, brick) in record.bricks {
+                let field = match part {
+                    0 => &mut sculpt.field,
+                    p => &mut sculpt.others[usize::from(p) - 1],
+                };
                 match brick {
-                    Some(brick) => sculpt.field.insert_brick(key, brick),
-                    None => sculpt.field.remove_brick(key),
+                    Some(brick) => field.insert_brick(key, brick),
+                    None => field.remove_brick(key),
                 }
             }
             strokes = record.stroke;
@@ -867,6 +931,9 @@ pub fn recover(dir: &Path) -> Result<Recovered, RecoveryError> {
         }
     }
     sculpt.field.take_dirty();
+    for field in &mut sculpt.others {
+        field.take_dirty();
+    }
     Ok(Recovered { sculpt, strokes, snapshot_strokes, discarded })
 }
 

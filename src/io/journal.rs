@@ -2,13 +2,15 @@
 //! module docs of `io`).
 
 use std::collections::HashSet;
-use std::sync::Arc;
 
-use super::{put_chunk, put_entries, read_chunk, read_entries, u32_at, BRICKS_PER_CHUNK};
+use super::{
+    put_chunk, put_part_entries, read_chunk, read_part_entries, u32_at, PartBrick, BRICKS_PER_CHUNK,
+};
 use crate::field::{Brick, LevelKey};
 
 const MAGIC: &[u8; 4] = b"ARGJ";
-const VERSION: u32 = 1;
+/// Version 2 journals entries of any part (version 1: of the first part alone); both are read.
+const VERSION: u32 = 2;
 /// Bytes of a journal's header.
 pub(crate) const HEADER: usize = 20;
 const RECORD_TAG: [u8; 4] = *b"STRK";
@@ -26,7 +28,7 @@ pub(crate) fn header(base: u64) -> [u8; HEADER] {
 
 /// The bytes of one record: stroke number `stroke`, the bricks it changed as they are now,
 /// in parts of at most [`BRICKS_PER_CHUNK`] bricks (each part a chunk, the last one flagged).
-pub(crate) fn record(stroke: u64, bricks: &[(LevelKey, Option<Arc<Brick>>)]) -> Vec<u8> {
+pub(crate) fn record(stroke: u64, bricks: &[PartBrick]) -> Vec<u8> {
     let mut out = Vec::new();
     let mut raw = Vec::new();
     let parts = bricks.len().div_ceil(BRICKS_PER_CHUNK).max(1);
@@ -35,17 +37,18 @@ pub(crate) fn record(stroke: u64, bricks: &[(LevelKey, Option<Arc<Brick>>)]) -> 
         raw.extend_from_slice(&stroke.to_le_bytes());
         raw.push(u8::from(i + 1 == parts));
         raw.extend_from_slice(&(part.len() as u32).to_le_bytes());
-        put_entries(&mut raw, part);
+        put_part_entries(&mut raw, part);
         put_chunk(&mut out, RECORD_TAG, &raw);
     }
     out
 }
 
-/// One stroke read back: its number and the bricks it left (`None`: emptied).
+/// One stroke read back: its number and the bricks it left (`None`: emptied), each with its
+/// part's index (0 the first).
 #[derive(Debug)]
 pub(crate) struct Record {
     pub(crate) stroke: u64,
-    pub(crate) bricks: Vec<(LevelKey, Option<Brick>)>,
+    pub(crate) bricks: Vec<(u16, LevelKey, Option<Brick>)>,
 }
 
 /// Reads a journal's records in order. A journal whose header is not whole is refused; the
@@ -71,8 +74,10 @@ impl<'b> Reader<'b> {
             return Err("its header fails its checksum".into());
         }
         let version = u32_at(bytes, 4);
-        if version != VERSION {
-            return Err(format!("it is journal version {version}; this Argile reads version {VERSION}"));
+        if !(1..=VERSION).contains(&version) {
+            return Err(format!(
+                "it is journal version {version}; this Argile reads versions 1 to {VERSION}"
+            ));
         }
         let base = u64::from_le_bytes(bytes[8..16].try_into().expect("8 bytes"));
         Ok(Self { bytes, at: HEADER, index: 0, next: base + 1, raw: Vec::new(), torn: None })
@@ -105,7 +110,7 @@ impl<'b> Reader<'b> {
             }
             let (last, count) = (raw[8], u32_at(raw, 9) as usize);
             let mut at = 13;
-            let part = read_entries(raw, &mut at, count, &mut seen)
+            let part = read_part_entries(raw, &mut at, count, &mut seen)
                 .map_err(|e| format!("record {}: {e}", self.index))?;
             if at != raw.len() {
                 return Err(format!(
@@ -158,6 +163,7 @@ mod tests {
     use super::*;
     use crate::field::BRICK_VOLUME;
     use crate::math::IVec3;
+    use std::sync::Arc;
 
     fn brick(seed: f32) -> Arc<Brick> {
         let mut b = Brick::default();
@@ -172,8 +178,9 @@ mod tests {
         let mut out = header(7).to_vec();
         for s in 1..=strokes {
             let bricks = vec![
-                (IVec3::new(s as i32, -1, 2).into(), Some(brick(s as f32))),
-                (LevelKey::new(2, IVec3::new(0, 0, -(s as i32))), None),
+                (0, IVec3::new(s as i32, -1, 2).into(), Some(brick(s as f32))),
+                (0, LevelKey::new(2, IVec3::new(0, 0, -(s as i32))), None),
+                (3, LevelKey::new(1, IVec3::new(s as i32, 0, 0)), Some(brick(-(s as f32)))),
             ];
             out.extend_from_slice(&record(7 + s, &bricks));
         }
@@ -188,8 +195,12 @@ mod tests {
         let records: Vec<Record> = reader.by_ref().collect();
         assert!(reader.torn.is_none());
         assert_eq!(records.iter().map(|r| r.stroke).collect::<Vec<_>>(), [8, 9, 10]);
-        assert_eq!(records[1].bricks[0].1.as_ref(), Some(&*brick(2.0)));
-        assert_eq!(records[2].bricks[1], (LevelKey::new(2, IVec3::new(0, 0, -3)), None));
+        assert_eq!(records[1].bricks[0].2.as_ref(), Some(&*brick(2.0)));
+        assert_eq!(records[2].bricks[1], (0, LevelKey::new(2, IVec3::new(0, 0, -3)), None));
+        assert_eq!(
+            records[2].bricks[2],
+            (3, LevelKey::new(1, IVec3::new(3, 0, 0)), Some((*brick(-3.0)).clone()))
+        );
     }
 
     #[test]
@@ -226,7 +237,7 @@ mod tests {
     #[test]
     fn a_record_of_many_parts_is_applied_whole_or_not_at_all() {
         let bricks: Vec<_> =
-            (0..BRICKS_PER_CHUNK as i32 * 2 + 5).map(|i| (IVec3::new(i, 0, 0).into(), None)).collect();
+            (0..BRICKS_PER_CHUNK as i32 * 2 + 5).map(|i| (0, IVec3::new(i, 0, 0).into(), None)).collect();
         let mut bytes = header(0).to_vec();
         bytes.extend_from_slice(&record(1, &bricks[..3]));
         let first = bytes.len();

@@ -63,6 +63,8 @@ pub struct LazySculpt {
     scene_toml: Option<String>,
     tools: Vec<StoredTool>,
     view: Option<StoredView>,
+    parts: Vec<super::PartLayout>,
+    others: Vec<Field>,
     entries: Vec<IndexEntry>,
     chunks: Vec<ChunkInfo>,
     /// Per chunk, its bytes in the file once it has been read.
@@ -113,8 +115,20 @@ impl LazySculpt {
         let fail = |reason: String| SculptError { file: file.clone(), reason };
         let (mut raw, mut buf) = (Vec::new(), Vec::new());
         let head = read_head(&mut *source, &mut raw, &mut buf, &mut None).map_err(fail)?;
-        let Head { version, chunk_count, meta, field, scene_toml, tools, view, index, base, chunks_read } =
-            head;
+        let Head {
+            version,
+            chunk_count,
+            meta,
+            field,
+            scene_toml,
+            tools,
+            view,
+            layouts,
+            others,
+            index,
+            base,
+            chunks_read,
+        } = head;
         let mut sculpt = Self {
             file: file.clone(),
             source,
@@ -125,6 +139,8 @@ impl LazySculpt {
             scene_toml,
             tools,
             view,
+            parts: layouts,
+            others: others.map_or_else(Vec::new, super::parts::PartsReader::finish),
             entries: Vec::new(),
             chunks: Vec::new(),
             read: Vec::new(),
@@ -153,6 +169,8 @@ impl LazySculpt {
                 sculpt.field = whole.field;
                 sculpt.tools = whole.tools;
                 sculpt.view = whole.view;
+                sculpt.parts = whole.parts;
+                sculpt.others = whole.others;
                 sculpt.whole = true;
             }
         }
@@ -177,6 +195,12 @@ impl LazySculpt {
     /// The bricks the whole sculpt holds, on every level.
     pub fn brick_count(&self) -> u64 {
         self.bricks
+    }
+
+    /// The parts' layouts (none: one part at rest) and the clay of those after the first, read
+    /// whole with the file's head.
+    pub fn parts(&self) -> (&[super::PartLayout], &[Field]) {
+        (&self.parts, &self.others)
     }
 
     /// The scene file's text, if the sculpt was made from one.
@@ -296,6 +320,8 @@ impl LazySculpt {
                 scene_toml: self.scene_toml,
                 tools: self.tools,
                 view: self.view,
+                parts: self.parts,
+                others: self.others,
             });
         }
         let total = self.chunks.len().max(1) as f32;
@@ -336,6 +362,13 @@ impl LazySculpt {
         let mut field = self.field;
         field.take_dirty();
         field.set_history(history.undo, history.redo);
-        Ok(Sculpt { field, scene_toml: self.scene_toml, tools: self.tools, view: self.view })
+        Ok(Sculpt {
+            field,
+            scene_toml: self.scene_toml,
+            tools: self.tools,
+            view: self.view,
+            parts: self.parts,
+            others: self.others,
+        })
     }
 }

@@ -3,7 +3,7 @@
 //!
 //! Knows the field (it stores bricks) and nothing of Vulkan or devices.
 //!
-//! ## Layout, version 4
+//! ## Layout, version 5
 //!
 //! ```text
 //!  header  "ARGL" · version u32 · chunk count u32                      (little-endian)
@@ -19,6 +19,14 @@
 //!                               copy of clay the scene's clay no longer holds): the scene
 //!                               tool's index u32 · sample counts (3 × u32) · spacing f32
 //!                               (metres) · densities (f32, x fastest, then y, then z)
+//!          PRTS  (at most once, before INDX) JSON: the parts' layouts, the first part's
+//!                               (whose clay is the file's own bricks) first: name, voxel
+//!                               size, rotation (quaternion), translation, scale, operator,
+//!                               visibility, lock (see [`PartLayout`]); absent for one part at
+//!                               rest
+//!          PART  (any number, after PRTS, before INDX) bricks of a part after the first: the
+//!                               part's index u32 (1 and up) · level u8 · up to 512 bricks of
+//!                               that level as in BRKS, keyed on the part's own lattice
 //!          INDX  (once, before any brick) the directory of the brick chunks that follow it:
 //!                               chunk count u32 · history offset u64 · per brick chunk, in
 //!                               file order: level u8 · block (3 × i32) · brick count u32 ·
@@ -47,12 +55,16 @@
 //! META, SCNE and INDX, and any brick chunk can then be read on its own, by where its block
 //! lies (loading a box reads the chunks whose samples reach into it, and nothing else).
 //!
+//! Version 4 is version 5 without PRTS and PART: a sculpt of one part. The undo history (HIST)
+//! is the first part's; the other parts' histories are not stored.
 //! Version 3 is version 4 without INDX, TOOL and VIEW, its brick chunks holding up to 512 bricks of one level
 //! in key order (not by block). Version 2 is version 3 without BRKL chunks and with the finest
 //! level alone in entries; version 1 is version 2 without HIST chunks. This build reads all
 //! four and writes any (`argile convert`): a sculpt with coarse levels written as version 1
 //! or 2 stores the finest lattice as its readers see it (the coarse clay refined into finest
-//! bricks, the same field to the eye and to the mesher), without its undo history. Versions 1
+//! bricks, the same field to the eye and to the mesher), without its undo history. A sculpt of
+//! several parts (or of one placed, hidden, locked or composed other than by union) is refused
+//! in versions 1 to 4 rather than cut down to its first part. Versions 1
 //! to 3 have no index: [`LazySculpt`] reads them whole when it opens them. They hold no
 //! freeform tools either: a scene's freeform tool is copied again from the clay.
 //!
@@ -98,11 +110,14 @@
 //!  session.json        who owns the session: process id and start token, start time, source
 //!  snapshot-N.argile   the sculpt after its first N strokes, in the format above
 //!  journal-B.argj      the strokes after stroke B, appended as they finish:
-//!     header  "ARGJ" · version u32 (1) · base stroke B u64 · CRC-32 of these 16 bytes u32
+//!     header  "ARGJ" · version u32 (2; version 1 is read too) · base stroke B u64 · CRC-32 of
+//!             these 16 bytes u32
 //!     records chunks as above, tag STRK, one record per finished stroke (or undo, redo),
 //!             in one or more chunks: stroke number u64 (B + 1, B + 2, …) · last part u8
 //!             (1 on the record's last chunk) · entry count u32 (≤ 512) · entries as in
-//!             HIST, each brick as the stroke left it (absent: the brick is now empty)
+//!             HIST, each brick as the stroke left it (absent: the brick is now empty); an
+//!             entry of a part after the first has bit 7 of its flags set and the part's
+//!             index (u16) after them
 //!  closed              written (atomically) when the session ends cleanly
 //! ```
 //!
@@ -133,15 +148,17 @@ mod atomic;
 pub mod autosave;
 mod journal;
 mod lazy;
+mod parts;
 mod process;
 pub mod text;
 
 pub use atomic::write_atomically;
 pub use lazy::{ChunkInfo, LazySculpt};
+pub use parts::{PartLayout, MAX_PARTS, PART_OPS};
 pub use process::process_alive;
 
 /// The format version this build writes.
-pub const VERSION: u32 = 4;
+pub const VERSION: u32 = 5;
 /// The largest raw chunk a reader accepts.
 pub const MAX_CHUNK_BYTES: usize = 64 << 20;
 /// The most chunks a file may declare.
@@ -175,12 +192,28 @@ pub struct Sculpt {
     pub tools: Vec<StoredTool>,
     /// The station's view when it was saved.
     pub view: Option<StoredView>,
+    /// Its parts' layouts, the first part's (whose clay is `field`) first; empty for a sculpt
+    /// of one part at rest.
+    pub parts: Vec<PartLayout>,
+    /// The clay of the parts after the first, one field each.
+    pub others: Vec<Field>,
 }
 
 impl Sculpt {
+    /// A sculpt of one part: `field`, with nothing else.
+    pub fn of_field(field: Field) -> Self {
+        Self { field, scene_toml: None, tools: Vec::new(), view: None, parts: Vec::new(), others: Vec::new() }
+    }
+
     /// What it stores besides its clay, to encode it again.
     pub fn scene_parts(&self) -> SceneParts<'_> {
-        SceneParts { toml: self.scene_toml.as_deref(), tools: &self.tools, view: self.view.as_ref() }
+        SceneParts {
+            toml: self.scene_toml.as_deref(),
+            tools: &self.tools,
+            view: self.view.as_ref(),
+            layouts: &self.parts,
+            others: &self.others,
+        }
     }
 }
 
@@ -194,6 +227,10 @@ pub struct SceneParts<'a> {
     pub tools: &'a [StoredTool],
     /// The station's view.
     pub view: Option<&'a StoredView>,
+    /// The parts' layouts (none: one part at rest).
+    pub layouts: &'a [PartLayout],
+    /// The clay of the parts after the first.
+    pub others: &'a [Field],
 }
 
 /// The station's view when a sculpt was saved: where the camera looks from, the stereo
@@ -333,8 +370,9 @@ struct Meta {
 /// What [`encode_with`] writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct EncodeOptions {
-    /// The format version to write (1 to 4; version 1 holds no history, versions 1 and 2 no
-    /// coarse levels, versions 1 to 3 no index).
+    /// The format version to write (1 to 5; version 1 holds no history, versions 1 and 2 no
+    /// coarse levels, versions 1 to 3 no index, versions 1 to 4 no parts: the first part
+    /// alone).
     pub version: u32,
     /// Whether to store the undo history held in memory.
     pub history: bool,
@@ -396,7 +434,13 @@ pub fn encode_sculpt(
     let settings = (field.transform().voxel_size_m, field.iso());
     let scene =
         if options.version >= 4 { scene } else { SceneParts { toml: scene.toml, ..SceneParts::default() } };
-    encode_parts(options.version, settings, bricks, scene, history.as_ref(), progress)
+    let others = scene
+        .others
+        .iter()
+        .enumerate()
+        .flat_map(|(i, f)| f.shared_bricks().map(move |(k, b)| (i as u32 + 1, k, &**b)))
+        .collect();
+    encode_parts(options.version, settings, bricks, scene, others, history.as_ref(), progress)
 }
 
 /// Encodes a sculpt given as its settings, bricks (in any order), scene text and freeform
@@ -406,9 +450,10 @@ pub(crate) fn encode_bricks(
     iso: f32,
     bricks: Vec<(LevelKey, &Brick)>,
     scene: SceneParts<'_>,
+    others: Vec<(u32, LevelKey, &Brick)>,
     progress: &mut dyn FnMut(f32),
 ) -> Vec<u8> {
-    encode_parts(VERSION, (voxel_size_m, iso), bricks, scene, None, progress)
+    encode_parts(VERSION, (voxel_size_m, iso), bricks, scene, others, None, progress)
 }
 
 type History = (Vec<HistoryStep>, Vec<HistoryStep>);
@@ -417,7 +462,8 @@ fn encode_parts(
     version: u32,
     (voxel_size_m, iso): (f32, f32),
     mut bricks: Vec<(LevelKey, &Brick)>,
-    SceneParts { toml: scene_toml, tools, view }: SceneParts<'_>,
+    SceneParts { toml: scene_toml, tools, view, layouts, .. }: SceneParts<'_>,
+    mut others: Vec<(u32, LevelKey, &Brick)>,
     history: Option<&History>,
     progress: &mut dyn FnMut(f32),
 ) -> Vec<u8> {
@@ -470,7 +516,16 @@ fn encode_parts(
         stored.push(chunk);
         progress((i + 1) as f32 / group_count as f32);
     }
+    // Version 5: the parts' layouts and the other parts' bricks, before the index.
+    let mut parts = Vec::new();
+    let part_chunks = if version >= 5 && !layouts.is_empty() {
+        put_chunk(&mut parts, *b"PRTS", &parts::put_layouts(layouts));
+        1 + parts::put_part_chunks(&mut parts, &mut others)
+    } else {
+        0
+    };
     let chunk_count = 1
+        + part_chunks
         + u32::from(scene_toml.is_some())
         + u32::from(view.is_some())
         + tools.len() as u32
@@ -491,6 +546,7 @@ fn encode_parts(
     for tool in tools {
         put_chunk(&mut out, *b"TOOL", &tool.put());
     }
+    out.extend_from_slice(&parts);
     if indexed {
         put_chunk(&mut out, *b"INDX", &put_index(&entries, offset));
     }
@@ -612,32 +668,78 @@ fn read_index(raw: &[u8], bricks: u64, room: u64) -> Result<(Vec<IndexEntry>, u6
     Ok((entries, history))
 }
 
-/// Appends brick entries: per brick, flags u8 (bit 0: present; bits 1–3: the level) · key
-/// (3 × i32) · if present, its densities and colours (as [`put_brick`]).
+/// Appends brick entries of the first part: per brick, flags u8 (bit 0: present; bits 1–3:
+/// the level) · key (3 × i32) · if present, its densities and colours (as [`put_brick`]).
 pub(crate) fn put_entries(raw: &mut Vec<u8>, bricks: &[(LevelKey, Option<Arc<Brick>>)]) {
     for (key, brick) in bricks {
-        match brick {
-            Some(b) => {
-                raw.push(1 | key.level << 1);
-                put_brick(raw, key.key, b);
-            }
-            None => {
-                raw.push(key.level << 1);
-                for c in key.key.to_array() {
-                    raw.extend_from_slice(&c.to_le_bytes());
-                }
+        put_entry(raw, 0, *key, brick.as_deref());
+    }
+}
+
+/// A brick of one part of a sculpt: the part's index (0 the first), its key, the brick
+/// (`None`: absent).
+pub(crate) type PartBrick = (u16, LevelKey, Option<Arc<Brick>>);
+
+/// Flag of an entry of a part after the first: its index follows the flags (u16).
+const PART_FLAG: u8 = 0x80;
+
+/// Appends brick entries of any parts: as [`put_entries`], with the flags' bit 7 set and the
+/// part's index (u16) after them for a part after the first.
+pub(crate) fn put_part_entries(raw: &mut Vec<u8>, bricks: &[PartBrick]) {
+    for (part, key, brick) in bricks {
+        put_entry(raw, *part, *key, brick.as_deref());
+    }
+}
+
+fn put_entry(raw: &mut Vec<u8>, part: u16, key: LevelKey, brick: Option<&Brick>) {
+    let flags = u8::from(brick.is_some()) | key.level << 1;
+    if part == 0 {
+        raw.push(flags);
+    } else {
+        raw.push(flags | PART_FLAG);
+        raw.extend_from_slice(&part.to_le_bytes());
+    }
+    match brick {
+        Some(b) => put_brick(raw, key.key, b),
+        None => {
+            for c in key.key.to_array() {
+                raw.extend_from_slice(&c.to_le_bytes());
             }
         }
     }
 }
 
-/// Reads `count` entries written by [`put_entries`] from `raw` at `*at`, refusing a key twice.
+/// Reads `count` entries written by [`put_entries`] from `raw` at `*at`, refusing a key twice
+/// and an entry of another part.
 pub(crate) fn read_entries(
     raw: &[u8],
     at: &mut usize,
     count: usize,
     seen: &mut HashSet<LevelKey>,
 ) -> Result<Vec<(LevelKey, Option<Brick>)>, String> {
+    let mut keys = HashSet::new();
+    let entries = read_part_entries(raw, at, count, &mut keys)?;
+    let mut out = Vec::with_capacity(entries.len());
+    for (part, key, brick) in entries {
+        if part != 0 {
+            return Err(format!("brick {key} is of part {part}; these entries are of the first part alone"));
+        }
+        if !seen.insert(key) {
+            return Err(format!("brick {key} appears twice"));
+        }
+        out.push((key, brick));
+    }
+    Ok(out)
+}
+
+/// Reads `count` entries written by [`put_part_entries`] from `raw` at `*at`, refusing a key of
+/// one part twice.
+pub(crate) fn read_part_entries(
+    raw: &[u8],
+    at: &mut usize,
+    count: usize,
+    seen: &mut HashSet<(u16, LevelKey)>,
+) -> Result<Vec<(u16, LevelKey, Option<Brick>)>, String> {
     // Refuse counts the bytes cannot hold before allocating for them.
     if count > (raw.len() - *at) / MIN_ENTRY {
         return Err(format!("it claims {count} bricks, more than its {} bytes hold", raw.len() - *at));
@@ -646,7 +748,18 @@ pub(crate) fn read_entries(
     for _ in 0..count {
         let Some(flags) = raw.get(*at).copied() else { return Err("it ends inside a brick".into()) };
         *at += 1;
-        let level = usize::from(flags >> 1);
+        let part = if flags & PART_FLAG != 0 {
+            let Some(bytes) = raw.get(*at..*at + 2) else { return Err("it ends inside a brick".into()) };
+            *at += 2;
+            let part = u16::from_le_bytes([bytes[0], bytes[1]]);
+            if part == 0 {
+                return Err("an entry flagged as of a later part names the first".into());
+            }
+            part
+        } else {
+            0
+        };
+        let level = usize::from((flags & !PART_FLAG) >> 1);
         if level >= LEVELS {
             return Err(format!(
                 "a brick has the flags {flags}: level {level} is beyond the field's {LEVELS}"
@@ -665,10 +778,10 @@ pub(crate) fn read_entries(
             }
             _ => return Err("it ends inside a brick".into()),
         };
-        if !seen.insert(entry.0) {
-            return Err(format!("brick {} appears twice", entry.0));
+        if !seen.insert((part, entry.0)) {
+            return Err(format!("brick {} of part {part} appears twice", entry.0));
         }
-        entries.push(entry);
+        entries.push((part, entry.0, entry.1));
     }
     Ok(entries)
 }
@@ -1084,6 +1197,9 @@ struct Head {
     scene_toml: Option<String>,
     tools: Vec<StoredTool>,
     view: Option<StoredView>,
+    /// Version 5: the parts' layouts and the clay of those after the first.
+    layouts: Vec<PartLayout>,
+    others: Option<parts::PartsReader>,
     /// Version 4: the brick chunks, and where the history starts, both from `base`.
     index: Option<(Vec<IndexEntry>, u64)>,
     /// The first byte after the index (version 4; before, it means nothing).
@@ -1117,6 +1233,8 @@ fn read_head(
         scene_toml: None,
         tools: Vec::new(),
         view: None,
+        layouts: Vec::new(),
+        others: None,
         index: None,
         base: source.position(),
         chunks_read: 1,
@@ -1152,6 +1270,22 @@ fn read_head(
                     ));
                 }
                 head.tools.push(tool);
+            }
+            b"PRTS" if version >= 5 && head.others.is_none() => {
+                head.layouts = parts::read_layouts(raw, index)?;
+                head.others = Some(parts::PartsReader::new(&head.layouts, head.meta.iso));
+                if (head.layouts[0].voxel_size_m - head.meta.voxel_size_m).abs() > 1e-9 {
+                    return Err(format!(
+                        "chunk {index} (PRTS) gives the first part voxels of {} m; its META chunk says {} m",
+                        head.layouts[0].voxel_size_m, head.meta.voxel_size_m
+                    ));
+                }
+            }
+            b"PART" if version >= 5 => {
+                let Some(reader) = head.others.as_mut() else {
+                    return Err(format!("chunk {index} (PART) comes before the parts are listed (PRTS)"));
+                };
+                reader.read(raw, index)?;
             }
             b"INDX" if version >= 4 => {
                 let room = source.len() - source.position();
@@ -1200,12 +1334,15 @@ fn decode_from(
         scene_toml,
         tools,
         view,
+        layouts,
+        others,
         index: directory,
         base,
         chunks_read,
     } = read_head(source, &mut raw, &mut buf, &mut pending)?;
     let mut keys: HashSet<LevelKey> = HashSet::new();
-    let lowest = Field::estimated_bytes(meta.bricks as f64, 0.0);
+    let other_bricks = others.as_ref().map_or(0, parts::PartsReader::bricks) as f64;
+    let lowest = Field::estimated_bytes(meta.bricks as f64 + other_bricks, other_bricks);
     if lowest > limit.bytes as f64 {
         return Err(over_limit(limit, lowest, 0, meta.bricks));
     }
@@ -1271,7 +1408,8 @@ fn decode_from(
     }
     field.take_dirty();
     field.set_history(history.undo, history.redo);
-    Ok(Sculpt { field, scene_toml, tools, view })
+    let others = others.map_or_else(Vec::new, parts::PartsReader::finish);
+    Ok(Sculpt { field, scene_toml, tools, view, parts: layouts, others })
 }
 
 #[cfg(test)]
