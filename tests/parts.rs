@@ -210,6 +210,10 @@ fn bad_parts_are_refused_at_their_line_with_what_is_wrong() {
         ("[[part]]\nname = \"a\"\n[[part]]\nname = \"a\"\n".to_owned(), "given to two parts"),
         ("[[part]]\nname = \"\"\n".to_owned(), "name must be 1 to"),
         (
+            "[[part]]\nname = \"a\"\nscale = 2.0\n[[region]]\ntime_s = 0.0\nop = \"inflate\"\ncentre_m = [0.0, 0.0, 0.0]\nradius_m = 0.01\ndistance_m = 0.001\n".to_owned(),
+            "[[region]] acts on the first part (\"a\") in world coordinates",
+        ),
+        (
             format!("{}[[clay]]\npart = \"c\"\nshape = \"sphere\"\nradius_m = 0.01\n", part("")),
             "no part named \"c\" (parts: a, b)",
         ),

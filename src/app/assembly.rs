@@ -27,6 +27,8 @@ pub struct Assembly {
     redo: Vec<Vec<usize>>,
     /// Per part, the undo steps its field held when last looked at.
     seen: Vec<usize>,
+    /// The part the desk's and the headset's tools act on.
+    active: usize,
 }
 
 /// Undo steps a field has recorded and not taken back (dropped ones included, so that the
@@ -41,12 +43,29 @@ impl Assembly {
     pub fn new(parts: Vec<ScenePart>, others: Vec<Field>, first: &Field) -> Self {
         debug_assert_eq!(parts.len(), others.len() + 1);
         let seen = std::iter::once(first).chain(&others).map(steps).collect();
-        Self { parts, others, composition: None, undo: Vec::new(), redo: Vec::new(), seen }
+        Self { parts, others, composition: None, undo: Vec::new(), redo: Vec::new(), seen, active: 0 }
     }
 
     /// The parts' layouts, in composition order.
     pub fn parts(&self) -> &[ScenePart] {
         &self.parts
+    }
+
+    /// The part the desk's and the headset's tools act on.
+    pub fn active(&self) -> usize {
+        self.active
+    }
+
+    /// Makes part `part` (an index into [`Assembly::parts`], wrapped) the active one; returns it.
+    pub fn set_active(&mut self, part: usize) -> usize {
+        self.active = part % self.parts.len();
+        self.active
+    }
+
+    /// Places part `part` at `placement`; the composition is made again at the next
+    /// [`Assembly::surface`].
+    pub fn set_placement(&mut self, part: usize, placement: Placement) {
+        self.parts[part].placement = placement;
     }
 
     /// The parts' layouts as a sculpt file stores them: none for one part at rest (the file of

@@ -13,6 +13,7 @@ use super::assembly::{image_in_part, Assembly};
 use crate::clay::{window_around, Clay, ClayParams, ClayTool};
 use crate::lattice::{volume_at, Lattice, LatticeError};
 use crate::math::{Aabb, Isometry, Vec3};
+use crate::parts::Placement;
 use crate::parts::{copy_repeated, inflate, RegionDrag, RegionOp, Symmetry};
 use crate::scene::{
     Hand, HandState, Key, RegionAction, Scene, SceneLattice, SceneRegion, SceneTool, SceneToolShape,
@@ -294,6 +295,48 @@ impl<'s> Playback<'s> {
         (self.field, layouts, self.assembly.into_others())
     }
 
+    /// The active part's clay, for the desk's and the headset's tools, and its placement in the
+    /// world when it is not at rest there (a tool's pose and size go into its frame through it),
+    /// or why no tool may act on it.
+    pub fn active_target(&mut self) -> Result<(&mut Field, Option<Placement>), String> {
+        let part = self.assembly.active();
+        let layout = &self.assembly.parts()[part];
+        if layout.locked {
+            return Err(format!("part \"{}\" is locked: no tool acts on it", layout.name));
+        }
+        let frame = self.assembly.frame_of(part);
+        Ok((self.assembly.field_mut(&mut self.field, part), frame))
+    }
+
+    /// A tool at `pose` (world), acting through the symmetry's `images`, as it acts on the
+    /// active part: in the part's frame and at its scale when the part is placed in the world.
+    /// The desk's and the headset's tools go through it.
+    pub fn in_active_part(&self, tool: Tool, pose: Pose, images: &[Isometry]) -> (Tool, Pose, Vec<Isometry>) {
+        in_part(self.assembly.frame_of(self.assembly.active()), tool, pose, images)
+    }
+
+    /// Makes part `part` (wrapped) the one the desk's and the headset's tools act on, closing the
+    /// strokes open; returns it.
+    pub fn set_active_part(&mut self, part: usize) -> usize {
+        self.close_steps();
+        self.assembly.set_active(part)
+    }
+
+    /// Places part `part` at `placement` in the world (the composition follows); the autosave
+    /// session's snapshots store where it is from the next [`Playback::keep_layouts`].
+    pub fn set_part_placement(&mut self, part: usize, placement: Placement) {
+        self.assembly.set_placement(part, placement);
+    }
+
+    /// Has the autosave session store the parts' layouts as they are now (after a part was
+    /// moved): written before this returns, so no recovery puts a part back where it was.
+    pub fn keep_layouts(&mut self) {
+        let layouts = self.assembly.layouts();
+        if let Some(a) = &mut self.autosave {
+            a.set_layouts(layouts);
+        }
+    }
+
     /// The sculpt's parts: their layouts and the fields of all but the first.
     pub fn assembly(&self) -> &Assembly {
         &self.assembly
@@ -451,14 +494,8 @@ impl<'s> Playback<'s> {
                     field.begin_stroke();
                     self.owns_stroke |= part == 0;
                 }
-                let mut tool = self.tools[during.tool].clone();
-                let images: Vec<Isometry> = match frame {
-                    Some(f) => {
-                        tool.scale /= f.scale;
-                        self.images.iter().map(|i| image_in_part(i, &f)).collect()
-                    }
-                    None => self.images.clone(),
-                };
+                let (tool, _, images) =
+                    in_part(frame, self.tools[during.tool].clone(), Pose::default(), &self.images);
                 let mut s = Stroke::with_images(tool, &images);
                 s.advance(field, local(at_start.pose), 0.0);
                 *stroke = Some((during.tool, part, s));
@@ -850,6 +887,24 @@ impl<'s> Playback<'s> {
             push.clay.poses().get(body).copied()
         });
         Some((state.tool, put.unwrap_or(state.pose)))
+    }
+}
+
+/// A tool at `pose` (world), acting through the symmetry's `images`, as it acts on a part
+/// placed at `frame` (`None`: at rest in the world): in the part's frame and at its scale.
+fn in_part(
+    frame: Option<Placement>,
+    mut tool: Tool,
+    pose: Pose,
+    images: &[Isometry],
+) -> (Tool, Pose, Vec<Isometry>) {
+    match frame {
+        None => (tool, pose, images.to_vec()),
+        Some(frame) => {
+            tool.scale /= frame.scale;
+            let images = images.iter().map(|i| image_in_part(i, &frame)).collect();
+            (tool, frame.local_pose(pose), images)
+        }
     }
 }
 

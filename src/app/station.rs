@@ -487,8 +487,13 @@ pub struct Station<'s> {
     swap_eyes: bool,
     /// The symmetry the desk tool and the scene's hands act through.
     symmetry: SymmetrySwitch,
-    /// The region the desk tool carries, copies or bends, and the tool's pose when it grabbed.
+    /// The region the desk tool carries, copies or bends, and the tool's pose when it grabbed
+    /// (in the frame of the part it acts on).
     region_drag: Option<(RegionDrag, Pose)>,
+    /// The active part's placement when the device driving the `part` target was last at home,
+    /// and the placement it last gave the part while moving it (kept once it stops).
+    part_base: crate::parts::Placement,
+    part_moving: Option<crate::parts::Placement>,
     /// The interlace parity is the calibration's flipped.
     parity_flipped: bool,
     /// The monitor's resolution as the window system gives it (when the calibration does not).
@@ -606,6 +611,8 @@ impl<'s> Station<'s> {
             swap_eyes: scene.display.swap_eyes,
             symmetry: SymmetrySwitch::new(scene.symmetry),
             region_drag: None,
+            part_base: scene.parts[0].placement,
+            part_moving: None,
             parity_flipped: false,
             head: None,
             auto_convergence: None,
@@ -960,9 +967,20 @@ impl<'s> Station<'s> {
             StationAction::InflateRegion | StationAction::DeflateRegion => {
                 const STEP_M: f32 = 0.001;
                 let distance = if action == StationAction::InflateRegion { STEP_M } else { -STEP_M };
-                let region = Region::of_tool(&self.desk_tool, self.desk.poses.get(Target::Tool));
                 let images = self.playback.images().to_vec();
-                let field = self.playback.field_mut();
+                let (tool, pose, images) = self.playback.in_active_part(
+                    self.desk_tool.clone(),
+                    self.desk.poses.get(Target::Tool),
+                    &images,
+                );
+                let region = Region::of_tool(&tool, pose);
+                let field = match self.playback.active_target() {
+                    Ok((field, _)) => field,
+                    Err(why) => {
+                        self.messages.push(why);
+                        return;
+                    }
+                };
                 if !field.in_stroke() {
                     field.begin_stroke();
                     let c = inflate(field, &region, distance, &images);
@@ -973,6 +991,18 @@ impl<'s> Station<'s> {
                         self.messages.push("no clay surface within the tool to inflate or deflate".into());
                     }
                 }
+            }
+            StationAction::NextPart | StationAction::PreviousPart => {
+                let count = self.playback.assembly().parts().len();
+                let now = self.playback.assembly().active();
+                let next = if action == StationAction::NextPart { now + 1 } else { now + count - 1 };
+                self.end_desk_strokes();
+                let part = self.playback.set_active_part(next);
+                // The device driving the part starts from home over the part as it is.
+                *self.desk.poses.get_mut(Target::Part) = self.home.get(Target::Part);
+                self.part_base = self.playback.assembly().parts()[part].placement;
+                self.part_moving = None;
+                self.messages.push(describe_part(self.playback.assembly(), part));
             }
             StationAction::ToggleSymmetry | StationAction::NextSymmetry => {
                 let symmetry = match action {
@@ -1111,6 +1141,12 @@ impl<'s> Station<'s> {
                 }
             ),
         ];
+        let (parts, active) = (self.playback.assembly().parts(), self.playback.assembly().active());
+        if parts.len() > 1 {
+            let locked = if parts[active].locked { ", locked" } else { "" };
+            lines
+                .insert(1, format!("part {} of {}: {}{locked}", active + 1, parts.len(), parts[active].name));
+        }
         if let Some(Budgeted { over: Some((check, _)), .. }) = &self.budget {
             // Today's figures, not those of the first warning.
             // The HUD's font has no degree sign.
@@ -1443,6 +1479,9 @@ impl<'s> Station<'s> {
             }
             // Else dropped unclosed: the next start recovers its strokes.
         }
+        self.part_base = self.playback.assembly().parts()[0].placement;
+        self.part_moving = None;
+        *self.desk.poses.get_mut(Target::Part) = self.home.get(Target::Part);
         self.save_to = path.to_owned();
         self.opened = Some(path.to_owned());
         self.unsaved_strokes = 0;
@@ -1502,7 +1541,7 @@ impl<'s> Station<'s> {
     /// The region tools held at the desk: the region of the tool's shape grabbed when a region
     /// key goes down, carried (or copied, or bent) with the tool each frame, one undo step
     /// when the key comes up. Not while the tool is applied.
-    fn carry_region(&mut self, pose: Pose, applying: bool, images: &[crate::math::Isometry]) {
+    fn carry_region(&mut self, tool: &Tool, pose: Pose, applying: bool, images: &[crate::math::Isometry]) {
         let held = [
             (StationAction::GrabRegion, RegionOp::Move),
             (StationAction::CopyRegion, RegionOp::Copy),
@@ -1512,10 +1551,18 @@ impl<'s> Station<'s> {
         .find(|&(a, _)| self.holding(a))
         .map(|(_, op)| op)
         .filter(|_| !applying);
-        let field = self.playback.field_mut();
+        let field = match self.playback.active_target() {
+            Ok((field, _)) => field,
+            Err(why) => {
+                if held.is_some() && self.messages.last() != Some(&why) {
+                    self.messages.push(why);
+                }
+                return;
+            }
+        };
         let failed = match (held, &mut self.region_drag) {
             (Some(op), None) if !field.in_stroke() => {
-                match RegionDrag::start(field, Region::of_tool(&self.desk_tool, pose), op, images) {
+                match RegionDrag::start(field, Region::of_tool(tool, pose), op, images) {
                     Ok(drag) => {
                         field.begin_stroke();
                         self.region_drag = Some((drag, pose));
@@ -1541,6 +1588,40 @@ impl<'s> Station<'s> {
             if self.messages.last() != Some(&message) {
                 self.messages.push(message);
             }
+        }
+    }
+
+    /// Ends the desk tool's stroke and region drag on the active part, each one undo step.
+    fn end_desk_strokes(&mut self) {
+        let open = self.stroke.take().is_some() | self.region_drag.take().is_some();
+        if open {
+            if let Ok((field, _)) = self.playback.active_target() {
+                field.end_stroke();
+            }
+            self.playback.journal();
+            self.unsaved_strokes += 1;
+        }
+    }
+
+    /// The active part follows the device driving the `part` target: turned about its origin
+    /// and moved as far as the device has moved that target from home. Once it stops, the
+    /// autosave session keeps where it is.
+    fn drive_active_part(&mut self) {
+        let (pose, home) = (self.desk.poses.get(Target::Part), self.home.get(Target::Part));
+        let base = self.part_base;
+        let turn = (pose.rotation * home.rotation.inverse()).normalize();
+        let placement = crate::parts::Placement {
+            rotation: (turn * base.rotation).normalize(),
+            translation_m: base.translation_m + (pose.position_m - home.position_m),
+            scale: base.scale,
+        };
+        let part = self.playback.assembly().active();
+        if self.playback.assembly().parts()[part].placement != placement && pose != home {
+            self.playback.set_part_placement(part, placement);
+            self.part_moving = Some(placement);
+        } else if self.part_moving.take().is_some() {
+            self.playback.keep_layouts();
+            self.unsaved_strokes += 1;
         }
     }
 
@@ -1595,26 +1676,37 @@ impl<'s> Station<'s> {
         let t = self.playback.time_s() + dt_s;
         self.playback.advance_to(t, |_| {});
         let applying = self.holding(StationAction::Apply) || self.device_apply;
-        let acting = self.acting_tool();
+        self.drive_active_part();
+        // The desk tool acts on the active part, in its frame.
         let images = self.playback.images().to_vec();
-        let field = self.playback.field_mut();
-        if applying {
-            if self.stroke.is_none() {
-                field.begin_stroke();
-                let mut s = Stroke::with_images(acting, &images);
-                s.advance(field, pose, 0.0);
-                self.stroke = Some(s);
+        let (acting, local, images) = self.playback.in_active_part(self.acting_tool(), pose, &images);
+        let (desk_tool, _, _) = self.playback.in_active_part(self.desk_tool.clone(), pose, &[]);
+        match self.playback.active_target() {
+            Err(why) => {
+                if applying && self.messages.last() != Some(&why) {
+                    self.messages.push(why);
+                }
             }
-            if let Some(s) = &mut self.stroke {
-                s.advance(field, pose, dt_s);
+            Ok((field, _)) => {
+                if applying {
+                    if self.stroke.is_none() {
+                        field.begin_stroke();
+                        let mut s = Stroke::with_images(acting, &images);
+                        s.advance(field, local, 0.0);
+                        self.stroke = Some(s);
+                    }
+                    if let Some(s) = &mut self.stroke {
+                        s.advance(field, local, dt_s);
+                    }
+                } else if self.stroke.take().is_some() {
+                    field.end_stroke();
+                    self.playback.journal();
+                    self.unsaved_strokes += 1;
+                    self.confirm_open = None;
+                }
             }
-        } else if self.stroke.take().is_some() {
-            field.end_stroke();
-            self.playback.journal();
-            self.unsaved_strokes += 1;
-            self.confirm_open = None;
         }
-        self.carry_region(pose, applying, &images);
+        self.carry_region(&desk_tool, local, applying, &images);
 
         self.times.tools_ms = ms_since(tools_started);
         self.feel_contact(pose, dt_s);
@@ -1737,7 +1829,7 @@ impl<'s> Station<'s> {
         let driven = match self.desk.mapping.target(DeviceClass::Gamepad) {
             Target::Tool => Some((tool, self.stroke.is_some())),
             Target::SecondTool => Some((self.desk.poses.get(Target::SecondTool), false)),
-            Target::Scene | Target::Light => None,
+            Target::Scene | Target::Light | Target::Part => None,
         };
         let contact = driven.map_or(Contact::default(), |(pose, stroking)| {
             let (touching, density) =
@@ -1753,6 +1845,26 @@ impl<'s> Station<'s> {
             self.rumble = Some(r);
         }
     }
+}
+
+/// What the station says of part `part` when it becomes the active one.
+fn describe_part(parts: &super::assembly::Assembly, part: usize) -> String {
+    let p = &parts.parts()[part];
+    let t = p.placement.translation_m;
+    format!(
+        "active part {} of {}: {} ({}, {} mm voxels, at {:.3}, {:.3}, {:.3} m, scale {}{}{})",
+        part + 1,
+        parts.parts().len(),
+        p.name,
+        p.op.name(),
+        p.voxel_size_m * 1000.0,
+        t.x,
+        t.y,
+        t.z,
+        p.placement.scale,
+        if p.visible { "" } else { ", hidden" },
+        if p.locked { ", locked: no tool acts on it" } else { "" }
+    )
 }
 
 /// Runs the station in a window on `scene` until the user closes it (or the frame count of
@@ -2148,6 +2260,7 @@ impl ApplicationHandler for WindowApp<'_, '_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::field::FieldReader;
     use crate::math::IVec3;
     use crate::mesh::remesh_dirty;
     use crate::stereo::BudgetMode;
@@ -2798,6 +2911,72 @@ mod tests {
         let mut settings = InputSettings::shipped();
         settings.mapping.set(DeviceClass::Gamepad, target);
         station.set_input_settings(&settings);
+    }
+
+    /// Two parts: a ball at rest and a ball of its own, 2 mm voxels, placed 8 cm along X at
+    /// twice its size.
+    fn two_part_scene() -> Scene {
+        let text = "[[part]]\nname = \"left\"\n[[part]]\nname = \"right\"\nvoxel_size_m = 0.002\n\
+                    position_m = [0.08, 0.0, 0.0]\nscale = 2.0\n\
+                    [[clay]]\npart = \"left\"\nshape = \"sphere\"\nradius_m = 0.02\n\
+                    [[clay]]\npart = \"right\"\nshape = \"sphere\"\nradius_m = 0.01\n\
+                    [[tool]]\nname = \"ball\"\nshape = \"sphere\"\nradius_m = 0.01\naction = \"add\"\n";
+        Scene::parse(text, "two parts", None).unwrap()
+    }
+
+    #[test]
+    fn n_makes_the_next_part_active_the_desk_tool_acts_in_its_frame_and_a_device_moves_it() {
+        use crate::input::calibration::SixDof;
+        let scene = two_part_scene();
+        let mut station = small_station(&scene);
+        let left = station.playback.field().clone();
+        let right = station.playback.assembly().others()[0].clone();
+        assert!(station.hud_lines().iter().any(|l| l == "part 1 of 2: left"));
+        station.key(KeyCode::KeyN, true);
+        station.key(KeyCode::KeyN, false);
+        assert!(
+            station.messages.last().unwrap().starts_with("active part 2 of 2: right"),
+            "{:?}",
+            station.messages
+        );
+        assert!(station.hud_lines().iter().any(|l| l == "part 2 of 2: right"));
+        // A stroke at the right ball's top (world): clay of the right part, in its frame.
+        station.mouse.tool_position_m = Vec3::new(0.08, 0.02, 0.0);
+        sculpt_for(&mut station, 2);
+        assert!(station.playback.field().same_samples(&left), "the left part is untouched");
+        let grown = &station.playback.assembly().others()[0];
+        assert!(grown.mass() > right.mass());
+        let local = scene.parts[1].placement.local_point(Vec3::new(0.08, 0.026, 0.0));
+        assert!(FieldReader::new(grown).density_at(grown.transform().world_to_index(local)) > 0.5);
+        let surface = |station: &mut Station<'_>, p: Vec3| {
+            let f = station.playback.surface();
+            FieldReader::new(f).density_world(p)
+        };
+        assert!(surface(&mut station, Vec3::new(0.08, 0.026, 0.0)) > 0.5, "drawn where it was laid");
+        // A gamepad on the part target carries it along X.
+        gamepad_drives(&mut station, Target::Part);
+        let push = GamepadMotion {
+            six: SixDof { translation: Vec3::X * 0.5, rotation: Vec3::ZERO },
+            size_rate: 0.0,
+        };
+        for _ in 0..10 {
+            station.devices(SCRIPTED_STEP_S, &[push], Vec::new());
+            station.step(SCRIPTED_STEP_S, |_| {});
+        }
+        let moved = station.playback.assembly().parts()[1].placement.translation_m;
+        assert!(moved.x > 0.081 && moved.y.abs() < 1e-6, "the part moved along X: {moved}");
+        assert!(station.playback.field().same_samples(&left), "the left part stays");
+        assert!(
+            surface(&mut station, Vec3::new(0.08 - 0.0195, 0.0, 0.0)) < 0.5,
+            "the right ball left its old place"
+        );
+        // Undo takes back the stroke on the right part.
+        station.act(StationAction::Undo);
+        assert!(station.playback.assembly().others()[0].same_samples(&right));
+        // Back to the first part.
+        station.key(KeyCode::KeyN, true);
+        station.key(KeyCode::KeyN, false);
+        assert_eq!(station.playback.assembly().active(), 0);
     }
 
     #[test]

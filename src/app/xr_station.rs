@@ -134,8 +134,22 @@ pub struct XrReport {
 /// A grab of the sculpture in progress: the placement and the hands when it began.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Grab {
-    One { hand: usize, start: Placement, hand_start: Pose },
-    Two { start: Placement, hands_start: (Vec3, Vec3) },
+    One {
+        hand: usize,
+        start: Placement,
+        hand_start: Pose,
+    },
+    Two {
+        start: Placement,
+        hands_start: (Vec3, Vec3),
+    },
+    /// The support hand alone, on a sculpt of several parts: it carries the active part (its
+    /// placement at the grip and the hand's world pose then), its thumbstick scaling it.
+    Part {
+        start: crate::parts::Placement,
+        hand_start: Pose,
+        scale: f32,
+    },
 }
 
 /// The headset station's state between frames, without the session and renderer.
@@ -302,7 +316,9 @@ impl<'s> XrSculptor<'s> {
     /// Closes the stroke in progress, journaling it.
     fn end_stroke(&mut self) {
         if self.stroke.take().is_some() {
-            self.playback.field_mut().end_stroke();
+            if let Ok((field, _)) = self.playback.active_target() {
+                field.end_stroke();
+            }
             self.playback.journal();
         }
     }
@@ -384,6 +400,12 @@ impl<'s> XrSculptor<'s> {
         } else if other.primary && !other_before.primary {
             let symmetry = self.symmetry.next_choice();
             self.set_symmetry(symmetry);
+        } else if other.secondary && !other_before.secondary {
+            self.end_stroke();
+            let count = self.playback.assembly().parts().len();
+            let part = self.playback.set_active_part(self.playback.assembly().active() + 1);
+            let name = &self.playback.assembly().parts()[part].name;
+            self.messages.push(format!("active part {} of {count}: {name}", part + 1));
         }
     }
 
@@ -398,12 +420,37 @@ impl<'s> XrSculptor<'s> {
         self.playback.symmetry()
     }
 
-    /// Grips: one hand drags and turns the sculpture, two also scale it.
-    fn grabs(&mut self, hands: &[HandState; 2]) {
+    /// Grips: one hand drags and turns the sculpture, two also scale it; on a sculpt of several
+    /// parts, the support hand alone carries and turns the active part, and its thumbstick
+    /// scales it (as Medium's layers are grabbed).
+    fn grabs(&mut self, hands: &[HandState; 2], dt_s: f32) {
         let gripping: Vec<(usize, Pose)> = (0..2)
             .filter_map(|i| hands[i].grip.filter(|_| hands[i].squeeze >= SQUEEZE_ON).map(|p| (i, p)))
             .collect();
+        let support = 1 - self.dominant;
+        let parted = self.playback.assembly().parts().len() > 1;
+        let was_part = matches!(self.grab, Some(Grab::Part { .. }));
         self.grab = match (gripping.as_slice(), self.grab) {
+            ([(i, p)], Some(Grab::Part { start, hand_start, scale })) if *i == support => {
+                let y = hands[support].thumbstick.y;
+                let scale = if y.abs() > 0.2 { scale * RESIZE_PER_S.powf(y * dt_s) } else { scale };
+                let now = self.placement.pose_to_world(*p);
+                let turn = (now.rotation * hand_start.rotation.inverse()).normalize();
+                let scale = (start.scale * scale)
+                    .clamp(*crate::parts::SCALE_RANGE.start(), *crate::parts::SCALE_RANGE.end())
+                    / start.scale;
+                let placed = crate::parts::Placement {
+                    rotation: (turn * start.rotation).normalize(),
+                    translation_m: now.position_m + turn * (start.translation_m - hand_start.position_m),
+                    scale: start.scale * scale,
+                };
+                self.playback.set_part_placement(self.playback.assembly().active(), placed);
+                Some(Grab::Part { start, hand_start, scale })
+            }
+            ([(i, p)], _) if *i == support && parted => {
+                let start = self.playback.assembly().parts()[self.playback.assembly().active()].placement;
+                Some(Grab::Part { start, hand_start: self.placement.pose_to_world(*p), scale: 1.0 })
+            }
             ([(_, a), (_, b)], Some(Grab::Two { start, hands_start })) => {
                 self.placement = two_hand_grab(&start, hands_start, (a.position_m, b.position_m));
                 self.grab
@@ -418,6 +465,10 @@ impl<'s> XrSculptor<'s> {
             ([(i, p)], _) => Some(Grab::One { hand: *i, start: self.placement, hand_start: *p }),
             _ => None,
         };
+        if was_part && !matches!(self.grab, Some(Grab::Part { .. })) {
+            // Let go: the autosave session keeps where the part is.
+            self.playback.keep_layouts();
+        }
     }
 
     /// Runs one headset frame: controls, grabs, the scene's timeline and the dominant hand's
@@ -429,7 +480,7 @@ impl<'s> XrSculptor<'s> {
         let mut haptics = Vec::new();
         let on_palette = self.palette_buttons(input, &mut haptics);
         self.controls(input, dt_s);
-        self.grabs(&input.hands);
+        self.grabs(&input.hands, dt_s);
         let hand = input.hands[self.dominant];
         let tool_pose = hand.grip.map(|g| self.placement.pose_to_world(g));
         let applying =
@@ -471,10 +522,11 @@ impl<'s> XrSculptor<'s> {
         } else {
             self.touching = false;
         }
+        // The tool acts on the active part, in its frame.
         let images = self.playback.images().to_vec();
-        let field = self.playback.field_mut();
-        match (applying_stroke, tool_pose) {
-            (true, Some(pose)) => {
+        let placed = tool_pose.map(|pose| self.playback.in_active_part(tool.clone(), pose, &images));
+        match (applying_stroke, placed, self.playback.active_target()) {
+            (true, Some((tool, pose, images)), Ok((field, _))) => {
                 if self.stroke.is_none() {
                     field.begin_stroke();
                     let mut s = Stroke::with_images(tool.clone(), &images);
@@ -482,13 +534,20 @@ impl<'s> XrSculptor<'s> {
                     self.stroke = Some(s);
                 }
                 if let Some(s) = &mut self.stroke {
-                    s.set_tool(tool.clone());
+                    s.set_tool(tool);
                     s.advance(field, pose, dt_s);
                 }
             }
-            _ => {
+            (true, Some(_), Err(why)) => {
+                if self.messages.last() != Some(&why) {
+                    self.messages.push(why);
+                }
+            }
+            (_, _, target) => {
                 if self.stroke.take().is_some() {
-                    field.end_stroke();
+                    if let Ok((field, _)) = target {
+                        field.end_stroke();
+                    }
                     self.playback.journal();
                 }
             }
@@ -1178,6 +1237,57 @@ mod tests {
         let pulling = HandState { trigger: 1.0, ..grip(0.2, 1.3) };
         frame(&mut s, [grip(-0.2, 1.3), pulling]);
         assert_eq!(density(&s, Vec3::new(0.0, 0.0, 0.045)), whole);
+    }
+
+    #[test]
+    fn on_a_sculpt_of_parts_the_support_grip_carries_turns_and_scales_the_active_part() {
+        let scene = Scene::parse(
+            "[field]\nvoxel_size_m = 0.004\n[camera]\neye_m = [0.0, 0.0, 0.5]\ntarget_m = [0.0, 0.0, 0.0]\n\
+             [[part]]\nname = \"body\"\n[[part]]\nname = \"head\"\nposition_m = [0.0, 0.08, 0.0]\n\
+             [[clay]]\npart = \"body\"\nshape = \"sphere\"\nradius_m = 0.05\n\
+             [[clay]]\npart = \"head\"\nshape = \"sphere\"\nradius_m = 0.02\n\
+             [[tool]]\nname = \"gouge\"\nradius_m = 0.012\naction = \"remove\"\n",
+            "parts",
+            None,
+        )
+        .unwrap();
+        let mut s = sculptor(&scene, false);
+        let sculpture = s.placement();
+        // The other hand's second button makes the head the active part.
+        frame(&mut s, [HandState { secondary: true, ..HandState::default() }, HandState::default()]);
+        frame(&mut s, [HandState::default(), HandState::default()]);
+        assert_eq!(s.playback.assembly().active(), 1);
+        assert!(s.messages.last().unwrap().contains("active part 2 of 2: head"));
+        // The support (left) grip carries the head up 10 cm of the room, the sculpture stays.
+        let grip = |y: f32, stick: f32| HandState {
+            grip: at(-0.1, y, -0.4),
+            squeeze: 1.0,
+            thumbstick: crate::math::Vec2::new(0.0, stick),
+            ..HandState::default()
+        };
+        frame(&mut s, [grip(1.3, 0.0), HandState::default()]);
+        frame(&mut s, [grip(1.4, 0.0), HandState::default()]);
+        assert_eq!(
+            s.placement(),
+            sculpture,
+            "one grip of the support hand moves the part, not the sculpture"
+        );
+        let head = s.playback.assembly().parts()[1].placement;
+        let up = head.translation_m - Vec3::new(0.0, 0.08, 0.0);
+        assert!((up - Vec3::Y * 0.1 / sculpture.scale).length() < 1e-4, "{up}");
+        // Its thumbstick up, held for a second, doubles it.
+        for _ in 0..90 {
+            frame(&mut s, [grip(1.4, 1.0), HandState::default()]);
+        }
+        let grown = s.playback.assembly().parts()[1].placement.scale;
+        assert!((grown - 2.0).abs() < 0.05, "{grown}");
+        frame(&mut s, [HandState::default(), HandState::default()]);
+        // The composed surface shows the head where it was carried, the body where it was.
+        let head_now = s.playback.assembly().parts()[1].placement.translation_m;
+        let _ = s.playback.surface();
+        let mut reader = FieldReader::new(s.playback.surface_now());
+        assert!(reader.density_world(head_now + Vec3::Y * 0.035) > 0.5, "the head, twice its size");
+        assert!(reader.density_world(Vec3::ZERO) > 0.5, "the body stays");
     }
 
     #[test]

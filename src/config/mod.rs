@@ -100,6 +100,11 @@ pub enum StationAction {
     /// Held: the clutch is lifted: the mouse's 3D cursor moves without the tool; released, the
     /// tool follows the pointer's motion from where it is, scaled by the mouse's clutch gain.
     Clutch,
+    /// Make the next part of the sculpt the active one (the tools act on it; a device driving
+    /// the `part` target moves and turns it).
+    NextPart,
+    /// Make the previous part the active one.
+    PreviousPart,
 }
 
 /// Every action with its name in the bindings file.
@@ -141,6 +146,8 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("bend-region", StationAction::BendRegion),
     ("inflate-region", StationAction::InflateRegion),
     ("deflate-region", StationAction::DeflateRegion),
+    ("next-part", StationAction::NextPart),
+    ("previous-part", StationAction::PreviousPart),
 ];
 
 impl StationAction {

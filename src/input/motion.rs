@@ -39,11 +39,14 @@ pub enum Target {
     Light,
     /// The second tool, for the other hand (a support, or a second brush).
     SecondTool,
+    /// The sculpt's active part, moved and turned about its origin.
+    Part,
 }
 
 impl Target {
     /// Every target, in [`MappingTable::cycle`] order.
-    pub const ALL: [Target; 4] = [Target::Tool, Target::Scene, Target::Light, Target::SecondTool];
+    pub const ALL: [Target; 5] =
+        [Target::Tool, Target::Scene, Target::Light, Target::SecondTool, Target::Part];
 
     /// The name used in settings files and messages.
     pub fn name(self) -> &'static str {
@@ -52,6 +55,7 @@ impl Target {
             Target::Scene => "scene",
             Target::Light => "light",
             Target::SecondTool => "second_tool",
+            Target::Part => "part",
         }
     }
 
@@ -261,16 +265,22 @@ pub fn integrate(
     }
 }
 
-/// The four target poses, indexed by [`Target`].
+/// The target poses, indexed by [`Target`].
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TargetPoses(pub [Pose; 4]);
+pub struct TargetPoses(pub [Pose; 5]);
 
 impl Default for TargetPoses {
     /// Tool and second tool half a decimetre either side of the origin, the light up and to the
-    /// left, the scene at the origin.
+    /// left, the scene and the part at the origin.
     fn default() -> Self {
         let at = |x: f32, y: f32, z: f32| Pose { position_m: Vec3::new(x, y, z), rotation: Quat::IDENTITY };
-        Self([at(0.05, 0.0, 0.0), at(0.0, 0.0, 0.0), at(-0.5, 0.8, 0.5), at(-0.05, 0.0, 0.0)])
+        Self([
+            at(0.05, 0.0, 0.0),
+            at(0.0, 0.0, 0.0),
+            at(-0.5, 0.8, 0.5),
+            at(-0.05, 0.0, 0.0),
+            at(0.0, 0.0, 0.0),
+        ])
     }
 }
 
@@ -377,8 +387,8 @@ mod tests {
         m.set(DeviceClass::SpaceMouse, Target::Scene);
         m.set(DeviceClass::Mouse, Target::Tool);
         assert_eq!(m.devices_driving(Target::Scene).collect::<Vec<_>>(), [DeviceClass::SpaceMouse]);
-        let order: Vec<Target> = (0..4).map(|_| m.cycle(DeviceClass::Gamepad)).collect();
-        assert_eq!(order, [Target::Tool, Target::Scene, Target::Light, Target::SecondTool]);
+        let order: Vec<Target> = (0..5).map(|_| m.cycle(DeviceClass::Gamepad)).collect();
+        assert_eq!(order, [Target::Part, Target::Tool, Target::Scene, Target::Light, Target::SecondTool]);
 
         let read = MappingTable::default()
             .parse("spacemouse = \"light\"\nmouse = \"tool\"\n", "settings.toml")

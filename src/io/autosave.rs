@@ -243,6 +243,8 @@ type PartKey = (u16, LevelKey);
 
 enum Msg {
     Stroke(u64, Changes),
+    /// The parts' layouts as they are now; the reply comes once a snapshot holds them.
+    Layouts(Vec<PartLayout>, Sender<()>),
     Checkpointed(u64, Result<(), String>),
     Close(Sender<Result<()>>),
     /// Stop without closing: the session stays open for recovery.
@@ -371,6 +373,17 @@ impl Autosave {
         let _ = self.tx.send(Msg::Stroke(self.strokes, changes));
     }
 
+    /// Stores the parts' layouts as they are now (a part moved, hidden, locked): the writer
+    /// writes the snapshot of the strokes so far again with them (atomically, in place of the
+    /// one of that number) before this returns, so that no recovery puts a part back.
+    pub fn set_layouts(&mut self, layouts: Vec<PartLayout>) {
+        let (done, wait) = mpsc::channel();
+        if self.tx.send(Msg::Layouts(layouts, done)).is_ok() {
+            // A writer that has stopped has reported why.
+            let _ = wait.recv();
+        }
+    }
+
     /// The session folder.
     pub fn dir(&self) -> &Path {
         &self.dir
@@ -478,6 +491,10 @@ impl Writer {
             };
             match msg {
                 Ok(Msg::Stroke(n, changes)) => self.stroke(n, changes),
+                Ok(Msg::Layouts(layouts, done)) => {
+                    self.layouts(layouts);
+                    let _ = done.send(());
+                }
                 Ok(Msg::Checkpointed(n, result)) => self.checkpointed(n, result),
                 Ok(Msg::Close(reply)) => {
                     let _ = reply.send(self.close());
@@ -552,6 +569,31 @@ impl Writer {
                 let _ = self.disk.remove(&path);
                 self.fail(format!("{e:#}"));
             }
+        }
+    }
+
+    /// Takes the parts' layouts and writes the snapshot of the strokes so far again with them.
+    fn layouts(&mut self, layouts: Vec<PartLayout>) {
+        if layouts == self.layouts {
+            return;
+        }
+        self.finish_checkpoint();
+        self.layouts = layouts;
+        let n = self.written;
+        let bytes = snapshot_bytes(
+            (self.voxel_size_m, self.iso),
+            self.mirror.iter(),
+            (self.scene_toml.as_deref(), &self.tools),
+            &self.layouts,
+        );
+        let path = snapshot_path(&self.dir, n);
+        match self.disk.write_whole(&path, &bytes) {
+            Ok(()) => {
+                if !self.snapshots.iter().any(|(s, _)| *s == n) {
+                    self.snapshots.push((n, path));
+                }
+            }
+            Err(e) => self.fail(format!("{e:#}")),
         }
     }
 
