@@ -40,7 +40,8 @@ pub enum Workload {
     /// tool editing by its size leaves, on one thread and on all.
     MeshFull,
     /// The incremental re-mesh after one stamp of radius 4, 8, 16 and 32 voxels carving the
-    /// surface of a sphere.
+    /// surface of a sphere; and the same with the sphere the first part of a sculpt of two
+    /// (`remesh-stamp-parts`), the composition re-made where the stamp changed it first.
     RemeshStamp,
     /// Stereo frames of the default scene and of a mesh of over a million triangles, with
     /// both eyes in one multiview pass and with one pass per eye.
@@ -521,38 +522,81 @@ fn bench_mesh_full(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> 
     Ok(())
 }
 
+/// The sphere field `first` (of `radius` voxels at the origin) as the first part of a sculpt of
+/// two: the second a ball of 2 mm voxels beside it, turned and scaled, which no stamp reaches.
+fn two_part_assembly(first: &Field, radius: f32) -> super::assembly::Assembly {
+    use crate::math::Quat;
+    use crate::parts::Placement;
+    use crate::scene::ScenePart;
+    let mut ball = Field::new(0.002, 0.5);
+    stamp_sphere(&mut ball, Vec3::ZERO, 0.3 * radius * 0.001, Action::Add, [0.3, 0.5, 0.7, 1.0]);
+    ball.take_dirty();
+    let placement =
+        Placement::new(Quat::from_rotation_y(0.5), Vec3::new(2.0 * radius * 0.001, 0.0, 0.0), 1.2)
+            .expect("a finite placement");
+    let parts = vec![
+        ScenePart::whole(first.transform().voxel_size_m),
+        ScenePart { name: "ball".into(), voxel_size_m: 0.002, placement, ..ScenePart::whole(0.002) },
+    ];
+    super::assembly::Assembly::new(parts, vec![ball], first)
+}
+
 fn bench_remesh_stamp(size: BenchSize, emit: &mut impl FnMut(Value)) {
     let radius = size.sphere_radius_voxels;
     for r in [4.0f32, 8.0, 16.0, 32.0] {
-        let mut field = sphere_field(radius);
-        // One mesher for the stroke, as the station keeps: its buffers are reused.
-        let mut mesher = Mesher::default();
-        let _ = mesher.mesh_all(&field);
-        field.take_dirty();
-        let stamps = size.stamps.min(100);
-        let mut times = Vec::with_capacity(stamps);
-        let mut bricks = 0;
-        for i in 0..stamps {
-            // Carving stamps walking over the sphere's surface, each on fresh clay.
-            let angle = i as f32 * 2.0 * r / radius;
-            let centre = Vec3::new(angle.cos(), 0.3 * (i as f32 * 0.37).sin(), angle.sin()).normalize()
-                * radius
-                * 0.001;
-            stamp_sphere(&mut field, centre, r * 0.001, Action::Remove, [0.0; 4]);
-            bricks += field.dirty().len();
-            let t = Instant::now();
-            let diff = mesher.remesh_dirty(&mut field);
-            times.push(t.elapsed().as_secs_f64() * 1e6);
-            std::hint::black_box(diff);
+        // The sphere alone, then as the first part of a sculpt of two: its surface is then the
+        // composition's, re-made where each stamp changed it before the re-mesh.
+        for parted in [false, true] {
+            let mut field = sphere_field(radius);
+            let mut assembly = parted.then(|| two_part_assembly(&field, radius));
+            // One mesher for the stroke, as the station keeps: its buffers are reused.
+            let mut mesher = Mesher::default();
+            match &mut assembly {
+                Some(a) => {
+                    let surface = a.surface(&mut field);
+                    let _ = mesher.mesh_all(surface);
+                    surface.take_dirty();
+                }
+                None => {
+                    let _ = mesher.mesh_all(&field);
+                    field.take_dirty();
+                }
+            }
+            let stamps = size.stamps.min(100);
+            let (mut times, mut composing) = (Vec::with_capacity(stamps), Vec::with_capacity(stamps));
+            let (mut bricks, mut surface_dirty) = (0, 0);
+            for i in 0..stamps {
+                // Carving stamps walking over the sphere's surface, each on fresh clay.
+                let angle = i as f32 * 2.0 * r / radius;
+                let centre = Vec3::new(angle.cos(), 0.3 * (i as f32 * 0.37).sin(), angle.sin()).normalize()
+                    * radius
+                    * 0.001;
+                stamp_sphere(&mut field, centre, r * 0.001, Action::Remove, [0.0; 4]);
+                bricks += field.dirty().len();
+                let t = Instant::now();
+                let diff = match &mut assembly {
+                    Some(a) => {
+                        let surface = a.surface(&mut field);
+                        composing.push(t.elapsed().as_secs_f64() * 1e6);
+                        surface_dirty += surface.dirty().len();
+                        mesher.remesh_dirty(surface)
+                    }
+                    None => mesher.remesh_dirty(&mut field),
+                };
+                times.push(t.elapsed().as_secs_f64() * 1e6);
+                std::hint::black_box(diff);
+            }
+            emit(json!({
+                "workload": if parted { "remesh-stamp-parts" } else { "remesh-stamp" },
+                "radius_voxels": r,
+                "stamps": stamps,
+                "threads": rayon::current_num_threads(),
+                "median_us": median(times),
+                "dirty_bricks_per_stamp": bricks as f64 / stamps as f64,
+                "compose_median_us": if parted { median(composing) } else { 0.0 },
+                "surface_dirty_bricks_per_stamp": if parted { surface_dirty } else { bricks } as f64 / stamps as f64,
+            }));
         }
-        emit(json!({
-            "workload": "remesh-stamp",
-            "radius_voxels": r,
-            "stamps": stamps,
-            "threads": rayon::current_num_threads(),
-            "median_us": median(times),
-            "dirty_bricks_per_stamp": bricks as f64 / stamps as f64,
-        }));
     }
 }
 
@@ -1146,9 +1190,12 @@ mod tests {
         assert!(full
             .iter()
             .all(|l| l["triangles"].as_u64().unwrap() > 1000 && l["median_ms"].as_f64().unwrap() > 0.0));
-        let remesh: Vec<_> = lines.iter().filter(|l| l["workload"] == "remesh-stamp").collect();
-        assert_eq!(remesh.len(), 4);
-        assert!(remesh.iter().all(|l| l["dirty_bricks_per_stamp"].as_f64().unwrap() >= 1.0));
+        for name in ["remesh-stamp", "remesh-stamp-parts"] {
+            let remesh: Vec<_> = lines.iter().filter(|l| l["workload"] == name).collect();
+            assert_eq!(remesh.len(), 4, "{name}");
+            assert!(remesh.iter().all(|l| l["dirty_bricks_per_stamp"].as_f64().unwrap() >= 1.0), "{name}");
+            assert!(remesh.iter().all(|l| l["median_us"].as_f64().unwrap() > 0.0), "{name}");
+        }
     }
 
     #[test]

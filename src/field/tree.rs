@@ -293,6 +293,40 @@ impl Field {
         self.mark_level_dirty(key.level.into(), base, base + IVec3::splat(BRICK_SIZE - 1));
     }
 
+    /// The brick stored at `key` (a finest-level [`BrickKey`] or a [`LevelKey`]), shared.
+    pub fn shared_brick(&self, key: impl Into<LevelKey>) -> Option<&Arc<Brick>> {
+        self.stored(key.into())
+    }
+
+    /// [`Field::replace_brick_within`] for a brick shared with another field (stored as it
+    /// is, not copied).
+    pub fn share_brick_within(&mut self, key: impl Into<LevelKey>, brick: Arc<Brick>, lo: IVec3, hi: IVec3) {
+        let key = key.into();
+        self.store(key, brick);
+        let base = key.key * BRICK_SIZE;
+        self.mark_level_dirty(key.level.into(), base + lo, base + hi);
+    }
+
+    /// [`Field::remove_brick`] for a caller that knows which of the brick's samples held
+    /// anything: only what reads the samples `lo ..= hi` (local) is marked dirty.
+    pub fn remove_brick_within(&mut self, key: impl Into<LevelKey>, lo: IVec3, hi: IVec3) {
+        let key = key.into();
+        self.remove(key);
+        let base = key.key * BRICK_SIZE;
+        self.mark_level_dirty(key.level.into(), base + lo, base + hi);
+    }
+
+    /// [`Field::insert_brick`] for a caller that knows which samples differ from the brick it
+    /// replaces: only what reads the samples `lo ..= hi` (local to the brick, each in
+    /// `0..BRICK_SIZE`) is marked dirty.
+    pub fn replace_brick_within(&mut self, key: impl Into<LevelKey>, mut brick: Brick, lo: IVec3, hi: IVec3) {
+        let key = key.into();
+        brick.compact();
+        self.store(key, Arc::new(brick));
+        let base = key.key * BRICK_SIZE;
+        self.mark_level_dirty(key.level.into(), base + lo, base + hi);
+    }
+
     /// Removes the brick at `key` (its points read the coarser levels, or are empty), and marks
     /// what it changes dirty. For loading stored sculpts; not journaled.
     pub fn remove_brick(&mut self, key: impl Into<LevelKey>) {
@@ -424,10 +458,28 @@ impl Field {
         let scale = 1 << level;
         let base = key.key * BRICK_SIZE * scale;
         let top = (key.key * BRICK_SIZE + IVec3::splat(BRICK_SIZE - 1)) * scale;
-        // Where no other level holds a brick, the bricks around are meshed on this level or
-        // hold no clay: none conforms to another's level, and only those reading the brick's
-        // points change.
-        let alone = self.levels.iter().enumerate().all(|(l, other)| l == level || other.bricks.is_empty());
+        // Where no other level holds a brick within a brick of this one, the bricks around are
+        // meshed on this level or hold no clay: none conforms to another's level, and only
+        // those reading the brick's points change.
+        let (near_lo, near_hi) =
+            (base - IVec3::splat(BRICK_SIZE * scale), top + IVec3::splat(BRICK_SIZE * scale));
+        let near = |l: usize, other: &Level| {
+            let side = IVec3::splat(BRICK_SIZE << l);
+            let (a, b) = (near_lo.div_euclid(side), near_hi.div_euclid(side));
+            let span = b - a + IVec3::ONE;
+            // A finer level's many keys there are not looked up one by one.
+            if span.x * span.y * span.z > 64 {
+                return !other.bricks.is_empty();
+            }
+            (a.z..=b.z).any(|z| {
+                (a.y..=b.y).any(|y| (a.x..=b.x).any(|x| other.bricks.contains_key(&IVec3::new(x, y, z))))
+            })
+        };
+        let alone = self
+            .levels
+            .iter()
+            .enumerate()
+            .all(|(l, other)| l == level || other.bricks.is_empty() || !near(l, other));
         let beyond = if alone { IVec3::ZERO } else { IVec3::splat(BRICK_SIZE) };
         self.mark_dirty(base - beyond, top + beyond);
     }

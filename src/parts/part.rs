@@ -31,6 +31,7 @@ use crate::field::{
 };
 use crate::math::{Aabb, IVec3, Mat3, Mat4, Pose, Quat, Vec3};
 use rayon::prelude::*;
+use std::sync::Arc;
 
 /// How a part combines with the composition of the parts before it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -306,9 +307,13 @@ impl Composition {
             .collect();
         let bounds = parts.iter().map(part_bounds).collect();
         let mut composition = Self { field: Field::new(finest, iso), layout, levels, bounds };
-        let all: Vec<usize> = (0..parts.len()).collect();
-        let everywhere = all.iter().fold(Aabb::EMPTY, |b, &i| b.union(&composition.bounds[i]));
-        composition.recompose(parts, everywhere);
+        let everything: Vec<(usize, Aabb)> = parts
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (i, local_bounds(p.field)))
+            .filter(|(_, b)| !b.is_empty())
+            .collect();
+        composition.recompose(parts, &everything);
         composition
     }
 
@@ -343,25 +348,24 @@ impl Composition {
     /// them are made again, and marked dirty when they change.
     pub fn update(&mut self, parts: &[PartView<'_>], changed: &[(usize, IVec3, IVec3)]) {
         debug_assert!(self.fits(parts));
-        let mut world = Aabb::EMPTY;
+        let mut local = Vec::with_capacity(changed.len());
         for &(part, lo, hi) in changed {
             let t = parts[part].field.transform();
-            let local = Aabb {
-                min: t.index_to_world(lo.as_vec3() - Vec3::ONE),
-                max: t.index_to_world(hi.as_vec3() + Vec3::ONE),
-            };
-            let placed = parts[part].placement.world_box(local);
-            self.bounds[part] = self.bounds[part].union(&placed);
-            world = world.union(&placed);
+            let points = Aabb { min: t.index_to_world(lo.as_vec3()), max: t.index_to_world(hi.as_vec3()) };
+            let reach = points.expanded(t.voxel_size_m);
+            self.bounds[part] = self.bounds[part].union(&parts[part].placement.world_box(reach));
+            local.push((part, points));
         }
-        if !world.is_empty() {
-            self.recompose(parts, world);
+        if !local.is_empty() {
+            self.recompose(parts, &local);
         }
     }
 
     /// Re-makes every brick of the composition, on every level it uses, whose lattice points
-    /// reach into `world`.
-    fn recompose(&mut self, parts: &[PartView<'_>], world: Aabb) {
+    /// read a part's samples in the boxes `changes` gives (per part, a box of its own frame,
+    /// metres): the points within them where the part is read sample for sample, and within one
+    /// of its voxels where it is interpolated.
+    fn recompose(&mut self, parts: &[PartView<'_>], changes: &[(usize, Aabb)]) {
         let mut used: Vec<usize> =
             (0..parts.len()).filter(|&i| self.layout[i].visible).map(|i| self.levels[i]).collect();
         used.sort_unstable();
@@ -370,9 +374,19 @@ impl Composition {
         for &level in used.iter().rev() {
             let voxel = self.field.transform().voxel_size_m * (1 << level) as f32;
             let brick_m = voxel * BRICK_SIZE as f32;
-            // A brick's mesh reads one point below it: its key range reaches one point further.
-            let lo = ((world.min - Vec3::splat(voxel)) / brick_m).floor().as_ivec3();
-            let hi = ((world.max + Vec3::splat(voxel)) / brick_m).floor().as_ivec3();
+            let mut world = Aabb::EMPTY;
+            for &(part, local) in changes {
+                let (p, part_voxel) = (&parts[part], parts[part].field.transform().voxel_size_m);
+                let exact = LatticeMap::new(&p.placement, part_voxel, voxel).exact.is_some();
+                let grown = if exact { local } else { local.expanded(part_voxel) };
+                world = world.union(&p.placement.world_box(grown));
+            }
+            if world.is_empty() {
+                continue;
+            }
+            // The composition's points within the box, and the bricks holding them.
+            let lo = ((world.min / voxel - Vec3::splat(1e-3)).ceil() / BRICK_SIZE as f32).floor().as_ivec3();
+            let hi = ((world.max / voxel + Vec3::splat(1e-3)).floor() / BRICK_SIZE as f32).floor().as_ivec3();
             let covering: Vec<Aabb> = (0..parts.len())
                 .filter(|&i| self.layout[i].visible && self.levels[i] == level)
                 .map(|i| self.bounds[i])
@@ -389,30 +403,52 @@ impl Composition {
             }
             let reading = self.reading(parts, level);
             let bounds = &self.bounds;
-            let made: Vec<(BrickKey, Option<Brick>)> = keys
-                .par_iter()
-                .map_init(
-                    || reading.parts.iter().map(|(_, f, _, _)| FieldReader::new(f)).collect::<Vec<_>>(),
-                    |readers, &(key, covered)| {
-                        let brick = covered
-                            .then(|| compose_brick(&reading, readers, bounds, key, brick_m, voxel))
-                            .flatten();
-                        (key, brick)
-                    },
-                )
-                .collect();
-            for (key, brick) in made {
+            let readers = || reading.parts.iter().map(|(_, f, _, _)| FieldReader::new(f)).collect::<Vec<_>>();
+            let make = |readers: &mut Vec<FieldReader<'_>>, &(key, covered): &(BrickKey, bool)| {
+                let brick =
+                    covered.then(|| compose_brick(&reading, readers, bounds, key, brick_m, voxel)).flatten();
+                (key, brick)
+            };
+            // A stroke's few bricks are made on this thread; many, on all.
+            let made: Vec<(BrickKey, Option<Made>)> = if keys.len() < PARALLEL_BRICKS {
+                let mut r = readers();
+                keys.iter().map(|k| make(&mut r, k)).collect()
+            } else {
+                keys.par_iter().map_init(readers, make).collect()
+            };
+            for (key, made) in made {
                 let at = LevelKey::new(level, key);
-                match brick {
-                    Some(mut b) if !b.is_empty() || self.coarser_holds(level, key) => {
-                        b.compact();
-                        if self.field.level_brick(at) != Some(&b) {
-                            self.field.insert_brick(at, b);
+                let old = self.field.shared_brick(at);
+                match made {
+                    Some(made) if !made.brick().is_empty() || self.coarser_holds(level, key) => {
+                        if let (Made::Shared(new), Some(old)) = (&made, old) {
+                            if Arc::ptr_eq(new, old) {
+                                continue;
+                            }
+                        }
+                        match (old.map(|old| changed_box(old, made.brick())), made) {
+                            // Unchanged.
+                            (Some(None), _) => {}
+                            (Some(Some((lo, hi))), Made::Shared(b)) => {
+                                self.field.share_brick_within(at, b, lo, hi)
+                            }
+                            (Some(Some((lo, hi))), Made::Owned(b)) => {
+                                self.field.replace_brick_within(at, b, lo, hi)
+                            }
+                            (None, Made::Shared(b)) => self.field.share_brick_within(
+                                at,
+                                b,
+                                IVec3::ZERO,
+                                IVec3::splat(BRICK_SIZE - 1),
+                            ),
+                            (None, Made::Owned(b)) => self.field.insert_brick(at, b),
                         }
                     }
                     _ => {
-                        if self.field.level_brick(at).is_some() {
-                            self.field.remove_brick(at);
+                        if let Some(old) = old {
+                            let (lo, hi) = changed_box(old, &Brick::default())
+                                .unwrap_or((IVec3::ZERO, IVec3::splat(BRICK_SIZE - 1)));
+                            self.field.remove_brick_within(at, lo, hi);
                         }
                     }
                 }
@@ -454,6 +490,36 @@ fn overlaps(a: &Aabb, b: &Aabb) -> bool {
     !a.is_empty() && !b.is_empty() && a.min.cmple(b.max).all() && b.min.cmple(a.max).all()
 }
 
+/// The box of samples (local, inclusive) where `new` differs from `old` for a mesh: a density,
+/// or the colour of a sample holding clay; `None` where none does.
+fn changed_box(old: &Brick, new: &Brick) -> Option<(IVec3, IVec3)> {
+    let (mut lo, mut hi) = (IVec3::MAX, IVec3::MIN);
+    for i in 0..BRICK_VOLUME {
+        let (a, b) = (old.density[i], new.density[i]);
+        if a != b || (b > 0 && old.colour[i] != new.colour[i]) {
+            let p = local_point(i);
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+    }
+    (lo.cmple(hi).all()).then_some((lo, hi))
+}
+
+/// A brick of the composition as it is made: one part's own brick, shared, or made here.
+enum Made {
+    Shared(Arc<Brick>),
+    Owned(Brick),
+}
+
+impl Made {
+    fn brick(&self) -> &Brick {
+        match self {
+            Made::Shared(b) => b,
+            Made::Owned(b) => b,
+        }
+    }
+}
+
 /// One brick of the composition (`None`: no part reaches it).
 fn compose_brick(
     reading: &Reading<'_>,
@@ -462,11 +528,32 @@ fn compose_brick(
     key: BrickKey,
     brick_m: f32,
     voxel_m: f32,
-) -> Option<Brick> {
+) -> Option<Made> {
     let here = brick_box(key, brick_m, voxel_m);
-    let reaching: Vec<bool> = reading.parts.iter().map(|(i, ..)| overlaps(&bounds[*i], &here)).collect();
+    let reaches = |n: usize| overlaps(&bounds[reading.parts[n].0], &here);
+    // The common case first, without allocating: one part reaches the brick, unioned, on the
+    // composition's lattice brick for brick.
+    let mut one = None;
+    for n in 0..reading.parts.len() {
+        if reaches(n) {
+            one = match one {
+                None => Some(n),
+                Some(_) => {
+                    one = None;
+                    break;
+                }
+            };
+        }
+    }
+    if let Some(made) = one.and_then(|n| shared_alone(reading, n, key)) {
+        return Some(made);
+    }
+    let reaching: Vec<bool> = (0..reading.parts.len()).map(reaches).collect();
     if !reaching.iter().any(|&r| r) {
         return None;
+    }
+    if let Some(made) = compose_aligned(reading, &reaching, key) {
+        return Some(made);
     }
     let mut brick = Brick::default();
     let mut winners = [u8::MAX; BRICK_VOLUME];
@@ -494,7 +581,7 @@ fn compose_brick(
     // The colour of the part that gives each sample its density, where there is clay (a brick
     // without any is kept empty: over coarser clay it says the composition is empty there).
     let mut held = winners.iter().enumerate().filter(|&(i, &n)| brick.density[i] > 0 && n != u8::MAX);
-    let Some((first, _)) = held.next() else { return Some(brick) };
+    let Some((first, _)) = held.next() else { return Some(Made::Owned(brick)) };
     let colour = |readers: &mut [FieldReader<'_>], i: usize| -> Colour {
         let n = winners[i] as usize;
         match reading.parts[n].3.index(base + local_point(i)) {
@@ -507,7 +594,80 @@ fn compose_brick(
         let c = colour(readers, i);
         brick.colour.set(i, c);
     }
-    Some(brick)
+    brick.compact();
+    Some(Made::Owned(brick))
+}
+
+/// One brick of the composition where every part reaching it lies on the composition's lattice
+/// brick for brick (not turned, moved by whole bricks, at the level's voxel): composed from the
+/// parts' bricks sample by sample on their stored values, which gives exactly what
+/// [`compose_brick`]'s reads give (the operators commute with the quantisation). `None` where a
+/// reaching part is not so placed.
+/// The brick of the composition at `key` where part `n` alone reaches it, unioned, on the
+/// composition's lattice brick for brick: that part's own brick (shared where it stores one).
+fn shared_alone(reading: &Reading<'_>, n: usize, key: BrickKey) -> Option<Made> {
+    let (_, field, op, map) = &reading.parts[n];
+    let (m, o) = map.exact?;
+    if *op != Csg::Union || m != Mat3::IDENTITY || o.rem_euclid(IVec3::splat(BRICK_SIZE)) != IVec3::ZERO {
+        return None;
+    }
+    let key = key + o.div_euclid(IVec3::splat(BRICK_SIZE));
+    if let Some(shared) = field.shared_brick(key) {
+        return Some(Made::Shared(Arc::clone(shared)));
+    }
+    let mut scratch = Brick::default();
+    Some(Made::Owned(field.read_brick(key, &mut scratch).cloned().unwrap_or_default()))
+}
+
+fn compose_aligned(reading: &Reading<'_>, reaching: &[bool], key: BrickKey) -> Option<Made> {
+    let mut keys = Vec::with_capacity(reading.parts.len());
+    for ((_, _, _, map), &reaches) in reading.parts.iter().zip(reaching) {
+        if !reaches {
+            keys.push(None);
+            continue;
+        }
+        let (m, o) = map.exact?;
+        if m != Mat3::IDENTITY || o.rem_euclid(IVec3::splat(BRICK_SIZE)) != IVec3::ZERO {
+            return None;
+        }
+        keys.push(Some(key + o.div_euclid(IVec3::splat(BRICK_SIZE))));
+    }
+    let mut scratch = Brick::default();
+    let mut out = Brick::default();
+    let mut winners = [u8::MAX; BRICK_VOLUME];
+    let mut owned: Vec<Option<Brick>> = Vec::with_capacity(keys.len());
+    for (n, ((_, field, op, _), part_key)) in reading.parts.iter().zip(&keys).enumerate() {
+        let brick = part_key.and_then(|k| field.read_brick(k, &mut scratch).cloned());
+        let zero = [0 as crate::field::Quantum; BRICK_VOLUME];
+        let densities = brick.as_ref().map_or(&zero, |b| &*b.density);
+        for ((d, &q), winner) in out.density.iter_mut().zip(densities.iter()).zip(winners.iter_mut()) {
+            match op {
+                Csg::Union if q > *d => {
+                    *d = q;
+                    *winner = n as u8;
+                }
+                Csg::Intersection if q < *d => {
+                    *d = q;
+                    *winner = n as u8;
+                }
+                Csg::Difference => {
+                    *d = (*d).min(crate::field::DENSITY_ONE - q.min(crate::field::DENSITY_ONE))
+                }
+                _ => {}
+            }
+        }
+        owned.push(brick);
+    }
+    let mut held = winners.iter().enumerate().filter(|&(i, &n)| out.density[i] > 0 && n != u8::MAX);
+    let Some((first, &n)) = held.next() else { return Some(Made::Owned(out)) };
+    let colour =
+        |i: usize, n: u8| owned[n as usize].as_ref().map_or(crate::field::DEFAULT_COLOUR, |b| b.colour[i]);
+    out.colour = crate::field::BrickColours::Uniform(colour(first, n));
+    for (i, &n) in held {
+        out.colour.set(i, colour(i, n));
+    }
+    out.compact();
+    Some(Made::Owned(out))
 }
 
 /// The local coordinates of a brick's sample of linear index `i`.
@@ -516,10 +676,18 @@ fn local_point(i: usize) -> IVec3 {
     IVec3::new(i % BRICK_SIZE, (i / BRICK_SIZE) % BRICK_SIZE, i / (BRICK_SIZE * BRICK_SIZE))
 }
 
+/// Bricks of the composition below which they are made on the calling thread.
+const PARALLEL_BRICKS: usize = 32;
+
 /// A world box holding a part's clay (its stored bricks on every level, and the apron its
 /// mesh reads).
 pub fn part_bounds(part: &PartView<'_>) -> Aabb {
-    let field = part.field;
+    part.placement.world_box(local_bounds(part.field))
+}
+
+/// A box of a field's own frame holding its clay (its stored bricks on every level, and the
+/// apron its mesh reads), metres.
+fn local_bounds(field: &Field) -> Aabb {
     let mut lo = IVec3::MAX;
     let mut hi = IVec3::MIN;
     for l in 0..crate::field::LEVELS {
@@ -533,11 +701,7 @@ pub fn part_bounds(part: &PartView<'_>) -> Aabb {
         return Aabb::EMPTY;
     }
     let t = field.transform();
-    let local = Aabb {
-        min: t.index_to_world(lo.as_vec3() - Vec3::ONE),
-        max: t.index_to_world(hi.as_vec3() + Vec3::ONE),
-    };
-    part.placement.world_box(local)
+    Aabb { min: t.index_to_world(lo.as_vec3() - Vec3::ONE), max: t.index_to_world(hi.as_vec3() + Vec3::ONE) }
 }
 
 #[cfg(test)]

@@ -194,3 +194,44 @@ fn an_edit_re_composes_what_it_touched_as_a_whole_build_would() {
     let whole = Composition::build(&parts);
     assert!(c.field().same_samples(whole.field()), "the update is the whole build's");
 }
+
+#[test]
+fn a_composition_marks_dirty_about_what_its_parts_changes_mark() {
+    let mut a = Field::new(1e-3, 0.5);
+    crate::tool::stamp_sphere(
+        &mut a,
+        Vec3::new(0.00031, -0.00017, 0.00023),
+        0.1,
+        crate::tool::Action::Add,
+        RED,
+    );
+    let far = ball(2e-3, 0.03, Vec3::ZERO, BLUE);
+    let away = Placement::new(Quat::from_rotation_y(0.5), Vec3::X * 0.2, 1.2).unwrap();
+    let mut c =
+        Composition::build(&[view(&a, Placement::IDENTITY, Csg::Union), view(&far, away, Csg::Union)]);
+    let _ = c.field_mut().take_dirty();
+    let _ = a.take_dirty();
+    for i in 0..6 {
+        let angle = i as f32 * 0.32;
+        let centre = Vec3::new(angle.cos(), 0.3 * (i as f32 * 0.37).sin(), angle.sin()).normalize() * 0.1;
+        crate::tool::stamp_sphere(&mut a, centre, 0.016, crate::tool::Action::Remove, RED);
+        let dirty = a.take_dirty();
+        let changed: Vec<(usize, IVec3, IVec3)> = dirty
+            .iter()
+            .map(|k| (0, k * BRICK_SIZE, k * BRICK_SIZE + IVec3::splat(BRICK_SIZE - 1)))
+            .collect();
+        c.update(&[view(&a, Placement::IDENTITY, Csg::Union), view(&far, away, Csg::Union)], &changed);
+        let composed = c.field_mut().take_dirty();
+        let extra: Vec<_> = composed.iter().filter(|k| !dirty.contains(*k)).collect();
+        // Bricks the stamp empties are removed from the composition with what read their old
+        // clay marked: a little more than the part's own marks, never the whole neighbourhood
+        // of every brick a coarse part's presence would mark.
+        assert!(
+            composed.len() * 4 <= dirty.len() * 5,
+            "stamp {i}: {} dirty in the part, {} in the composition; extra {:?}",
+            dirty.len(),
+            composed.len(),
+            &extra[..extra.len().min(8)]
+        );
+    }
+}
