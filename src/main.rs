@@ -182,6 +182,10 @@ enum Command {
         /// Replace the file if it exists.
         #[arg(long)]
         force: bool,
+        /// A sculpt of parts as one mesh, their composition (`composed`), or one mesh per
+        /// visible part with its placement (`separate`: a GLB node or an OBJ object each).
+        #[arg(long, value_enum, default_value = "composed")]
+        parts: app::PartsExport,
     },
     /// Lists the Vulkan devices, the OpenXR state, the input devices Argile sees, what each
     /// drives and where its calibration comes from; with a sculpt file, describes it instead
@@ -361,8 +365,8 @@ fn main() -> ExitCode {
             let view = RenderView { size, calibration: calibration.as_deref(), swap_eyes };
             render(&scene, out, display_mode, view, validation, &autosave)
         }
-        Some(Command::Export { input, format, out, force }) => app::export(&input, format, &out, force, true)
-            .map(|s| {
+        Some(Command::Export { input, format, out, force, parts }) => {
+            app::export_as(&input, format, parts, &out, force, true).map(|s| {
                 println!(
                     "wrote {} ({} vertices, {} triangles, {} bytes)",
                     s.path.display(),
@@ -370,7 +374,8 @@ fn main() -> ExitCode {
                     s.triangles,
                     s.bytes
                 )
-            }),
+            })
+        }
         Some(Command::Save { scene, out, force, autosave }) => {
             let saved = if app::is_sculpt(&scene) {
                 let options = argile::io::EncodeOptions { version: argile::io::VERSION, history: true };

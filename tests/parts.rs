@@ -274,3 +274,59 @@ fn a_sculpt_file_keeps_every_part_and_exports_and_renders_their_composition() {
     assert!(lazy.others[1].same_samples(&sculpt.others[1]));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn export_parts_separate_writes_a_glb_node_per_part_with_its_placement() {
+    let dir = std::env::temp_dir().join(format!("argile-parts-export-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/parts-figure.toml");
+    let out = dir.join("figure.glb");
+    let format = argile::mesh::export::ExportFormat::Glb;
+    let written =
+        argile::app::export_as(&scene_path, format, argile::app::PartsExport::Separate, &out, false, false)
+            .unwrap();
+    let (document, buffers, _) = gltf::import(&out).unwrap();
+    let nodes: Vec<_> = document.nodes().collect();
+    assert_eq!(nodes.iter().map(|n| n.name().unwrap()).collect::<Vec<_>>(), ["plinth", "body", "head"]);
+    let (t, r, s) = nodes[2].transform().decomposed();
+    assert!((Vec3::from(t) - Vec3::new(0.0, 0.078, 0.0)).length() < 1e-6);
+    assert!((Quat::from_array(r).dot(Quat::from_rotation_y(30f32.to_radians())).abs() - 1.0).abs() < 1e-6);
+    assert!((s[0] - 1.4).abs() < 1e-6);
+    // The head's mesh is in its own frame: a ball of 8 mm about its origin (with its nose).
+    let head = nodes[2].mesh().unwrap().primitives().next().unwrap();
+    let reader = head.reader(|b| Some(&buffers[b.index()]));
+    let radius = reader.read_positions().unwrap().map(|p| Vec3::from(p).length()).fold(0.0f32, f32::max);
+    assert!(radius > 0.0095 && radius < 0.0125, "{radius}");
+    let triangles: usize = nodes
+        .iter()
+        .map(|n| n.mesh().unwrap().primitives().map(|p| p.indices().unwrap().count() / 3).sum::<usize>())
+        .sum();
+    assert_eq!(triangles, written.triangles);
+    // OBJ: an object per part, placed in the world; PLY holds one mesh and is refused.
+    let obj = dir.join("figure.obj");
+    argile::app::export_as(
+        &scene_path,
+        argile::mesh::export::ExportFormat::Obj,
+        argile::app::PartsExport::Separate,
+        &obj,
+        false,
+        false,
+    )
+    .unwrap();
+    let text = std::fs::read_to_string(&obj).unwrap();
+    assert_eq!(
+        text.lines().filter(|l| l.starts_with("o ")).collect::<Vec<_>>(),
+        ["o plinth", "o body", "o head"]
+    );
+    let ply = argile::app::export_as(
+        &scene_path,
+        argile::mesh::export::ExportFormat::Ply,
+        argile::app::PartsExport::Separate,
+        &dir.join("x.ply"),
+        false,
+        false,
+    );
+    assert!(ply.unwrap_err().to_string().contains("a ply file holds one mesh"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -8,7 +8,7 @@ use super::playback::Playback;
 use super::sculpt::{is_sculpt, load_sculpt};
 use crate::field::Field;
 use crate::io::write_atomically;
-use crate::mesh::export::{write_mesh, ExportFormat};
+use crate::mesh::export::{write_mesh, write_parts, ExportFormat, PartMesh};
 use crate::mesh::{mesh_all, weld, WeldedMesh};
 use crate::scene::Scene;
 
@@ -65,9 +65,35 @@ pub fn export(
     overwrite: bool,
     progress: bool,
 ) -> Result<ExportSummary> {
+    export_as(input, format, PartsExport::Composed, out, overwrite, progress)
+}
+
+/// How a sculpt of parts is exported.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum PartsExport {
+    /// The composition, one mesh: what the station draws.
+    #[default]
+    Composed,
+    /// One mesh per visible part, in its own frame, with its placement (a GLB node per part; an
+    /// OBJ object per part, placed in the world).
+    Separate,
+}
+
+/// [`export`], with the parts of a sculpt of parts composed or each its own mesh.
+pub fn export_as(
+    input: &Path,
+    format: ExportFormat,
+    parts: PartsExport,
+    out: &Path,
+    overwrite: bool,
+    progress: bool,
+) -> Result<ExportSummary> {
     // Checked here too (`write_atomically` checks again) so a refused export costs no meshing.
     if !overwrite && out.exists() {
         bail!("{} already exists; pass --force to replace it", out.display());
+    }
+    if parts == PartsExport::Separate {
+        return export_parts(input, format, out, overwrite, progress);
     }
     let mesh = if is_sculpt(input) {
         let surface = super::assembly::sculpt_surface(load_sculpt(input)?)
@@ -83,18 +109,87 @@ pub fn export(
             input.display()
         );
     }
-    let bar = if progress { indicatif::ProgressBar::new(1000) } else { indicatif::ProgressBar::hidden() };
-    bar.set_message(format!("writing {}", out.display()));
-    write_atomically(out, overwrite, |w| {
-        write_mesh(format, &mesh, w, &mut |f| bar.set_position((f * 1000.0) as u64))
-            .with_context(|| format!("cannot write {}", out.display()))
-    })?;
-    bar.finish_and_clear();
-    let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
+    let bytes = write_with_progress(out, overwrite, progress, |w, p| write_mesh(format, &mesh, w, p))?;
     Ok(ExportSummary {
         path: out.to_path_buf(),
         vertices: mesh.positions.len(),
         triangles: mesh.triangle_count(),
         bytes,
     })
+}
+
+/// Writes each visible part of `input`'s sculpt as its own mesh (see [`PartsExport::Separate`]).
+fn export_parts(
+    input: &Path,
+    format: ExportFormat,
+    out: &Path,
+    overwrite: bool,
+    progress: bool,
+) -> Result<ExportSummary> {
+    if matches!(format, ExportFormat::Ply | ExportFormat::Stl) {
+        bail!("a {} file holds one mesh: export the parts separately as glb or obj", format.extension());
+    }
+    let (layouts, fields): (Vec<crate::scene::ScenePart>, Vec<Field>) = if is_sculpt(input) {
+        let sculpt = load_sculpt(input)?;
+        let parts = super::assembly::parts_of(&sculpt)
+            .with_context(|| format!("{}: a part's layout cannot be placed", input.display()))?;
+        (parts, std::iter::once(sculpt.field).chain(sculpt.others).collect())
+    } else {
+        let scene = Scene::load(input)?;
+        let mut playback = Playback::build(&scene)?;
+        playback.advance_to(end_s(&scene), |_| {});
+        playback.close_steps();
+        let parts = playback.assembly().parts().to_vec();
+        let (first, _, others) = playback.into_parts();
+        (parts, std::iter::once(first).chain(others).collect())
+    };
+    let meshes: Vec<(usize, WeldedMesh)> = layouts
+        .iter()
+        .zip(&fields)
+        .enumerate()
+        .filter(|(_, (layout, _))| layout.visible)
+        .map(|(i, (_, field))| (i, welded_surface(field)))
+        .filter(|(_, mesh)| !mesh.indices.is_empty())
+        .collect();
+    if meshes.is_empty() {
+        bail!("{}: no visible part has a surface; there is nothing to export", input.display());
+    }
+    let parts: Vec<PartMesh<'_>> = meshes
+        .iter()
+        .map(|(i, mesh)| {
+            let p = &layouts[*i].placement;
+            PartMesh {
+                name: &layouts[*i].name,
+                mesh,
+                scale: p.scale,
+                rotation: p.rotation.to_array(),
+                translation_m: p.translation_m.to_array(),
+            }
+        })
+        .collect();
+    let bytes = write_with_progress(out, overwrite, progress, |w, p| write_parts(format, &parts, w, p))?;
+    Ok(ExportSummary {
+        path: out.to_path_buf(),
+        vertices: meshes.iter().map(|(_, m)| m.positions.len()).sum(),
+        triangles: meshes.iter().map(|(_, m)| m.triangle_count()).sum(),
+        bytes,
+    })
+}
+
+/// Writes `out` atomically with `write`, with a progress bar on the terminal when `progress`;
+/// returns the bytes written.
+fn write_with_progress(
+    out: &Path,
+    overwrite: bool,
+    progress: bool,
+    write: impl FnOnce(&mut dyn std::io::Write, &mut dyn FnMut(f32)) -> std::io::Result<()>,
+) -> Result<u64> {
+    let bar = if progress { indicatif::ProgressBar::new(1000) } else { indicatif::ProgressBar::hidden() };
+    bar.set_message(format!("writing {}", out.display()));
+    write_atomically(out, overwrite, |w| {
+        write(w, &mut |f| bar.set_position((f * 1000.0) as u64))
+            .with_context(|| format!("cannot write {}", out.display()))
+    })?;
+    bar.finish_and_clear();
+    Ok(std::fs::metadata(out).map(|m| m.len()).unwrap_or(0))
 }

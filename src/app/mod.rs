@@ -33,7 +33,7 @@ pub use capture::{
 };
 pub use comfort::{apply_parallax_budget, judge_parallax_budget, BudgetVerdict};
 pub use environment::{load_environment, EnvironmentError};
-pub use export::{export, final_field, final_mesh, welded_surface, ExportSummary};
+pub use export::{export, export_as, final_field, final_mesh, welded_surface, ExportSummary, PartsExport};
 pub use frame::{build_frame, world_lights};
 pub use playback::Playback;
 pub use sculpt::{

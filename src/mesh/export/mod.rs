@@ -45,6 +45,43 @@ impl ExportFormat {
     }
 }
 
+/// A part's mesh in its own frame (metres) and where the part sits: its vertex `v` is at
+/// `translation + rotation · (scale · v)` in the world.
+#[derive(Clone, Copy, Debug)]
+pub struct PartMesh<'a> {
+    /// The part's name.
+    pub name: &'a str,
+    /// Its surface, welded.
+    pub mesh: &'a WeldedMesh,
+    /// Its uniform scale.
+    pub scale: f32,
+    /// Its turn (quaternion x, y, z, w).
+    pub rotation: [f32; 4],
+    /// Where its origin sits, metres.
+    pub translation_m: [f32; 3],
+}
+
+/// Writes each of `parts` as its own mesh: a GLB node per part with its placement, an OBJ
+/// object per part placed in the world. PLY and STL hold one mesh and are refused.
+pub fn write_parts(
+    format: ExportFormat,
+    parts: &[PartMesh<'_>],
+    out: &mut dyn Write,
+    progress: &mut dyn FnMut(f32),
+) -> std::io::Result<()> {
+    match format {
+        ExportFormat::Glb => glb::write_parts(parts, out, progress),
+        ExportFormat::Obj => obj::write_parts(parts, out, progress),
+        ExportFormat::Ply | ExportFormat::Stl => Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!(
+                "a {} file holds one mesh: export the parts separately as glb or obj",
+                format.extension()
+            ),
+        )),
+    }
+}
+
 /// Metres to the millimetres of OBJ and STL files.
 pub const MILLIMETRES_PER_METRE: f32 = 1000.0;
 
