@@ -142,7 +142,7 @@ fn render_over(
         None => Playback::new_autosaved(&scene, start)?,
     };
     let initial = mesh_all(playback.surface());
-    playback.field_mut().take_dirty();
+    playback.surface().take_dirty();
     let clay = initial.upserted_bounds();
     // The views' copy of the scene, whose interaxial the parallax budget may lower.
     let mut viewed = scene.clone();
