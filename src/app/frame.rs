@@ -16,6 +16,41 @@ pub fn lattice_glyphs(playback: &super::playback::Playback<'_>) -> Vec<crate::re
         .collect()
 }
 
+/// The box of the active part of a sculpt of several parts, turned and scaled with it (none
+/// for one part, or an empty one).
+pub fn part_glyph(
+    playback: &super::playback::Playback<'_>,
+    colour: Vec4,
+) -> Option<crate::render::ToolGlyph> {
+    let parts = playback.assembly();
+    let (layouts, active) = (parts.parts(), parts.active());
+    if layouts.len() < 2 {
+        return None;
+    }
+    let bounds = crate::parts::local_bounds(parts.field(playback.field(), active));
+    part_glyph_of(bounds, &layouts[active].placement, colour)
+}
+
+fn part_glyph_of(
+    bounds: Aabb,
+    placement: &crate::parts::Placement,
+    colour: Vec4,
+) -> Option<crate::render::ToolGlyph> {
+    if bounds.is_empty() {
+        return None;
+    }
+    let local = crate::math::Mat4::from_scale_rotation_translation(
+        0.5 * bounds.size(),
+        crate::math::Quat::IDENTITY,
+        bounds.centre(),
+    );
+    Some(crate::render::ToolGlyph {
+        shape: crate::render::GlyphShape::Box,
+        model: placement.to_matrix() * local,
+        colour,
+    })
+}
+
 /// The colour regions being carried are drawn in: a faint warm yellow.
 pub const REGION_COLOUR: Vec4 = Vec4::new(0.95, 0.82, 0.35, 0.2);
 

@@ -494,6 +494,8 @@ pub struct Station<'s> {
     /// and the placement it last gave the part while moving it (kept once it stops).
     part_base: crate::parts::Placement,
     part_moving: Option<crate::parts::Placement>,
+    /// Seconds the active part's box is still drawn (after it was picked or moved).
+    part_shown_s: f32,
     /// The interlace parity is the calibration's flipped.
     parity_flipped: bool,
     /// The monitor's resolution as the window system gives it (when the calibration does not).
@@ -613,6 +615,7 @@ impl<'s> Station<'s> {
             region_drag: None,
             part_base: scene.parts[0].placement,
             part_moving: None,
+            part_shown_s: 0.0,
             parity_flipped: false,
             head: None,
             auto_convergence: None,
@@ -1002,6 +1005,7 @@ impl<'s> Station<'s> {
                 *self.desk.poses.get_mut(Target::Part) = self.home.get(Target::Part);
                 self.part_base = self.playback.assembly().parts()[part].placement;
                 self.part_moving = None;
+                self.part_shown_s = PART_SHOWN_S;
                 self.messages.push(describe_part(self.playback.assembly(), part));
             }
             StationAction::ToggleSymmetry | StationAction::NextSymmetry => {
@@ -1619,6 +1623,7 @@ impl<'s> Station<'s> {
         if self.playback.assembly().parts()[part].placement != placement && pose != home {
             self.playback.set_part_placement(part, placement);
             self.part_moving = Some(placement);
+            self.part_shown_s = PART_SHOWN_S;
         } else if self.part_moving.take().is_some() {
             self.playback.keep_layouts();
             self.unsaved_strokes += 1;
@@ -1797,6 +1802,11 @@ impl<'s> Station<'s> {
             let ghost = colour.truncate().extend(0.5 * colour.w);
             frame.tools.push(tool_glyph(&tool.shape, image.pose(&pose).0, tool.scale, ghost));
         }
+        // The active part's box, for a while after it was picked or moved.
+        self.part_shown_s = (self.part_shown_s - dt_s).max(0.0);
+        if self.part_shown_s > 0.0 {
+            frame.tools.extend(super::frame::part_glyph(&self.playback, PART_COLOUR));
+        }
         let second = self.desk.poses.get(Target::SecondTool);
         if second != self.home.get(Target::SecondTool) {
             // The second tool, once a device has moved it: the desk tool's shape and size, in blue.
@@ -1846,6 +1856,12 @@ impl<'s> Station<'s> {
         }
     }
 }
+
+/// How long the active part's box is drawn after it was picked or moved, seconds.
+const PART_SHOWN_S: f32 = 2.0;
+
+/// The colour the active part's box is drawn in: a faint blue.
+const PART_COLOUR: Vec4 = Vec4::new(0.35, 0.6, 1.0, 0.12);
 
 /// What the station says of part `part` when it becomes the active one.
 fn describe_part(parts: &super::assembly::Assembly, part: usize) -> String {
@@ -2940,6 +2956,19 @@ mod tests {
             station.messages
         );
         assert!(station.hud_lines().iter().any(|l| l == "part 2 of 2: right"));
+        // Its box is drawn for a while, turned and scaled with it, then no more.
+        let shown = station.step(SCRIPTED_STEP_S, |_| {});
+        let part_box = |frame: &crate::render::Frame| {
+            frame.tools.iter().filter(|g| g.colour == PART_COLOUR).map(|g| g.model).next()
+        };
+        let model = part_box(&shown).expect("the picked part's box is drawn");
+        let centre = model.transform_point3(Vec3::ZERO);
+        assert!((centre - Vec3::new(0.08, 0.0, 0.0)).length() < 0.01, "about the right ball: {centre}");
+        assert!(model.transform_vector3(Vec3::X).x > 0.02, "as large as the ball scaled 2×");
+        for _ in 0..(PART_SHOWN_S / SCRIPTED_STEP_S) as usize + 1 {
+            station.step(SCRIPTED_STEP_S, |_| {});
+        }
+        assert!(part_box(&station.step(SCRIPTED_STEP_S, |_| {})).is_none(), "gone after a while");
         // A stroke at the right ball's top (world): clay of the right part, in its frame.
         station.mouse.tool_position_m = Vec3::new(0.08, 0.02, 0.0);
         sculpt_for(&mut station, 2);

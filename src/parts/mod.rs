@@ -19,7 +19,9 @@ mod part;
 mod region;
 mod symmetry;
 
-pub use part::{part_bounds, Composition, Csg, PartView, Placement, PlacementError, SCALE_RANGE};
+pub use part::{
+    local_bounds, part_bounds, Composition, Csg, PartView, Placement, PlacementError, SCALE_RANGE,
+};
 pub use region::{
     copy_repeated, inflate, Motion, Region, RegionDrag, RegionError, RegionOp, RegionStats, MAX_REGION_POINTS,
 };

@@ -687,7 +687,7 @@ pub fn part_bounds(part: &PartView<'_>) -> Aabb {
 
 /// A box of a field's own frame holding its clay (its stored bricks on every level, and the
 /// apron its mesh reads), metres.
-fn local_bounds(field: &Field) -> Aabb {
+pub fn local_bounds(field: &Field) -> Aabb {
     let mut lo = IVec3::MAX;
     let mut hi = IVec3::MIN;
     for l in 0..crate::field::LEVELS {
