@@ -51,6 +51,9 @@ fn part_glyph_of(
     })
 }
 
+/// The colour the active part's box is drawn in: a faint blue.
+pub const PART_COLOUR: Vec4 = Vec4::new(0.35, 0.6, 1.0, 0.12);
+
 /// The colour regions being carried are drawn in: a faint warm yellow.
 pub const REGION_COLOUR: Vec4 = Vec4::new(0.95, 0.82, 0.35, 0.2);
 

@@ -1805,7 +1805,7 @@ impl<'s> Station<'s> {
         // The active part's box, for a while after it was picked or moved.
         self.part_shown_s = (self.part_shown_s - dt_s).max(0.0);
         if self.part_shown_s > 0.0 {
-            frame.tools.extend(super::frame::part_glyph(&self.playback, PART_COLOUR));
+            frame.tools.extend(super::frame::part_glyph(&self.playback, super::frame::PART_COLOUR));
         }
         let second = self.desk.poses.get(Target::SecondTool);
         if second != self.home.get(Target::SecondTool) {
@@ -1859,9 +1859,6 @@ impl<'s> Station<'s> {
 
 /// How long the active part's box is drawn after it was picked or moved, seconds.
 const PART_SHOWN_S: f32 = 2.0;
-
-/// The colour the active part's box is drawn in: a faint blue.
-const PART_COLOUR: Vec4 = Vec4::new(0.35, 0.6, 1.0, 0.12);
 
 /// What the station says of part `part` when it becomes the active one.
 fn describe_part(parts: &super::assembly::Assembly, part: usize) -> String {
@@ -2959,7 +2956,12 @@ mod tests {
         // Its box is drawn for a while, turned and scaled with it, then no more.
         let shown = station.step(SCRIPTED_STEP_S, |_| {});
         let part_box = |frame: &crate::render::Frame| {
-            frame.tools.iter().filter(|g| g.colour == PART_COLOUR).map(|g| g.model).next()
+            frame
+                .tools
+                .iter()
+                .filter(|g| g.colour == super::super::frame::PART_COLOUR)
+                .map(|g| g.model)
+                .next()
         };
         let model = part_box(&shown).expect("the picked part's box is drawn");
         let centre = model.transform_point3(Vec3::ZERO);

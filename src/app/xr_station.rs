@@ -599,6 +599,10 @@ impl XrSculptor<'_> {
             }
         }
         frame.tools.extend(super::frame::symmetry_glyphs(&self.playback));
+        // The active part's box while the support hand carries it.
+        if matches!(self.grab, Some(Grab::Part { .. })) {
+            frame.tools.extend(super::frame::part_glyph(&self.playback, super::frame::PART_COLOUR));
+        }
         let other = if self.dominant == 0 { Hand::Right } else { Hand::Left };
         if let Some((i, pose)) = self.playback.hand(other) {
             let t = &tools[i];
@@ -1266,7 +1270,9 @@ mod tests {
             ..HandState::default()
         };
         frame(&mut s, [grip(1.3, 0.0), HandState::default()]);
-        frame(&mut s, [grip(1.4, 0.0), HandState::default()]);
+        let out = frame(&mut s, [grip(1.4, 0.0), HandState::default()]);
+        let carried = out.frame.tools.iter().filter(|g| g.colour == super::super::frame::PART_COLOUR).count();
+        assert_eq!(carried, 1, "the carried part's box is drawn");
         assert_eq!(
             s.placement(),
             sculpture,
