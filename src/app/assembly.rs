@@ -31,6 +31,11 @@ pub struct Assembly {
     active: usize,
 }
 
+/// [`steps`] of every part's field, the first's first.
+fn counts(first: &Field, others: &[Field]) -> Vec<usize> {
+    std::iter::once(first).chain(others).map(steps).collect()
+}
+
 /// Undo steps a field has recorded and not taken back (dropped ones included, so that the
 /// count only grows with new steps).
 fn steps(field: &Field) -> usize {
@@ -42,7 +47,7 @@ impl Assembly {
     /// The parts `parts` describes, `others` holding the fields of all but the first.
     pub fn new(parts: Vec<ScenePart>, others: Vec<Field>, first: &Field) -> Self {
         debug_assert_eq!(parts.len(), others.len() + 1);
-        let seen = std::iter::once(first).chain(&others).map(steps).collect();
+        let seen = counts(first, &others);
         Self { parts, others, composition: None, undo: Vec::new(), redo: Vec::new(), seen, active: 0 }
     }
 
@@ -185,7 +190,7 @@ impl Assembly {
     /// Logs the sculpt step that has just closed on any part's field (the parts whose fields
     /// recorded a new step); a new step clears the redo order.
     pub fn note_steps(&mut self, first: &Field) {
-        let now: Vec<usize> = std::iter::once(first).chain(&self.others).map(steps).collect();
+        let now = counts(first, &self.others);
         let grown: Vec<usize> = (0..now.len()).filter(|&i| now[i] > self.seen[i]).collect();
         self.seen = now;
         if !grown.is_empty() {
@@ -197,32 +202,31 @@ impl Assembly {
     /// Takes back the newest sculpt step in every part it changed (the first part's newest step
     /// when none is logged). Returns whether there was one.
     pub fn undo(&mut self, first: &mut Field) -> Result<bool, HistoryError> {
-        self.note_steps(first);
-        let parts = self.undo.pop().unwrap_or_else(|| vec![0]);
-        let mut any = false;
-        for &part in &parts {
-            any |= self.field_mut(first, part).undo()?;
-        }
-        if any {
-            self.redo.push(parts);
-        }
-        self.seen = std::iter::once(&*first).chain(&self.others).map(steps).collect();
-        Ok(any)
+        self.step_back(first, true)
     }
 
     /// Puts back the newest step undone. Returns whether there was one.
     pub fn redo(&mut self, first: &mut Field) -> bool {
+        self.step_back(first, false).unwrap_or(false)
+    }
+
+    /// Undoes (or redoes) the newest logged step in every part it changed, and logs it on the
+    /// other stack.
+    fn step_back(&mut self, first: &mut Field, undo: bool) -> Result<bool, HistoryError> {
         self.note_steps(first);
-        let parts = self.redo.pop().unwrap_or_else(|| vec![0]);
+        let from = if undo { &mut self.undo } else { &mut self.redo };
+        let parts = from.pop().unwrap_or_else(|| vec![0]);
         let mut any = false;
         for &part in &parts {
-            any |= self.field_mut(first, part).redo();
+            let field = self.field_mut(first, part);
+            any |= if undo { field.undo()? } else { field.redo() };
         }
         if any {
-            self.undo.push(parts);
+            let to = if undo { &mut self.redo } else { &mut self.undo };
+            to.push(parts);
         }
-        self.seen = std::iter::once(&*first).chain(&self.others).map(steps).collect();
-        any
+        self.seen = counts(first, &self.others);
+        Ok(any)
     }
 
     /// Closes the strokes open on the parts after the first.

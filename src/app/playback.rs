@@ -110,11 +110,7 @@ impl<'s> Playback<'s> {
     /// The scene at time 0: its initial clay, rasterised into a new field, whatever it costs
     /// (for scenes known to be small; a user's scene goes through [`Playback::build`]).
     pub fn new(scene: &'s Scene) -> Self {
-        let mut fields: Vec<Field> = (0..scene.parts.len()).map(|p| empty_field(scene, p)).collect();
-        for primitive in &scene.clay {
-            rasterize_solid(&mut fields[primitive.part], &primitive.solid, primitive.op, primitive.colour);
-        }
-        Self::on_parts(scene, fields, &[], |_, _| None)
+        Self::on_parts(scene, scene_parts(scene, |_| true), &[], |_, _| None)
     }
 
     /// The scene at time 0, its initial clay built by [`initial_parts`]: refused over the
@@ -170,15 +166,7 @@ impl<'s> Playback<'s> {
         let fields = if others.len() + 1 == scene.parts.len() {
             std::iter::once(field).chain(others).collect()
         } else {
-            let mut fields: Vec<Field> = (0..scene.parts.len()).map(|p| empty_field(scene, p)).collect();
-            for primitive in scene.clay.iter().filter(|c| c.part > 0) {
-                rasterize_solid(
-                    &mut fields[primitive.part],
-                    &primitive.solid,
-                    primitive.op,
-                    primitive.colour,
-                );
-            }
+            let mut fields = scene_parts(scene, |part| part > 0);
             fields[0] = field;
             fields
         };
@@ -906,6 +894,16 @@ fn in_part(
             (tool, frame.local_pose(pose), images)
         }
     }
+}
+
+/// A field per part of `scene`, holding the scene's initial clay of the parts `which` takes,
+/// whatever it costs (for scenes known to be small; see [`initial_parts`]).
+fn scene_parts(scene: &Scene, which: impl Fn(usize) -> bool) -> Vec<Field> {
+    let mut fields: Vec<Field> = (0..scene.parts.len()).map(|p| empty_field(scene, p)).collect();
+    for primitive in scene.clay.iter().filter(|c| which(c.part)) {
+        rasterize_solid(&mut fields[primitive.part], &primitive.solid, primitive.op, primitive.colour);
+    }
+    fields
 }
 
 /// An empty field for the scene's part `part`: its voxel size, the scene's iso-level, the

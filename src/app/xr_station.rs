@@ -434,14 +434,16 @@ impl<'s> XrSculptor<'s> {
             ([(i, p)], Some(Grab::Part { start, hand_start, scale })) if *i == support => {
                 let y = hands[support].thumbstick.y;
                 let scale = if y.abs() > 0.2 { scale * RESIZE_PER_S.powf(y * dt_s) } else { scale };
-                let now = self.placement.pose_to_world(*p);
-                let turn = (now.rotation * hand_start.rotation.inverse()).normalize();
                 let scale = (start.scale * scale)
                     .clamp(*crate::parts::SCALE_RANGE.start(), *crate::parts::SCALE_RANGE.end())
                     / start.scale;
+                // Carried and turned as one grip carries the sculpture, scaled about its origin.
+                let at =
+                    Placement { scale: 1.0, rotation: start.rotation, translation_m: start.translation_m };
+                let moved = one_hand_grab(&at, hand_start, self.placement.pose_to_world(*p));
                 let placed = crate::parts::Placement {
-                    rotation: (turn * start.rotation).normalize(),
-                    translation_m: now.position_m + turn * (start.translation_m - hand_start.position_m),
+                    rotation: moved.rotation,
+                    translation_m: moved.translation_m,
                     scale: start.scale * scale,
                 };
                 self.playback.set_part_placement(self.playback.assembly().active(), placed);

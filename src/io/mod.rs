@@ -717,19 +717,13 @@ pub(crate) fn read_entries(
     count: usize,
     seen: &mut HashSet<LevelKey>,
 ) -> Result<Vec<(LevelKey, Option<Brick>)>, String> {
-    let mut keys = HashSet::new();
-    let entries = read_part_entries(raw, at, count, &mut keys)?;
-    let mut out = Vec::with_capacity(entries.len());
-    for (part, key, brick) in entries {
-        if part != 0 {
-            return Err(format!("brick {key} is of part {part}; these entries are of the first part alone"));
-        }
-        if !seen.insert(key) {
-            return Err(format!("brick {key} appears twice"));
-        }
-        out.push((key, brick));
-    }
-    Ok(out)
+    let first_part = |part: u16, key: LevelKey| match part {
+        0 if seen.insert(key) => Ok(()),
+        0 => Err(format!("brick {key} appears twice")),
+        _ => Err(format!("brick {key} is of part {part}; these entries are of the first part alone")),
+    };
+    let entries = read_entries_with(raw, at, count, first_part)?;
+    Ok(entries.into_iter().map(|(_, key, brick)| (key, brick)).collect())
 }
 
 /// Reads `count` entries written by [`put_part_entries`] from `raw` at `*at`, refusing a key of
@@ -739,6 +733,19 @@ pub(crate) fn read_part_entries(
     at: &mut usize,
     count: usize,
     seen: &mut HashSet<(u16, LevelKey)>,
+) -> Result<Vec<(u16, LevelKey, Option<Brick>)>, String> {
+    read_entries_with(raw, at, count, |part, key| match seen.insert((part, key)) {
+        true => Ok(()),
+        false => Err(format!("brick {key} of part {part} appears twice")),
+    })
+}
+
+/// Reads `count` entries of any parts, each key checked by `accept` (which refuses a repeat).
+fn read_entries_with(
+    raw: &[u8],
+    at: &mut usize,
+    count: usize,
+    mut accept: impl FnMut(u16, LevelKey) -> Result<(), String>,
 ) -> Result<Vec<(u16, LevelKey, Option<Brick>)>, String> {
     // Refuse counts the bytes cannot hold before allocating for them.
     if count > (raw.len() - *at) / MIN_ENTRY {
@@ -778,9 +785,7 @@ pub(crate) fn read_part_entries(
             }
             _ => return Err("it ends inside a brick".into()),
         };
-        if !seen.insert((part, entry.0)) {
-            return Err(format!("brick {} of part {part} appears twice", entry.0));
-        }
+        accept(part, entry.0)?;
         entries.push((part, entry.0, entry.1));
     }
     Ok(entries)
