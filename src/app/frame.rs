@@ -6,14 +6,21 @@ use crate::render::{Frame, Light, Material, Stage};
 use crate::scene::{Attachment, Scene, SceneLight, SceneToolShape};
 use crate::tool::ToolShape;
 
-/// The glyphs of the lattices `playback` has open and whose scene shows them.
+/// The glyphs of the lattices `playback` has open and whose scene shows them, and of the
+/// lattice held open at the desk or in the headset (placed with its part).
 pub fn lattice_glyphs(playback: &super::playback::Playback<'_>) -> Vec<crate::render::ToolGlyph> {
     let iso = playback.field().iso() as f64;
-    playback
+    let mut glyphs: Vec<_> = playback
         .open_lattices()
         .filter(|(scene, _)| scene.show)
         .flat_map(|(_, lattice)| super::glyphs::lattice_glyphs(lattice.volume(), iso))
-        .collect()
+        .collect();
+    if let Some(held) = playback.held_lattice() {
+        let frame =
+            playback.assembly().frame_of(held.part()).map_or(crate::math::Mat4::IDENTITY, |p| p.to_matrix());
+        glyphs.extend(held.glyphs(iso, frame));
+    }
+    glyphs
 }
 
 /// The box of the active part of a sculpt of several parts, turned and scaled with it (none

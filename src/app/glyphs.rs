@@ -192,10 +192,7 @@ pub fn tool_glyph(shape: &ToolShape, pose: Pose, scale: Vec3, colour: Vec4) -> T
 /// between neighbouring control points.
 pub fn lattice_glyphs(volume: &crate::spline::SplineVolume, iso: f64) -> Vec<ToolGlyph> {
     let counts = volume.counts();
-    let spacing = (0..3)
-        .map(|a| volume.region().size()[a] / (counts[a].max(2) - 1) as f32)
-        .fold(f32::INFINITY, f32::min);
-    let radius = (0.12 * spacing).min(0.01);
+    let radius = control_radius(volume);
     let line = 0.12 * radius;
     let mut glyphs = Vec::with_capacity(4 * volume.controls().len());
     let at = |i: usize, j: usize, k: usize| volume.controls()[i + counts[0] * (j + counts[1] * k)];
@@ -203,7 +200,7 @@ pub fn lattice_glyphs(volume: &crate::spline::SplineVolume, iso: f64) -> Vec<Too
         for j in 0..counts[1] {
             for i in 0..counts[0] {
                 let c = at(i, j, k);
-                let r = radius * (c.weight as f32).cbrt().clamp(0.3, 3.0);
+                let r = radius * weight_size(c.weight);
                 let place = Mat4::from_translation(c.position_m);
                 glyphs.push(ToolGlyph::sphere(
                     place * Mat4::from_scale(Vec3::splat(r)),
@@ -234,6 +231,21 @@ pub fn lattice_glyphs(volume: &crate::spline::SplineVolume, iso: f64) -> Vec<Too
         }
     }
     glyphs
+}
+
+/// The radius of a lattice's control spheres of weight 1, metres: an eighth of the nearest
+/// controls' spacing, at most a centimetre.
+pub fn control_radius(volume: &crate::spline::SplineVolume) -> f32 {
+    let counts = volume.counts();
+    let spacing = (0..3)
+        .map(|a| volume.region().size()[a] / (counts[a].max(2) - 1) as f32)
+        .fold(f32::INFINITY, f32::min);
+    (0.12 * spacing).min(0.01)
+}
+
+/// How much a NURBS weight scales its control's sphere (its cube root, within 0.3 to 3).
+pub fn weight_size(weight: f64) -> f32 {
+    (weight as f32).cbrt().clamp(0.3, 3.0)
 }
 
 /// The colour of the symmetry's planes and axis: a faint cool blue.

@@ -14,6 +14,7 @@ mod environment;
 mod export;
 mod frame;
 mod glyphs;
+mod held_lattice;
 mod playback;
 mod sculpt;
 pub mod signals;

@@ -10,6 +10,7 @@ use crate::math::Pose;
 use std::sync::Arc;
 
 use super::assembly::{image_in_part, Assembly};
+use super::held_lattice::HeldLattice;
 use crate::clay::{window_around, Clay, ClayParams, ClayTool};
 use crate::lattice::{volume_at, Lattice, LatticeError};
 use crate::math::{Aabb, Isometry, Vec3};
@@ -74,6 +75,9 @@ pub struct Playback<'s> {
     /// The symmetry strokes and pushes act through, and its images.
     symmetry: Symmetry,
     images: Vec<Isometry>,
+    /// The lattice the desk or the headset holds open over a part's clay: its part's stroke
+    /// stays open until it is applied (one undo step) or put back.
+    held: Option<HeldLattice>,
 }
 
 /// Where a scene's region tool stands on the timeline.
@@ -204,6 +208,7 @@ impl<'s> Playback<'s> {
             regions: scene.regions.iter().map(|_| RegionState::Waiting).collect(),
             symmetry: scene.symmetry,
             images: scene.symmetry.images(),
+            held: None,
         };
         // Keys at time 0 with their action on stamp at once.
         playback.step_to(0.0);
@@ -237,6 +242,7 @@ impl<'s> Playback<'s> {
         self.owns_stroke = false;
         self.push = None;
         // An open lattice resamples the clay it opened over: it ends with that clay.
+        self.held = None;
         for state in &mut self.lattices {
             if matches!(state, LatticeState::Open(..)) {
                 *state = LatticeState::Closed;
@@ -351,20 +357,29 @@ impl<'s> Playback<'s> {
 
     /// Takes back the newest step of the sculpt, in every part it changed; returns whether
     /// there was one.
+    /// A lattice held open is the newest step: undo puts its clay back and closes it.
     pub fn undo(&mut self) -> Result<bool, crate::field::HistoryError> {
+        if self.cancel_lattice() {
+            return Ok(true);
+        }
         self.close_steps();
         self.assembly.undo(&mut self.field)
     }
 
-    /// Puts back the newest step undone; returns whether there was one.
+    /// Puts back the newest step undone; returns whether there was one (none while a lattice
+    /// is held open: opening it cleared what could be redone).
     pub fn redo(&mut self) -> bool {
+        if self.held.is_some() {
+            return false;
+        }
         self.close_steps();
         self.assembly.redo(&mut self.field)
     }
 
     /// Ends the hands' strokes and closes the steps they hold open on every part (as undo does
-    /// before taking back the newest), journaling them.
+    /// before taking back the newest), journaling them; a lattice held open is applied.
     pub fn close_steps(&mut self) {
+        self.apply_held();
         self.strokes = [None, None];
         if self.owns_stroke {
             self.field.end_stroke();
@@ -500,6 +515,7 @@ impl<'s> Playback<'s> {
         // tool) is theirs to close.
         let drawing = self.strokes.iter().any(Option::is_some)
             || self.push.is_some()
+            || self.held.is_some()
             || self.lattices.iter().any(|l| matches!(l, LatticeState::Open(..)))
             || self.regions.iter().any(|r| matches!(r, RegionState::Moving(..)));
         // The step's strokes on the other parts close with it, before it is journaled.
@@ -723,6 +739,12 @@ impl<'s> Playback<'s> {
     /// Writes into the clay what the open lattices changed since they last wrote: call before
     /// the clay is meshed, measured or saved while a lattice is open.
     pub fn sync_lattices(&mut self) {
+        if let Some(held) = &mut self.held {
+            if let Err(e) = held.sync(self.assembly.field_mut(&mut self.field, held.part())) {
+                eprintln!("warning: the lattice held open stops, its clay put back: {e}");
+                self.cancel_lattice();
+            }
+        }
         let scene = self.scene;
         for (state, sl) in self.lattices.iter_mut().zip(&scene.lattices) {
             let LatticeState::Open(lattice, pending) = state else { continue };
@@ -734,6 +756,66 @@ impl<'s> Playback<'s> {
                 *state = LatticeState::Closed;
             }
         }
+    }
+
+    /// Opens a lattice of `spec` (the active part's frame) over the active part's clay, held
+    /// until [`Playback::apply_lattice`] or [`Playback::cancel_lattice`]: the steps open are
+    /// closed first, and the part's stroke stays open while it is held, so that its whole
+    /// session is one undo step. Refused, with a sentence, while one is held, on a locked part,
+    /// or when the lattice cannot open.
+    pub fn open_lattice(&mut self, spec: &crate::lattice::LatticeSpec) -> Result<(), String> {
+        if self.held.is_some() {
+            return Err("a lattice is open already: apply it or put the clay back first".into());
+        }
+        self.active_target()?;
+        self.close_steps();
+        let part = self.assembly.active();
+        let field = self.assembly.field_mut(&mut self.field, part);
+        let held = HeldLattice::open(field, part, spec).map_err(|e| format!("cannot open a lattice: {e}"))?;
+        field.begin_stroke();
+        self.held = Some(held);
+        Ok(())
+    }
+
+    /// The lattice held open, if any.
+    pub fn held_lattice(&self) -> Option<&HeldLattice> {
+        self.held.as_ref()
+    }
+
+    /// The lattice held open, to pick, drag and shape its controls (written into the clay by
+    /// [`Playback::sync_lattices`]).
+    pub fn held_lattice_mut(&mut self) -> Option<&mut HeldLattice> {
+        self.held.as_mut()
+    }
+
+    /// Applies the lattice held open: the clay keeps its deformation, one undo step, journaled.
+    /// Returns whether one was open.
+    pub fn apply_lattice(&mut self) -> bool {
+        let applied = self.apply_held();
+        if applied {
+            self.close_steps();
+        }
+        applied
+    }
+
+    /// Ends the held lattice's step, its last changes written; the caller journals it.
+    fn apply_held(&mut self) -> bool {
+        let Some(mut held) = self.held.take() else { return false };
+        let field = self.assembly.field_mut(&mut self.field, held.part());
+        if let Err(e) = held.sync(field) {
+            eprintln!("warning: the lattice's last change is left out: {e}");
+        }
+        field.end_stroke();
+        true
+    }
+
+    /// Closes the lattice held open and puts its part's clay back bit for bit as it was when
+    /// it opened, leaving no undo step. Returns whether one was open.
+    pub fn cancel_lattice(&mut self) -> bool {
+        let Some(held) = self.held.take() else { return false };
+        self.assembly.field_mut(&mut self.field, held.part()).abandon_stroke();
+        self.close_steps();
+        true
     }
 
     /// The scene's lattices open now, with their scene entries.

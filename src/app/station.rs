@@ -26,6 +26,8 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
+mod lattice;
+
 use super::environment::load_environment;
 use super::frame::build_frame;
 use super::glyphs::tool_glyph;
@@ -889,6 +891,9 @@ impl<'s> Station<'s> {
     }
 
     fn act(&mut self, action: StationAction) {
+        if self.act_lattice(action) {
+            return;
+        }
         match action {
             StationAction::Quit => self.quit = true,
             StationAction::Undo => {
@@ -1062,7 +1067,16 @@ impl<'s> Station<'s> {
             | StationAction::PointerUp
             | StationAction::PointerDown
             | StationAction::PointerAway
-            | StationAction::PointerToward => {}
+            | StationAction::PointerToward
+            | StationAction::OpenLattice
+            | StationAction::OpenPartLattice
+            | StationAction::ApplyLattice
+            | StationAction::CancelLattice
+            | StationAction::DragControl
+            | StationAction::RaiseValue
+            | StationAction::LowerValue
+            | StationAction::HeavierWeight
+            | StationAction::LighterWeight => {}
         }
     }
 
@@ -1680,12 +1694,25 @@ impl<'s> Station<'s> {
         // Tools: the scene's scripted hands, then the desk tool.
         let t = self.playback.time_s() + dt_s;
         self.playback.advance_to(t, |_| {});
-        let applying = self.holding(StationAction::Apply) || self.device_apply;
+        let mut applying = self.holding(StationAction::Apply) || self.device_apply;
         self.drive_active_part();
         // The desk tool acts on the active part, in its frame.
         let images = self.playback.images().to_vec();
         let (acting, local, images) = self.playback.in_active_part(self.acting_tool(), pose, &images);
         let (desk_tool, _, _) = self.playback.in_active_part(self.desk_tool.clone(), pose, &[]);
+        let lattice_open = self.playback.held_lattice().is_some();
+        if lattice_open {
+            self.drive_lattice(local.position_m);
+            let region_keys =
+                [StationAction::GrabRegion, StationAction::CopyRegion, StationAction::BendRegion];
+            if applying || region_keys.into_iter().any(|a| self.holding(a)) {
+                let why = "a lattice is open: the tools wait until Enter applies it or Backspace puts the clay back";
+                if self.messages.last().map(String::as_str) != Some(why) {
+                    self.messages.push(why.to_owned());
+                }
+            }
+            applying = false;
+        }
         match self.playback.active_target() {
             Err(why) => {
                 if applying && self.messages.last() != Some(&why) {
@@ -1711,7 +1738,9 @@ impl<'s> Station<'s> {
                 }
             }
         }
-        self.carry_region(&desk_tool, local, applying, &images);
+        if !lattice_open {
+            self.carry_region(&desk_tool, local, applying, &images);
+        }
 
         self.times.tools_ms = ms_since(tools_started);
         self.feel_contact(pose, dt_s);
@@ -2514,6 +2543,78 @@ mod tests {
         station.step(SCRIPTED_STEP_S, |_| {});
         assert!(at(&station, Vec3::new(0.045, 0.0, 0.0)) > 0.5, "the edge was pulled out");
         assert!(at(&station, Vec3::new(-0.025, 0.0, 0.0)) > 0.5, "the far side stays");
+    }
+
+    #[test]
+    fn the_lattice_keys_open_shape_apply_and_put_back_a_lattice_each_one_undo_step() {
+        let scene = ball_scene();
+        let mut station = small_station(&scene);
+        station.mouse.tool_position_m = Vec3::ZERO;
+        sculpt_for(&mut station, 2);
+        let ball = station.playback.field().clone();
+        let (mass, steps) = (ball.mass(), station.playback.field().history_stats().undo_in_memory);
+        let press = |station: &mut Station<'_>, chord: &str| {
+            let chord = Chord::parse(chord).unwrap();
+            station.modifiers = chord.modifiers;
+            station.key(chord.key, true);
+            station.key(chord.key, false);
+            station.modifiers = Modifiers::default();
+            station.step(SCRIPTED_STEP_S, |_| {})
+        };
+        // Shift+F: a lattice over the whole ball, drawn, the clay untouched.
+        let frame = press(&mut station, "Shift+KeyF");
+        let held = station.playback.held_lattice().expect("a lattice is open");
+        assert_eq!(held.lattice().volume().counts(), [4, 4, 4]);
+        assert!(frame.tools.len() > 64, "its 64 controls, their lines and the picked one are drawn");
+        assert!(station.playback.field().same_samples(&ball));
+        // The tool picks the control nearest it; R three times swells the clay there.
+        station.mouse.tool_position_m = Vec3::splat(0.012);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        let picked = station.playback.held_lattice().unwrap().picked();
+        assert!(picked.iter().all(|&i| i == 2), "the interior control nearest the tool: {picked:?}");
+        for _ in 0..3 {
+            press(&mut station, "KeyR");
+        }
+        let swelled = station.playback.field().mass();
+        assert!(swelled > mass * 1.01, "raised values swell the clay: {mass} → {swelled}");
+        // The tools wait while it is open.
+        sculpt_for(&mut station, 2);
+        assert_eq!(station.playback.field().mass(), swelled, "no stroke while a lattice is open");
+        assert!(station.messages.iter().any(|m| m.contains("a lattice is open")));
+        // Enter applies it: one undo step, which takes it back bit for bit; redo puts it again.
+        press(&mut station, "Enter");
+        assert!(station.playback.held_lattice().is_none());
+        assert_eq!(station.playback.field().history_stats().undo_in_memory, steps + 1);
+        station.act(StationAction::Undo);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert!(station.playback.field().same_samples(&ball), "one undo takes the lattice back");
+        station.act(StationAction::Redo);
+        assert_eq!(station.playback.field().mass(), swelled);
+        station.act(StationAction::Undo);
+        // F around the tool, D held drags the picked control 1 cm out, Backspace puts it all
+        // back and leaves no step.
+        station.mouse.tool_position_m = Vec3::new(0.02, 0.0, 0.0);
+        press(&mut station, "KeyF");
+        let spec = *station.playback.held_lattice().unwrap().lattice().spec();
+        assert!((spec.region.size().x - 0.12).abs() < 1e-4, "twice the tool's size about it: {spec:?}");
+        station.key(KeyCode::KeyD, true);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        station.mouse.tool_position_m = Vec3::new(0.03, 0.0, 0.0);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        station.key(KeyCode::KeyD, false);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert!(!station.playback.field().same_samples(&ball), "the drag warped the clay");
+        press(&mut station, "Backspace");
+        assert!(station.playback.held_lattice().is_none());
+        assert!(station.playback.field().same_samples(&ball), "put back bit for bit");
+        assert_eq!(station.playback.field().history_stats().undo_in_memory, steps, "no step left");
+        // Undo while one is open closes it the same way.
+        press(&mut station, "KeyF");
+        press(&mut station, "KeyR");
+        station.act(StationAction::Undo);
+        assert!(station.playback.held_lattice().is_none());
+        assert!(station.playback.field().same_samples(&ball));
+        assert_eq!(station.playback.field().history_stats().undo_in_memory, steps);
     }
 
     #[test]

@@ -105,6 +105,25 @@ pub enum StationAction {
     NextPart,
     /// Make the previous part the active one.
     PreviousPart,
+    /// Open a lattice over the clay around the tool (a box twice the tool's size), held open
+    /// until it is applied or put back.
+    OpenLattice,
+    /// Open a lattice over the active part's whole clay.
+    OpenPartLattice,
+    /// Apply the open lattice: the clay keeps its deformation, one undo step.
+    ApplyLattice,
+    /// Close the open lattice and put the clay back as it was when it opened.
+    CancelLattice,
+    /// Held: the open lattice's picked control (the one nearest the tool) follows the tool.
+    DragControl,
+    /// Raise the picked control's function value: the clay near it swells.
+    RaiseValue,
+    /// Lower the picked control's function value: the clay near it shrinks.
+    LowerValue,
+    /// Make the picked control's NURBS weight heavier: the volume is drawn towards it.
+    HeavierWeight,
+    /// Make the picked control's NURBS weight lighter.
+    LighterWeight,
 }
 
 /// Every action with its name in the bindings file.
@@ -148,6 +167,15 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("deflate-region", StationAction::DeflateRegion),
     ("next-part", StationAction::NextPart),
     ("previous-part", StationAction::PreviousPart),
+    ("open-lattice", StationAction::OpenLattice),
+    ("open-part-lattice", StationAction::OpenPartLattice),
+    ("apply-lattice", StationAction::ApplyLattice),
+    ("cancel-lattice", StationAction::CancelLattice),
+    ("drag-control", StationAction::DragControl),
+    ("raise-value", StationAction::RaiseValue),
+    ("lower-value", StationAction::LowerValue),
+    ("heavier-weight", StationAction::HeavierWeight),
+    ("lighter-weight", StationAction::LighterWeight),
 ];
 
 impl StationAction {

@@ -200,6 +200,20 @@ impl History {
         self.open = Some((Step::default(), HashSet::new()));
     }
 
+    /// Takes the open stroke away unrecorded: its step (each brick it touched as it was before
+    /// the stroke), the memory it held given back; the keys it saw come with it.
+    pub(crate) fn take_open(&mut self) -> Option<(Step, HashSet<LevelKey>)> {
+        let (step, seen) = self.open.take()?;
+        self.memory_bytes -= step.bytes();
+        Some((step, seen))
+    }
+
+    /// Puts back, as the open stroke, what [`History::take_open`] took.
+    pub(crate) fn put_open(&mut self, (step, seen): (Step, HashSet<LevelKey>)) {
+        self.memory_bytes += step.bytes();
+        self.open = Some((step, seen));
+    }
+
     /// Saves `current` as the state of `key` before the open stroke, on its first touch (by
     /// sharing it: the field copies it when it writes).
     pub(crate) fn touch(&mut self, key: LevelKey, current: Option<&Arc<Brick>>) {

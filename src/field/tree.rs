@@ -146,6 +146,36 @@ impl Field {
         self.history.recording()
     }
 
+    /// Takes back the open stroke's edits and forgets it: the field is bit for bit as it was
+    /// when the stroke began, no undo step is left and the redo steps it cleared stay gone.
+    /// The restored bricks are marked dirty. Returns whether a stroke was open.
+    pub fn abandon_stroke(&mut self) -> bool {
+        let Some((step, _)) = self.history.take_open() else { return false };
+        self.swap_in(step);
+        true
+    }
+
+    /// Calls `f` with the field as it was when the open stroke began (the clay a save stores
+    /// beside the closed history), then puts the stroke's edits back, bit for bit, the stroke
+    /// still open; without an open stroke `f` sees the field as it is.
+    pub fn with_stroke_undone<R>(&mut self, f: impl FnOnce(&Field) -> R) -> R {
+        let Some((mut step, seen)) = self.history.take_open() else { return f(self) };
+        let swap = |field: &mut Field, step: &mut Step| {
+            for (key, brick) in &mut step.bricks {
+                let old = match brick.take() {
+                    Some(b) => field.store(*key, b),
+                    None => field.remove(*key),
+                };
+                *brick = old;
+            }
+        };
+        swap(self, &mut step);
+        let out = f(self);
+        swap(self, &mut step);
+        self.history.put_open((step, seen));
+        out
+    }
+
     /// Undoes the newest stroke (closing an open one first). Returns whether there was one.
     /// The restored bricks are marked dirty.
     pub fn undo(&mut self) -> Result<bool, HistoryError> {
@@ -1063,6 +1093,32 @@ mod tests {
         assert!(f.undo().unwrap() && f.undo().unwrap());
         assert!(f.same_samples(&solid));
         assert_eq!(f.tile_count(), 64);
+    }
+
+    #[test]
+    fn an_abandoned_stroke_leaves_the_field_and_its_history_as_they_were() {
+        let mut f = Field::new(0.001, 0.5);
+        f.begin_stroke();
+        f.edit_box(IVec3::ZERO, IVec3::splat(20), true, |_, d, _| *d = 1.0);
+        f.end_stroke();
+        let before = f.clone();
+        let stats = f.history_stats();
+        f.begin_stroke();
+        // Changes a brick, removes one's matter, and makes new ones.
+        f.edit_box(IVec3::splat(4), IVec3::splat(40), true, |p, d, _| *d = if p.x < 10 { 0.0 } else { 0.75 });
+        assert!(!f.same_samples(&before));
+        // The field as it was when the stroke began, for the call alone.
+        let after = f.clone();
+        assert!(f.with_stroke_undone(|at_rest| at_rest.same_samples(&before)));
+        assert!(f.same_samples(&after) && f.in_stroke(), "the stroke's edits are back, and it is still open");
+        assert!(f.abandon_stroke());
+        assert!(f.same_samples(&before), "bit for bit as the stroke found it");
+        assert!(!f.in_stroke() && !f.abandon_stroke());
+        let now = f.history_stats();
+        assert_eq!((now.undo_in_memory, now.memory_bytes), (stats.undo_in_memory, stats.memory_bytes));
+        // The step before it is still the newest.
+        assert!(f.undo().unwrap());
+        assert_eq!(f.brick_count(), 0);
     }
 
     #[test]
