@@ -578,7 +578,11 @@ fn station(
                 .transpose()?,
         };
         let written = match sculpt {
-            Some(s) => app::render_sculpt(&scene, s.field, s.others, &options)?,
+            Some(s) => {
+                let path = scene_path.as_deref().unwrap_or(std::path::Path::new("the sculpt"));
+                let s = app::with_lattice_applied(s, path)?;
+                app::render_sculpt(&scene, s.field, s.others, &options)?
+            }
             None => app::render_scene_autosaved(
                 &scene,
                 &options,
@@ -629,7 +633,9 @@ fn render(
         RenderOptions { out_dir: out, display_modes, progress: true, validation, size_px: size, calibration };
     if app::is_sculpt(scene) {
         // Nothing is sculpted while rendering a sculpt: there is nothing to autosave.
-        let (mut scene, sculpt) = app::open_sculpt(scene)?;
+        let path = scene;
+        let (mut scene, sculpt) = app::open_sculpt(path)?;
+        let sculpt = app::with_lattice_applied(sculpt, path)?;
         scene.display.swap_eyes |= swap_eyes;
         print_written(&app::render_sculpt(&scene, sculpt.field, sculpt.others, &options)?);
         return Ok(());

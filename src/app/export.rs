@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 
 use super::playback::Playback;
-use super::sculpt::{is_sculpt, load_sculpt};
+use super::sculpt::{is_sculpt, load_sculpt, with_lattice_applied};
 use crate::field::Field;
 use crate::io::write_atomically;
 use crate::mesh::export::{write_mesh, write_parts, ExportFormat, PartMesh};
@@ -96,7 +96,7 @@ pub fn export_as(
         return export_parts(input, format, out, overwrite, progress);
     }
     let mesh = if is_sculpt(input) {
-        let surface = super::assembly::sculpt_surface(load_sculpt(input)?)
+        let surface = super::assembly::sculpt_surface(with_lattice_applied(load_sculpt(input)?, input)?)
             .with_context(|| format!("{}: a part's layout cannot be placed", input.display()))?;
         welded_surface(&surface)
     } else {
@@ -130,7 +130,7 @@ fn export_parts(
         bail!("a {} file holds one mesh: export the parts separately as glb or obj", format.extension());
     }
     let (layouts, fields): (Vec<crate::scene::ScenePart>, Vec<Field>) = if is_sculpt(input) {
-        let sculpt = load_sculpt(input)?;
+        let sculpt = with_lattice_applied(load_sculpt(input)?, input)?;
         let parts = super::assembly::parts_of(&sculpt)
             .with_context(|| format!("{}: a part's layout cannot be placed", input.display()))?;
         (parts, std::iter::once(sculpt.field).chain(sculpt.others).collect())

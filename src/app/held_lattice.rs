@@ -5,6 +5,7 @@
 //! one at a time, shared by the desk and the headset through [`super::playback::Playback`].
 
 use crate::field::Field;
+use crate::io::{StoredControl, StoredLattice};
 use crate::lattice::{Lattice, LatticeError, LatticeSpec};
 use crate::math::{Aabb, Mat4, Vec3, Vec4};
 use crate::render::ToolGlyph;
@@ -148,13 +149,73 @@ impl HeldLattice {
         Ok(weight)
     }
 
-    /// Puts the controls of `volume` (the same lattice, shaped elsewhere: a sculpt file) in
-    /// place.
-    pub fn set_controls(&mut self, volume: &crate::spline::SplineVolume) -> Result<(), LatticeError> {
-        if let Some(changed) = self.lattice.set_controls(volume)? {
-            self.pending = self.pending.union(&changed);
+    /// The lattice as a sculpt file stores it.
+    pub fn stored(&self) -> StoredLattice {
+        let spec = self.lattice.spec();
+        StoredLattice {
+            part: self.part,
+            min_m: spec.region.min.to_array(),
+            max_m: spec.region.max.to_array(),
+            counts: spec.counts,
+            kind: match spec.kind {
+                SplineKind::Bezier => "bezier",
+                SplineKind::BSpline => "bspline",
+                SplineKind::Nurbs => "nurbs",
+            }
+            .to_owned(),
+            order: spec.order,
+            knots: match spec.knots {
+                KnotStyle::Clamped => "clamped",
+                KnotStyle::Uniform => "uniform",
+            }
+            .to_owned(),
+            samples_per_span: spec.samples_per_span,
+            controls: self
+                .lattice
+                .volume()
+                .controls()
+                .iter()
+                .map(|c| StoredControl {
+                    position_m: c.position_m.to_array(),
+                    value: c.value,
+                    weight: c.weight,
+                })
+                .collect(),
+            picked: self.picked,
         }
-        Ok(())
+    }
+
+    /// Opens the lattice a sculpt file stored over `field` (its part's clay as it was when the
+    /// lattice opened) and shapes it as it was saved.
+    pub fn reopen(field: &Field, stored: &StoredLattice) -> Result<Self, LatticeError> {
+        let spec = LatticeSpec {
+            region: Aabb { min: Vec3::from_array(stored.min_m), max: Vec3::from_array(stored.max_m) },
+            counts: stored.counts,
+            kind: match stored.kind.as_str() {
+                "bezier" => SplineKind::Bezier,
+                "bspline" => SplineKind::BSpline,
+                _ => SplineKind::Nurbs,
+            },
+            order: stored.order,
+            knots: if stored.knots == "uniform" { KnotStyle::Uniform } else { KnotStyle::Clamped },
+            samples_per_span: stored.samples_per_span,
+        };
+        let mut held = Self::open(field, stored.part, &spec)?;
+        let mut volume = held.lattice.volume().clone();
+        let [l, m, _] = stored.counts;
+        for (n, c) in stored.controls.iter().enumerate() {
+            let (i, j, k) = (n % l, (n / l) % m, n / (l * m));
+            volume.set_position(i, j, k, Vec3::from_array(c.position_m))?;
+            volume.set_value(i, j, k, c.value)?;
+            if c.weight != volume.control(i, j, k)?.weight {
+                volume.set_weight(i, j, k, c.weight)?;
+            }
+        }
+        if let Some(changed) = held.lattice.set_controls(&volume)? {
+            held.pending = changed;
+        }
+        held.picked = stored.picked;
+        Ok(held)
     }
 
     /// Writes what the changes since the last write did into `field` (the part's clay).

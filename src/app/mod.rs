@@ -39,7 +39,7 @@ pub use frame::{build_frame, world_lights};
 pub use playback::Playback;
 pub use sculpt::{
     convert_sculpt, describe_sculpt, is_sculpt, load_sculpt, load_sculpt_with_progress, open_sculpt,
-    save_scene_sculpt, SavedSculpt, SCULPT_EXTENSION,
+    save_scene_sculpt, with_lattice_applied, SavedSculpt, SCULPT_EXTENSION,
 };
 pub use station::{
     no_display_reason, run_station, InputScript, ScriptEvent, Station, StationOptions, StationReport,

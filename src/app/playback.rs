@@ -777,6 +777,42 @@ impl<'s> Playback<'s> {
         Ok(())
     }
 
+    /// Opens the lattice a sculpt file stored (see [`crate::io::StoredLattice`]) over its
+    /// part's clay, which the file holds as it was when the lattice opened, shaped as it was
+    /// saved and held open as [`Playback::open_lattice`] holds it; its part becomes the active
+    /// one.
+    pub fn reopen_lattice(&mut self, stored: &crate::io::StoredLattice) -> Result<(), String> {
+        if self.held.is_some() {
+            return Err("a lattice is open already: apply it or put the clay back first".into());
+        }
+        if stored.part >= self.assembly.parts().len() {
+            return Err(format!("its lattice lies over part {}, which it has not", stored.part));
+        }
+        self.set_active_part(stored.part);
+        let field = self.assembly.field_mut(&mut self.field, stored.part);
+        let held = HeldLattice::reopen(field, stored).map_err(|e| format!("its lattice cannot open: {e}"))?;
+        field.begin_stroke();
+        self.held = Some(held);
+        self.sync_lattices();
+        Ok(())
+    }
+
+    /// Calls `f` with the sculpt as a file stores it: the held lattice's part (if one is held)
+    /// as it was when the lattice opened, beside its closed history, and the lattice
+    /// ([`HeldLattice::stored`]); the lattice's work is back as it was when `f` returns.
+    pub fn as_stored<R>(
+        &mut self,
+        f: impl FnOnce(&Playback<'s>, Option<&crate::io::StoredLattice>) -> R,
+    ) -> R {
+        self.sync_lattices();
+        let Some(part) = self.held.as_ref().map(HeldLattice::part) else { return f(self, None) };
+        let stored = self.held.as_ref().map(HeldLattice::stored);
+        self.assembly.field_mut(&mut self.field, part).swap_open_stroke();
+        let out = f(self, stored.as_ref());
+        self.assembly.field_mut(&mut self.field, part).swap_open_stroke();
+        out
+    }
+
     /// The lattice held open, if any.
     pub fn held_lattice(&self) -> Option<&HeldLattice> {
         self.held.as_ref()

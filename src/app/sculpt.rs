@@ -71,8 +71,14 @@ pub fn save_scene_sculpt(
     let session = playback.finish_autosave();
     let tools = playback.stored_tools();
     let (field, layouts, others) = playback.into_parts();
-    let scene =
-        SceneParts { toml: Some(&text), tools: &tools, view: None, layouts: &layouts, others: &others };
+    let scene = SceneParts {
+        toml: Some(&text),
+        tools: &tools,
+        view: None,
+        layouts: &layouts,
+        others: &others,
+        lattice: None,
+    };
     let bytes = encode_sculpt(&field, scene, EncodeOptions::default(), &mut |_| {});
     write_atomically(out, overwrite, |w| {
         w.write_all(&bytes).with_context(|| format!("cannot write {}", out.display()))
@@ -108,6 +114,23 @@ pub fn load_sculpt_with_progress(path: &Path, progress: bool) -> Result<Sculpt> 
     let sculpt = read_file_within(path, &limit, &mut |f| bar.set_position((f * 1000.0) as u64));
     bar.finish_and_clear();
     Ok(sculpt?)
+}
+
+/// `sculpt` (read from `path`) with the lattice it holds open applied to its part's clay, as
+/// the station shows it: for what only wants its shape (an export, a render).
+pub fn with_lattice_applied(mut sculpt: Sculpt, path: &Path) -> Result<Sculpt> {
+    let Some(stored) = sculpt.lattice.take() else { return Ok(sculpt) };
+    let field = match stored.part {
+        0 => &mut sculpt.field,
+        p => sculpt.others.get_mut(p - 1).with_context(|| {
+            format!("{}: its lattice lies over part {p}, which it has not", path.display())
+        })?,
+    };
+    let mut held = super::held_lattice::HeldLattice::reopen(field, &stored)
+        .with_context(|| format!("{}: its open lattice cannot be applied", path.display()))?;
+    held.sync(field).with_context(|| format!("{}: its open lattice cannot be applied", path.display()))?;
+    field.take_dirty();
+    Ok(sculpt)
 }
 
 /// Opens a sculpt file for viewing or sculpting: its clay, and the scene to show it in — the
@@ -160,8 +183,16 @@ pub fn convert_sculpt(
         playback.advance_to(end_s(&scene), |_| {});
         let tools = playback.stored_tools();
         let (field, parts, others) = playback.into_parts();
-        Sculpt { field, scene_toml: Some(text), tools, view: None, parts, others }
+        Sculpt { field, scene_toml: Some(text), tools, view: None, parts, others, lattice: None }
     };
+    if options.version < 6 && sculpt.lattice.is_some() {
+        bail!(
+            "{} holds a lattice left open; format version {} cannot store one (versions from 6 do): \
+             open it in the station and apply the lattice (Enter) or put the clay back (Backspace) first",
+            input.display(),
+            options.version
+        );
+    }
     if options.version < 5 && !sculpt.parts.is_empty() {
         bail!(
             "{} is a sculpt of {} parts; format version {} stores one (versions from 5 store parts)",
@@ -178,21 +209,27 @@ pub fn convert_sculpt(
     Ok(SavedSculpt { path: out.to_path_buf(), bricks, bytes: bytes.len() })
 }
 
-/// Writes the clay of `playback` (with its undo history), the scene text it plays, the
-/// scene's freeform tools and the station's `view` to `path` as a sculpt, atomically.
-pub(crate) fn save_playback(
-    playback: &Playback<'_>,
+/// Encodes the clay of `playback` (with its undo history, and the lattice it holds open over
+/// the clay as it was when the lattice opened), the scene text it plays, the scene's freeform
+/// tools and the station's `view` as a sculpt file's bytes.
+pub(crate) fn encode_playback(
+    playback: &mut Playback<'_>,
     scene_toml: Option<&str>,
     view: Option<&StoredView>,
-    path: &Path,
-) -> Result<()> {
-    let tools = playback.stored_tools();
-    let layouts = playback.assembly().layouts();
-    let others = if layouts.is_empty() { &[][..] } else { playback.assembly().others() };
-    let scene = SceneParts { toml: scene_toml, tools: &tools, view, layouts: &layouts, others };
-    let bytes = encode_sculpt(playback.field(), scene, EncodeOptions::default(), &mut |_| {});
+) -> Vec<u8> {
+    playback.as_stored(|playback, lattice| {
+        let tools = playback.stored_tools();
+        let layouts = playback.assembly().layouts();
+        let others = if layouts.is_empty() { &[][..] } else { playback.assembly().others() };
+        let scene = SceneParts { toml: scene_toml, tools: &tools, view, layouts: &layouts, others, lattice };
+        encode_sculpt(playback.field(), scene, EncodeOptions::default(), &mut |_| {})
+    })
+}
+
+/// Writes a sculpt file's `bytes` to `path`, atomically.
+pub(crate) fn write_sculpt(bytes: &[u8], path: &Path) -> Result<()> {
     write_atomically(path, true, |w| {
-        w.write_all(&bytes).with_context(|| format!("cannot write {}", path.display()))
+        w.write_all(bytes).with_context(|| format!("cannot write {}", path.display()))
     })
 }
 
@@ -266,6 +303,24 @@ pub fn describe_sculpt(path: &Path) -> Result<String> {
                 if p.locked { ", locked" } else { "" }
             );
         }
+    }
+    if let Some(l) = lazy.lattice() {
+        let [x, y, z] = l.counts;
+        let _ = writeln!(
+            out,
+            "  a lattice left open over part {}: {x} × {y} × {z} {} controls of order {}, {} knots, from \
+             ({:.3}, {:.3}, {:.3}) to ({:.3}, {:.3}, {:.3}) m (the clay stored is the clay it opened on)",
+            l.part,
+            l.kind,
+            l.order,
+            l.knots,
+            l.min_m[0],
+            l.min_m[1],
+            l.min_m[2],
+            l.max_m[0],
+            l.max_m[1],
+            l.max_m[2]
+        );
     }
     match lazy.history_size() {
         Some((0, _)) => {

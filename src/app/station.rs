@@ -1350,7 +1350,8 @@ impl<'s> Station<'s> {
     fn save_keeping(&mut self, kept: &'static str) -> Result<PathBuf> {
         let view = self.stored_view();
         let scene = self.scene_toml.as_deref();
-        let write = |path: &Path| super::sculpt::save_playback(&self.playback, scene, Some(&view), path);
+        let bytes = super::sculpt::encode_playback(&mut self.playback, scene, Some(&view));
+        let write = |path: &Path| super::sculpt::write_sculpt(&bytes, path);
         let path = match write(&self.save_to) {
             Ok(()) => self.save_to.clone(),
             Err(e) => {
@@ -1497,7 +1498,17 @@ impl<'s> Station<'s> {
             }
             // Else dropped unclosed: the next start recovers its strokes.
         }
-        self.part_base = self.playback.assembly().parts()[0].placement;
+        if let Some(stored) = &sculpt.lattice {
+            self.messages.push(match self.playback.reopen_lattice(stored) {
+                Ok(()) => {
+                    "the lattice left open is open again: Enter applies it, Backspace puts the clay back"
+                        .into()
+                }
+                Err(e) => format!("{}: {e}; the clay is as it was before the lattice", path.display()),
+            });
+        }
+        let active = self.playback.assembly().active();
+        self.part_base = self.playback.assembly().parts()[active].placement;
         self.part_moving = None;
         *self.desk.poses.get_mut(Target::Part) = self.home.get(Target::Part);
         self.save_to = path.to_owned();
@@ -2615,6 +2626,67 @@ mod tests {
         assert!(station.playback.held_lattice().is_none());
         assert!(station.playback.field().same_samples(&ball));
         assert_eq!(station.playback.field().history_stats().undo_in_memory, steps);
+    }
+
+    #[test]
+    fn a_lattice_left_open_is_saved_over_the_clay_it_opened_on_and_opens_again_as_it_was() {
+        let dir = std::env::temp_dir().join(format!("argile-station-lattice-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("open-lattice.argile");
+        let scene = ball_scene();
+        let mut station = Station::new(&scene, KeyBindings::shipped(), (64, 64), path.clone());
+        station.mouse.tool_position_m = Vec3::ZERO;
+        sculpt_for(&mut station, 2);
+        let ball = station.playback.field().clone();
+        let steps = ball_steps(&station);
+        station.act(StationAction::OpenPartLattice);
+        station.mouse.tool_position_m = Vec3::splat(0.012);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        for _ in 0..3 {
+            station.act(StationAction::RaiseValue);
+        }
+        station.act(StationAction::HeavierWeight);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        let shaped = station.playback.field().clone();
+        assert!(!shaped.same_samples(&ball));
+        station.save().unwrap();
+        assert!(station.playback.field().same_samples(&shaped), "saving leaves the lattice's work in place");
+        assert!(station.playback.held_lattice().is_some(), "and the lattice open");
+        // The file: the clay as the lattice found it, its history, and the lattice.
+        let stored = crate::app::load_sculpt(&path).unwrap();
+        assert!(stored.field.same_samples(&ball));
+        assert_eq!(stored.field.history_stats().undo_in_memory, steps);
+        let lattice = stored.lattice.clone().expect("the open lattice is stored");
+        assert_eq!(lattice, station.playback.held_lattice().unwrap().stored());
+        // What only wants the shape gets it applied.
+        let info = crate::app::describe_sculpt(&path).unwrap();
+        assert!(
+            info.contains("a lattice left open over part 0: 4 × 4 × 4 nurbs controls of order 4"),
+            "{info}"
+        );
+        let applied = crate::app::with_lattice_applied(stored, &path).unwrap();
+        assert!(applied.field.same_samples(&shaped) && applied.lattice.is_none());
+        // Opened again, the lattice is open as it was left, and one undo step when applied.
+        let mut again = Station::new(&scene, KeyBindings::shipped(), (64, 64), dir.join("other.argile"));
+        again.open(&path).unwrap();
+        let held = again.playback.held_lattice().expect("open again");
+        assert_eq!(held.stored(), lattice);
+        assert!(again.playback.field().same_samples(&shaped), "shaped as it was saved");
+        again.act(StationAction::ApplyLattice);
+        assert_eq!(ball_steps(&again), steps + 1);
+        again.act(StationAction::Undo);
+        assert!(again.playback.field().same_samples(&ball));
+        // A version that cannot keep it refuses rather than lose it.
+        let old = dir.join("v5.argile");
+        let options = crate::io::EncodeOptions { version: 5, history: true };
+        let e = crate::app::convert_sculpt(&path, &old, options, false).unwrap_err();
+        assert!(format!("{e:#}").contains("holds a lattice left open"), "{e:#}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    fn ball_steps(station: &Station<'_>) -> usize {
+        station.playback.field().history_stats().undo_in_memory
     }
 
     #[test]

@@ -273,7 +273,8 @@ impl<'s> XrSculptor<'s> {
     pub fn save(&mut self) -> Result<PathBuf> {
         self.end_stroke();
         let path = self.save_to.clone();
-        super::sculpt::save_playback(&self.playback, self.scene_toml.as_deref(), None, &path)?;
+        let bytes = super::sculpt::encode_playback(&mut self.playback, self.scene_toml.as_deref(), None);
+        super::sculpt::write_sculpt(&bytes, &path)?;
         self.saved = Some(path.clone());
         Ok(path)
     }
@@ -672,7 +673,18 @@ pub fn run_xr(
         })
     };
     let playback = match opened {
-        Some(sculpt) => Playback::on_sculpt(scene, sculpt.field, sculpt.others, &sculpt.tools, start),
+        Some(sculpt) => {
+            let mut playback = Playback::on_sculpt(scene, sculpt.field, sculpt.others, &sculpt.tools, start);
+            if let Some(stored) = &sculpt.lattice {
+                if let Err(e) = playback.reopen_lattice(stored) {
+                    eprintln!(
+                        "warning: {}: {e}; the clay is as it was before the lattice",
+                        save_to.display()
+                    );
+                }
+            }
+            playback
+        }
         None => Playback::new_autosaved(scene, start)?,
     };
     let mut sculptor = XrSculptor::new(scene, playback, save_to, options.left_handed);

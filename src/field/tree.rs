@@ -155,25 +155,20 @@ impl Field {
         true
     }
 
-    /// Calls `f` with the field as it was when the open stroke began (the clay a save stores
-    /// beside the closed history), then puts the stroke's edits back, bit for bit, the stroke
-    /// still open; without an open stroke `f` sees the field as it is.
-    pub fn with_stroke_undone<R>(&mut self, f: impl FnOnce(&Field) -> R) -> R {
-        let Some((mut step, seen)) = self.history.take_open() else { return f(self) };
-        let swap = |field: &mut Field, step: &mut Step| {
-            for (key, brick) in &mut step.bricks {
-                let old = match brick.take() {
-                    Some(b) => field.store(*key, b),
-                    None => field.remove(*key),
-                };
-                *brick = old;
-            }
-        };
-        swap(self, &mut step);
-        let out = f(self);
-        swap(self, &mut step);
+    /// Exchanges the open stroke's saved bricks with the field's own: called once, the field is
+    /// as it was when the stroke began (what a save stores beside the closed history) and the
+    /// stroke holds its edits; called again, both are back, bit for bit. Nothing may edit the
+    /// field in between. Returns whether a stroke was open.
+    pub fn swap_open_stroke(&mut self) -> bool {
+        let Some((mut step, seen)) = self.history.take_open() else { return false };
+        for (key, brick) in &mut step.bricks {
+            *brick = match brick.take() {
+                Some(b) => self.store(*key, b),
+                None => self.remove(*key),
+            };
+        }
         self.history.put_open((step, seen));
-        out
+        true
     }
 
     /// Undoes the newest stroke (closing an open one first). Returns whether there was one.
@@ -1109,7 +1104,9 @@ mod tests {
         assert!(!f.same_samples(&before));
         // The field as it was when the stroke began, for the call alone.
         let after = f.clone();
-        assert!(f.with_stroke_undone(|at_rest| at_rest.same_samples(&before)));
+        assert!(f.swap_open_stroke());
+        assert!(f.same_samples(&before) && f.in_stroke(), "as the stroke found it");
+        assert!(f.swap_open_stroke());
         assert!(f.same_samples(&after) && f.in_stroke(), "the stroke's edits are back, and it is still open");
         assert!(f.abandon_stroke());
         assert!(f.same_samples(&before), "bit for bit as the stroke found it");

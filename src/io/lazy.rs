@@ -65,6 +65,7 @@ pub struct LazySculpt {
     view: Option<StoredView>,
     parts: Vec<super::PartLayout>,
     others: Vec<Field>,
+    lattice: Option<super::StoredLattice>,
     entries: Vec<IndexEntry>,
     chunks: Vec<ChunkInfo>,
     /// Per chunk, its bytes in the file once it has been read.
@@ -125,6 +126,7 @@ impl LazySculpt {
             view,
             layouts,
             others,
+            lattice,
             index,
             base,
             chunks_read,
@@ -141,6 +143,7 @@ impl LazySculpt {
             view,
             parts: layouts,
             others: others.map_or_else(Vec::new, super::parts::PartsReader::finish),
+            lattice,
             entries: Vec::new(),
             chunks: Vec::new(),
             read: Vec::new(),
@@ -171,6 +174,7 @@ impl LazySculpt {
                 sculpt.view = whole.view;
                 sculpt.parts = whole.parts;
                 sculpt.others = whole.others;
+                sculpt.lattice = whole.lattice;
                 sculpt.whole = true;
             }
         }
@@ -201,6 +205,11 @@ impl LazySculpt {
     /// whole with the file's head.
     pub fn parts(&self) -> (&[super::PartLayout], &[Field]) {
         (&self.parts, &self.others)
+    }
+
+    /// The lattice held open when it was saved.
+    pub fn lattice(&self) -> Option<&super::StoredLattice> {
+        self.lattice.as_ref()
     }
 
     /// The scene file's text, if the sculpt was made from one.
@@ -322,6 +331,7 @@ impl LazySculpt {
                 view: self.view,
                 parts: self.parts,
                 others: self.others,
+                lattice: self.lattice,
             });
         }
         let total = self.chunks.len().max(1) as f32;
@@ -369,6 +379,7 @@ impl LazySculpt {
             view: self.view,
             parts: self.parts,
             others: self.others,
+            lattice: self.lattice,
         })
     }
 }

@@ -3,7 +3,7 @@
 //!
 //! Knows the field (it stores bricks) and nothing of Vulkan or devices.
 //!
-//! ## Layout, version 5
+//! ## Layout, version 6
 //!
 //! ```text
 //!  header  "ARGL" · version u32 · chunk count u32                      (little-endian)
@@ -27,6 +27,14 @@
 //!          PART  (any number, after PRTS, before INDX) bricks of a part after the first: the
 //!                               part's index u32 (1 and up) · level u8 · up to 512 bricks of
 //!                               that level as in BRKS, keyed on the part's own lattice
+//!          LATT  (at most once, after PRTS and PART, before INDX) JSON: the lattice held open
+//!                               when the sculpt was saved (see [`StoredLattice`]): its part,
+//!                               box, counts, kind, order, knots, every control's position,
+//!                               value and weight, the control picked. The clay stored for its
+//!                               part is the clay as it was when the lattice opened (and the
+//!                               history the closed steps before it): a reader reopens the
+//!                               lattice over it and puts its controls in place to have the
+//!                               sculpt as it was left, or applies it for the shape alone
 //!          INDX  (once, before any brick) the directory of the brick chunks that follow it:
 //!                               chunk count u32 · history offset u64 · per brick chunk, in
 //!                               file order: level u8 · block (3 × i32) · brick count u32 ·
@@ -55,7 +63,8 @@
 //! META, SCNE and INDX, and any brick chunk can then be read on its own, by where its block
 //! lies (loading a box reads the chunks whose samples reach into it, and nothing else).
 //!
-//! Version 4 is version 5 without PRTS and PART: a sculpt of one part. The undo history (HIST)
+//! Version 5 is version 6 without LATT: a lattice held open is refused there rather than lost
+//! (`argile convert`). Version 4 is version 5 without PRTS and PART: a sculpt of one part. The undo history (HIST)
 //! is the first part's; the other parts' histories are not stored.
 //! Version 3 is version 4 without INDX, TOOL and VIEW, its brick chunks holding up to 512 bricks of one level
 //! in key order (not by block). Version 2 is version 3 without BRKL chunks and with the finest
@@ -147,18 +156,20 @@ use crate::math::IVec3;
 mod atomic;
 pub mod autosave;
 mod journal;
+mod lattice;
 mod lazy;
 mod parts;
 mod process;
 pub mod text;
 
 pub use atomic::write_atomically;
+pub use lattice::{StoredControl, StoredLattice, KNOT_STYLES, LATTICE_KINDS};
 pub use lazy::{ChunkInfo, LazySculpt};
 pub use parts::{PartLayout, MAX_PARTS, PART_OPS};
 pub use process::process_alive;
 
 /// The format version this build writes.
-pub const VERSION: u32 = 5;
+pub const VERSION: u32 = 6;
 /// The largest raw chunk a reader accepts.
 pub const MAX_CHUNK_BYTES: usize = 64 << 20;
 /// The most chunks a file may declare.
@@ -197,12 +208,22 @@ pub struct Sculpt {
     pub parts: Vec<PartLayout>,
     /// The clay of the parts after the first, one field each.
     pub others: Vec<Field>,
+    /// The lattice held open when it was saved, over the clay as it was when it opened.
+    pub lattice: Option<StoredLattice>,
 }
 
 impl Sculpt {
     /// A sculpt of one part: `field`, with nothing else.
     pub fn of_field(field: Field) -> Self {
-        Self { field, scene_toml: None, tools: Vec::new(), view: None, parts: Vec::new(), others: Vec::new() }
+        Self {
+            field,
+            scene_toml: None,
+            tools: Vec::new(),
+            view: None,
+            parts: Vec::new(),
+            others: Vec::new(),
+            lattice: None,
+        }
     }
 
     /// What it stores besides its clay, to encode it again.
@@ -213,6 +234,7 @@ impl Sculpt {
             view: self.view.as_ref(),
             layouts: &self.parts,
             others: &self.others,
+            lattice: self.lattice.as_ref(),
         }
     }
 }
@@ -231,6 +253,8 @@ pub struct SceneParts<'a> {
     pub layouts: &'a [PartLayout],
     /// The clay of the parts after the first.
     pub others: &'a [Field],
+    /// The lattice held open (version 6), over the clay as it was when it opened.
+    pub lattice: Option<&'a StoredLattice>,
 }
 
 /// The station's view when a sculpt was saved: where the camera looks from, the stereo
@@ -462,7 +486,7 @@ fn encode_parts(
     version: u32,
     (voxel_size_m, iso): (f32, f32),
     mut bricks: Vec<(LevelKey, &Brick)>,
-    SceneParts { toml: scene_toml, tools, view, layouts, .. }: SceneParts<'_>,
+    SceneParts { toml: scene_toml, tools, view, layouts, lattice, .. }: SceneParts<'_>,
     mut others: Vec<(u32, LevelKey, &Brick)>,
     history: Option<&History>,
     progress: &mut dyn FnMut(f32),
@@ -524,8 +548,10 @@ fn encode_parts(
     } else {
         0
     };
+    let lattice = lattice.filter(|_| version >= 6);
     let chunk_count = 1
         + part_chunks
+        + u32::from(lattice.is_some())
         + u32::from(scene_toml.is_some())
         + u32::from(view.is_some())
         + tools.len() as u32
@@ -547,6 +573,9 @@ fn encode_parts(
         put_chunk(&mut out, *b"TOOL", &tool.put());
     }
     out.extend_from_slice(&parts);
+    if let Some(lattice) = lattice {
+        put_chunk(&mut out, *b"LATT", &lattice.put());
+    }
     if indexed {
         put_chunk(&mut out, *b"INDX", &put_index(&entries, offset));
     }
@@ -1205,6 +1234,8 @@ struct Head {
     /// Version 5: the parts' layouts and the clay of those after the first.
     layouts: Vec<PartLayout>,
     others: Option<parts::PartsReader>,
+    /// Version 6: the lattice held open.
+    lattice: Option<StoredLattice>,
     /// Version 4: the brick chunks, and where the history starts, both from `base`.
     index: Option<(Vec<IndexEntry>, u64)>,
     /// The first byte after the index (version 4; before, it means nothing).
@@ -1240,6 +1271,7 @@ fn read_head(
         view: None,
         layouts: Vec::new(),
         others: None,
+        lattice: None,
         index: None,
         base: source.position(),
         chunks_read: 1,
@@ -1292,7 +1324,13 @@ fn read_head(
                 };
                 reader.read(raw, index)?;
             }
+            b"LATT" if version >= 6 && head.lattice.is_none() => {
+                head.lattice = Some(StoredLattice::read(raw, index)?);
+            }
             b"INDX" if version >= 4 => {
+                if let Some(lattice) = &head.lattice {
+                    lattice.check_part(head.layouts.len().max(1))?;
+                }
                 let room = source.len() - source.position();
                 let (entries, history_at) = read_index(raw, head.meta.bricks, room)?;
                 if entries.len() as u64 > u64::from(chunk_count - head.chunks_read) {
@@ -1341,6 +1379,7 @@ fn decode_from(
         view,
         layouts,
         others,
+        lattice,
         index: directory,
         base,
         chunks_read,
@@ -1414,7 +1453,7 @@ fn decode_from(
     field.take_dirty();
     field.set_history(history.undo, history.redo);
     let others = others.map_or_else(Vec::new, parts::PartsReader::finish);
-    Ok(Sculpt { field, scene_toml, tools, view, parts: layouts, others })
+    Ok(Sculpt { field, scene_toml, tools, view, parts: layouts, others, lattice })
 }
 
 #[cfg(test)]
