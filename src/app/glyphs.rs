@@ -19,8 +19,9 @@
 //! ```text
 //!   palette, seen from above the hand that holds no tool (grip frame: −Z forward, +X right)
 //!
-//!     undo  redo  recentre  save  quit       buttons: BUTTON_AHEAD_M in front of the grip,
-//!      (●)   (●)    (◎)     [■]   [■]         the tool hand pokes one and pulls its trigger
+//!   symmetry undo redo recentre save quit lattice   buttons: BUTTON_AHEAD_M in front of the
+//!     (▮)    (●)  (●)    (◎)    [■]  [■]    (○)      grip, the tool hand pokes one and pulls
+//!                                                     its trigger
 //!
 //!        shape   action   size bar (its length: the tool's largest extent)
 //!        ( ◇ )    (●)     ══════════►  +X
@@ -37,6 +38,7 @@
 //! | recentre | blue ring | brings the sculpture back in front of the head, at scale 1 |
 //! | save | green cube | saves the sculpt |
 //! | quit | red cube | saves the sculpt and ends the headset session |
+//! | lattice | violet ring | opens a lattice over the active part's clay; pressed again, applies it |
 //!
 //! [`XrSculptor`]: super::XrSculptor
 
@@ -93,12 +95,21 @@ pub enum Button {
     Quit,
     /// Step the symmetry: off, mirror X, mirror X and Z, radial 6, kaleidoscope, off.
     Symmetry,
+    /// Open a lattice over the active part's clay; with one open, apply it.
+    Lattice,
 }
 
 impl Button {
     /// The buttons in their row, from the grip's −X to its +X.
-    pub const ALL: [Button; 6] =
-        [Button::Symmetry, Button::Undo, Button::Redo, Button::Recentre, Button::Save, Button::Quit];
+    pub const ALL: [Button; 7] = [
+        Button::Symmetry,
+        Button::Undo,
+        Button::Redo,
+        Button::Recentre,
+        Button::Save,
+        Button::Quit,
+        Button::Lattice,
+    ];
 
     /// What the button is called.
     pub fn name(self) -> &'static str {
@@ -109,6 +120,7 @@ impl Button {
             Button::Save => "save",
             Button::Quit => "quit",
             Button::Symmetry => "symmetry",
+            Button::Lattice => "lattice",
         }
     }
 
@@ -139,6 +151,7 @@ impl Button {
             Button::Save => (GlyphShape::Box, [0.3, 0.85, 0.35]),
             Button::Quit => (GlyphShape::Box, [0.9, 0.2, 0.2]),
             Button::Symmetry => (GlyphShape::Cylinder, [0.45, 0.7, 1.0]),
+            Button::Lattice => (GlyphShape::Torus { tube: 0.2 }, [0.7, 0.45, 0.95]),
         };
         let (size, opacity) = if pointed { (1.3 * BUTTON_RADIUS_M, 1.0) } else { (BUTTON_RADIUS_M, 0.75) };
         // The ring faces the viewer: its axis along the grip's Z.
@@ -157,7 +170,7 @@ impl Button {
 }
 
 /// The palette's buttons for the hand at `grip`, `pointed` drawn as pointed at.
-pub fn buttons(grip: Pose, pointed: Option<Button>) -> [ToolGlyph; 6] {
+pub fn buttons(grip: Pose, pointed: Option<Button>) -> [ToolGlyph; Button::ALL.len()] {
     Button::ALL.map(|b| b.glyph(grip, pointed == Some(b)))
 }
 

@@ -17,9 +17,9 @@ pub const HELD_COUNTS: [usize; 3] = [4, 4, 4];
 /// How much one press raises or lowers the picked control's function value (a density).
 pub const VALUE_STEP: f64 = 0.1;
 
-/// The range a held lattice's values are kept in: a density, with room to push past the
-/// surface either way.
-pub const VALUE_RANGE: (f64, f64) = (-1.0, 2.0);
+/// How far a held lattice's values may be taken from the values fitted to the clay (a density
+/// spans 1): room to push the surface through the whole lattice cell either way.
+pub const VALUE_REACH: f64 = 2.0;
 
 /// The factor one press makes the picked control's NURBS weight heavier (or lighter, by its
 /// inverse).
@@ -27,6 +27,9 @@ pub const WEIGHT_STEP: f64 = 1.25;
 
 /// The range a held lattice's weights are kept in.
 pub const WEIGHT_RANGE: (f64, f64) = (0.05, 20.0);
+
+/// A lattice opened over a whole part reaches this fraction of the clay's size beyond it.
+pub const PART_MARGIN: f32 = 0.05;
 
 /// The colour of the picked control's marker: a bright ring yellow.
 pub const PICKED_COLOUR: Vec4 = Vec4::new(1.0, 0.85, 0.2, 0.35);
@@ -127,12 +130,14 @@ impl HeldLattice {
         Ok(())
     }
 
-    /// Raises (or, negative, lowers) the picked control's function value by `delta`, kept in
-    /// [`VALUE_RANGE`]: the clay near it swells (shrinks). Returns the new value.
+    /// Raises (or, negative, lowers) the picked control's function value by `delta`, kept
+    /// within [`VALUE_REACH`] of the value the fit gave it: the clay near it swells (shrinks).
+    /// Returns the new value.
     pub fn add_value(&mut self, delta: f64) -> Result<f64, LatticeError> {
         let [i, j, k] = self.picked;
         let now = self.lattice.volume().control(i, j, k)?.value;
-        let value = (now + delta).clamp(VALUE_RANGE.0, VALUE_RANGE.1);
+        let fitted = self.lattice.fitted().control(i, j, k)?.value;
+        let value = (now + delta).clamp(fitted - VALUE_REACH, fitted + VALUE_REACH);
         let changed = self.lattice.set_value(self.picked, value)?;
         self.pending = self.pending.union(&changed);
         Ok(value)

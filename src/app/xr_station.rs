@@ -19,9 +19,14 @@
 //! - left menu: recentre the sculpture in front of the head;
 //! - left thumbstick click: symmetry on or off; X: the next symmetry (mirror X, mirror X and
 //!   Z, radial 6, a kaleidoscope); every stroke and push then acts at its images too;
-//! - the palette's buttons (symmetry, undo, redo, recentre, save, quit), in front of the left
-//!   controller: touch one with the right controller and pull the trigger. Every profile
-//!   has a trigger, so each of these is reachable on every controller.
+//! - the palette's buttons (symmetry, undo, redo, recentre, save, quit, lattice), in front of
+//!   the left controller: touch one with the right controller and pull the trigger. Every
+//!   profile has a trigger, so each of these is reachable on every controller.
+//! - with a lattice open (the palette's lattice button; pressed again it applies the lattice,
+//!   one undo step, and A puts the clay back): the control nearest the right controller is
+//!   picked and ringed, the right trigger pulled off the palette drags it with the hand, and
+//!   the right thumbstick up/down raises or lowers its value (the clay near it swells or
+//!   shrinks) instead of sizing the tool.
 
 use std::path::PathBuf;
 
@@ -61,6 +66,8 @@ pub const CONTACT_NS: i64 = 30_000_000;
 const CONTACT_REACH: f32 = 1.3;
 /// Density under the tool from which it touches the clay.
 const TOUCH_DENSITY: f32 = 0.5;
+/// How fast a full thumbstick deflection raises a lattice control's value, per second.
+const VALUE_PER_S: f32 = 0.5;
 /// The tick when the tool comes onto a palette button.
 pub const BUTTON_PULSE: (f32, i64) = (0.3, 10_000_000);
 
@@ -352,9 +359,66 @@ impl<'s> XrSculptor<'s> {
                 let symmetry = self.symmetry.step();
                 self.set_symmetry(symmetry);
             }
+            Some(Button::Lattice) => self.lattice_button(),
             None => {}
         }
         pointed.is_some()
+    }
+
+    /// The palette's lattice button: opens a lattice over the active part's whole clay, or
+    /// applies the one open (one undo step).
+    fn lattice_button(&mut self) {
+        self.end_stroke();
+        if self.playback.apply_lattice() {
+            self.messages.push("lattice applied (undo takes it back)".into());
+            return;
+        }
+        let part = self.playback.assembly().active();
+        let clay = crate::parts::local_bounds(self.playback.assembly().field(self.playback.field(), part));
+        if clay.is_empty() {
+            self.messages.push("the active part holds no clay to open a lattice over".into());
+            return;
+        }
+        let region = clay.expanded(super::held_lattice::PART_MARGIN * clay.size().max_element());
+        self.messages.push(match self.playback.open_lattice(&super::held_lattice::held_spec(region)) {
+            Ok(()) => {
+                "lattice open: the trigger drags the control nearest the tool, the thumbstick its value; \
+                       the lattice button applies it, undo puts the clay back"
+                    .into()
+            }
+            Err(e) => e,
+        });
+    }
+
+    /// With a lattice open, the tool hand at `pose` (the scene): the control nearest it is
+    /// picked, the trigger pulled off the palette drags it (a drag starts only as the trigger
+    /// goes down), and the thumbstick raises or lowers its value. Returns whether a lattice is
+    /// open (the hand then does not sculpt).
+    fn drive_lattice(&mut self, input: &FrameInput, pose: Option<Pose>, on_palette: bool, dt_s: f32) -> bool {
+        let d = self.dominant;
+        let (now, before) = (input.hands[d], self.previous[d]);
+        let local = pose.map(|pose| self.playback.in_active_part(self.tool.clone(), pose, &[]).1.position_m);
+        let Some(held) = self.playback.held_lattice_mut() else { return false };
+        let mut failed = None;
+        if let Some(point) = local {
+            held.pick_nearest(point);
+            let pulling = now.trigger >= TRIGGER_ON && !on_palette && self.grab.is_none();
+            let drag = pulling && (held.dragging() || before.trigger < TRIGGER_ON);
+            failed = held.drag(point, drag).err().map(|e| format!("the control stays: {e}"));
+        }
+        let y = now.thumbstick.y;
+        if y.abs() > 0.2 && failed.is_none() {
+            failed = held
+                .add_value((VALUE_PER_S * y * dt_s) as f64)
+                .err()
+                .map(|e| format!("the value stays: {e}"));
+        }
+        if let Some(message) = failed {
+            if self.messages.last() != Some(&message) {
+                self.messages.push(message);
+            }
+        }
+        true
     }
 
     /// Buttons and thumbstick of the dominant hand; menu of the other.
@@ -367,7 +431,8 @@ impl<'s> XrSculptor<'s> {
             self.redo();
         }
         let y = now.thumbstick.y;
-        if y.abs() > 0.2 {
+        // With a lattice open the thumbstick sets the picked control's value instead.
+        if y.abs() > 0.2 && self.playback.held_lattice().is_none() {
             self.tool.scale *= RESIZE_PER_S.powf(y * dt_s);
         }
         let flick = |x: f32| {
@@ -486,8 +551,12 @@ impl<'s> XrSculptor<'s> {
         self.grabs(&input.hands, dt_s);
         let hand = input.hands[self.dominant];
         let tool_pose = hand.grip.map(|g| self.placement.pose_to_world(g));
-        let applying =
-            hand.trigger >= TRIGGER_ON && tool_pose.is_some() && self.grab.is_none() && !on_palette;
+        let lattice = self.drive_lattice(input, tool_pose, on_palette, dt_s);
+        let applying = hand.trigger >= TRIGGER_ON
+            && tool_pose.is_some()
+            && self.grab.is_none()
+            && !on_palette
+            && !lattice;
         // The virtual clay: the dominant hand's push tool and the other hand's support act
         // through the playback, as the scene's scripted hands do.
         let pushing_tool = self.tool_index.filter(|_| self.tool.action == Action::Push);
@@ -602,6 +671,7 @@ impl XrSculptor<'_> {
             }
         }
         frame.tools.extend(super::frame::symmetry_glyphs(&self.playback));
+        frame.tools.extend(super::frame::lattice_glyphs(&self.playback));
         // The active part's box while the support hand carries it.
         if matches!(self.grab, Some(Grab::Part { .. })) {
             frame.tools.extend(super::frame::part_glyph(&self.playback, super::frame::PART_COLOUR));
@@ -1233,6 +1303,71 @@ mod tests {
         frame(&mut s, [HandState::default(), rest]);
         frame(&mut s, [HandState::default(), HandState { secondary: true, ..rest }]);
         assert!(density(&s, inside) < 0.5, "B redoes it");
+    }
+
+    #[test]
+    fn the_lattice_button_opens_a_lattice_whose_controls_the_tool_hand_drags_and_values_then_applies_it() {
+        let scene = ball();
+        let mut s = sculptor(&scene, false);
+        let ball = s.field().clone();
+        let steps = ball.history_stats().undo_in_memory;
+        let palette = Pose { position_m: Vec3::new(-0.1, 1.6, -0.1), rotation: Quat::IDENTITY };
+        let left = HandState { grip: Some(palette), ..HandState::default() };
+        let hand = |p: Vec3, trigger: f32, stick: f32| HandState {
+            grip: Some(Pose { position_m: p, rotation: Quat::IDENTITY }),
+            trigger,
+            thumbstick: Vec2::new(0.0, stick),
+            ..HandState::default()
+        };
+        let press = |s: &mut XrSculptor<'_>, b: Button| {
+            frame(s, [left, hand(b.centre(palette), 0.0, 0.0)]);
+            frame(s, [left, hand(b.centre(palette), 1.0, 0.0)]);
+            frame(s, [left, hand(b.centre(palette), 0.0, 0.0)])
+        };
+        let out = press(&mut s, Button::Lattice);
+        assert!(s.playback.held_lattice().is_some(), "{:?}", s.messages);
+        assert!(out.frame.tools.len() > 64, "the lattice's controls and lines are drawn");
+        // The hand goes to the control at (2, 2, 2): picked; the trigger drags it 2 cm (room).
+        let control =
+            s.playback.held_lattice().unwrap().lattice().volume().control(2, 2, 2).unwrap().position_m;
+        let room = s.placement().matrix().transform_point3(control);
+        frame(&mut s, [left, hand(room, 0.0, 0.0)]);
+        assert_eq!(s.playback.held_lattice().unwrap().picked(), [2, 2, 2]);
+        frame(&mut s, [left, hand(room, 1.0, 0.0)]);
+        frame(&mut s, [left, hand(room + Vec3::new(0.02, 0.0, 0.0), 1.0, 0.0)]);
+        frame(&mut s, [left, hand(room + Vec3::new(0.02, 0.0, 0.0), 0.0, 0.0)]);
+        let held = s.playback.held_lattice().unwrap();
+        let moved = held.lattice().volume().control(2, 2, 2).unwrap().position_m - control;
+        let expected = 0.02 / s.placement().scale;
+        assert!((moved.x - expected).abs() < 1e-5 && moved.y.abs() < 1e-6, "{moved} vs {expected}");
+        assert!(!s.field().same_samples(&ball), "the drag warped the clay, not a stroke");
+        assert_eq!(s.field().history_stats().undo_in_memory, steps);
+        // The thumbstick raises its value (half a unit a second), not the tool's size.
+        let (value, size) = (held.lattice().volume().control(2, 2, 2).unwrap().value, s.tool().scale);
+        for _ in 0..30 {
+            frame(&mut s, [left, hand(room, 0.0, 1.0)]);
+        }
+        let raised = s.playback.held_lattice().unwrap().lattice().volume().control(2, 2, 2).unwrap().value;
+        assert!((raised - value - 30.0 * 0.5 / 90.0).abs() < 1e-4, "{value} → {raised}");
+        assert_eq!(s.tool().scale, size);
+        let shaped = s.field().clone();
+        // Pressed again, the button applies it: one undo step, taken back exactly.
+        press(&mut s, Button::Lattice);
+        assert!(s.playback.held_lattice().is_none());
+        assert!(s.field().same_samples(&shaped));
+        assert_eq!(s.field().history_stats().undo_in_memory, steps + 1);
+        press(&mut s, Button::Undo);
+        assert!(s.field().same_samples(&ball));
+        // Opened again and dragged, undo puts the clay back and leaves no step.
+        press(&mut s, Button::Lattice);
+        frame(&mut s, [left, hand(room, 1.0, 0.0)]);
+        frame(&mut s, [left, hand(room + Vec3::new(0.0, 0.03, 0.0), 1.0, 0.0)]);
+        frame(&mut s, [left, hand(room, 0.0, 0.0)]);
+        assert!(!s.field().same_samples(&ball));
+        press(&mut s, Button::Undo);
+        assert!(s.playback.held_lattice().is_none());
+        assert!(s.field().same_samples(&ball));
+        assert_eq!(s.field().history_stats().undo_in_memory, steps);
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! The lattice held open at the desk: its keys, and the picked control following the tool.
 
 use super::Station;
-use crate::app::held_lattice::{held_spec, VALUE_STEP, WEIGHT_STEP};
+use crate::app::held_lattice::{held_spec, PART_MARGIN, VALUE_STEP, WEIGHT_STEP};
 use crate::config::StationAction;
 use crate::input::motion::Target;
 use crate::math::{Aabb, Vec3};
@@ -9,9 +9,6 @@ use crate::math::{Aabb, Vec3};
 /// A lattice opened around the tool spans this many times the tool's largest half-extent on
 /// each side of it.
 const AROUND_TOOL: f32 = 2.0;
-
-/// A lattice opened over a whole part reaches this fraction of the clay's size beyond it.
-const PART_MARGIN: f32 = 0.05;
 
 impl Station<'_> {
     /// The lattice keys (see `calibration/keys.toml`); returns whether `action` was one.
