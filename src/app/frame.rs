@@ -13,7 +13,13 @@ pub fn lattice_glyphs(playback: &super::playback::Playback<'_>) -> Vec<crate::re
     let mut glyphs: Vec<_> = playback
         .open_lattices()
         .filter(|(scene, _)| scene.show)
-        .flat_map(|(_, lattice)| super::glyphs::lattice_glyphs(lattice.volume(), iso))
+        .flat_map(|(scene, lattice)| {
+            let mut glyphs = super::glyphs::lattice_glyphs(lattice.volume(), iso);
+            if let Some(k) = scene.slice {
+                glyphs.extend(super::glyphs::lattice_slice_glyphs(lattice.volume(), k, iso));
+            }
+            glyphs
+        })
         .collect();
     if let Some(held) = playback.held_lattice() {
         let frame =

@@ -261,6 +261,35 @@ pub fn weight_size(weight: f64) -> f32 {
     (weight as f32).cbrt().clamp(0.3, 3.0)
 }
 
+/// The colour of a lattice slice's zero contour: a bright red, as ESM's Fig. 5 draws it.
+pub const CONTOUR_COLOUR: Vec4 = Vec4::new(1.0, 0.12, 0.08, 1.0);
+
+/// How a slice of a lattice is drawn (ESM §4.2): the `l × m` patch of controls `k` each with a
+/// stem along the patch's normal (the rest box's Z) as long as its value's distance from the
+/// iso-level (a quarter of the controls' spacing per unit, up for full, down for empty) in
+/// its value's colour, and the function's zero contour on the slice (`F = iso`) in red.
+pub fn lattice_slice_glyphs(volume: &crate::spline::SplineVolume, k: usize, iso: f64) -> Vec<ToolGlyph> {
+    let [l, m, n] = volume.counts();
+    let radius = control_radius(volume);
+    let length = 0.25 * (volume.region().size().z / (n.max(2) - 1) as f32);
+    let mut glyphs = Vec::with_capacity(l * m);
+    for j in 0..m {
+        for i in 0..l {
+            let Ok(c) = volume.control(i, j, k.min(n - 1)) else { continue };
+            let tip = c.position_m + Vec3::Z * ((c.value - iso) as f32 * length);
+            glyphs.push(segment(c.position_m, tip, 0.25 * radius, value_colour(c.value, iso).extend(0.9)));
+        }
+    }
+    let w = volume.slice_w(k);
+    glyphs.extend(
+        volume
+            .slice_contour(w, iso, crate::spline::SLICE_SAMPLES)
+            .into_iter()
+            .map(|[a, b]| segment(a, b, 0.2 * radius, CONTOUR_COLOUR)),
+    );
+    glyphs
+}
+
 /// The colour of the symmetry's planes and axis: a faint cool blue.
 pub const SYMMETRY_COLOUR: Vec4 = Vec4::new(0.45, 0.7, 1.0, 0.14);
 
@@ -285,7 +314,7 @@ pub fn symmetry_glyphs(symmetry: &crate::parts::Symmetry, around: crate::math::A
 }
 
 /// A thin cylinder of `radius` from `a` to `b`.
-fn segment(a: Vec3, b: Vec3, radius: f32, colour: Vec4) -> ToolGlyph {
+pub fn segment(a: Vec3, b: Vec3, radius: f32, colour: Vec4) -> ToolGlyph {
     let d = b - a;
     let len = d.length();
     let turn = if len > 0.0 {

@@ -56,6 +56,8 @@ pub struct HeldLattice {
     drag: Option<(Vec3, Vec3)>,
     /// The box of the part's clay the last changes have not been written to yet.
     pending: Aabb,
+    /// The slice shown (ESM §4.2): the patch of controls `k` and its zero contour.
+    slice: Option<usize>,
 }
 
 impl HeldLattice {
@@ -63,7 +65,7 @@ impl HeldLattice {
     /// nearest the box's centre picked.
     pub fn open(field: &Field, part: usize, spec: &LatticeSpec) -> Result<Self, LatticeError> {
         let lattice = Lattice::open(field, spec)?;
-        let mut held = Self { lattice, part, picked: [0; 3], drag: None, pending: Aabb::EMPTY };
+        let mut held = Self { lattice, part, picked: [0; 3], drag: None, pending: Aabb::EMPTY, slice: None };
         held.pick_nearest(spec.region.centre());
         Ok(held)
     }
@@ -81,6 +83,23 @@ impl HeldLattice {
     /// The picked control's indices.
     pub fn picked(&self) -> [usize; 3] {
         self.picked
+    }
+
+    /// The slice shown, if any: the index `k` of its patch of controls.
+    pub fn slice(&self) -> Option<usize> {
+        self.slice
+    }
+
+    /// Shows the next slice (none, then `k` = 0, 1, … up the lattice's third axis, then none
+    /// again); returns the one shown.
+    pub fn next_slice(&mut self) -> Option<usize> {
+        let n = self.lattice.volume().counts()[2];
+        self.slice = match self.slice {
+            None => Some(0),
+            Some(k) if k + 1 < n => Some(k + 1),
+            Some(_) => None,
+        };
+        self.slice
     }
 
     /// Whether the picked control is being dragged.
@@ -238,6 +257,9 @@ impl HeldLattice {
     pub fn glyphs(&self, iso: f64, frame: Mat4) -> Vec<ToolGlyph> {
         let volume = self.lattice.volume();
         let mut glyphs = super::glyphs::lattice_glyphs(volume, iso);
+        if let Some(k) = self.slice {
+            glyphs.extend(super::glyphs::lattice_slice_glyphs(volume, k, iso));
+        }
         let [i, j, k] = self.picked;
         if let Ok(c) = volume.control(i, j, k) {
             let r = 1.8 * super::glyphs::control_radius(volume) * super::glyphs::weight_size(c.weight);

@@ -1076,7 +1076,8 @@ impl<'s> Station<'s> {
             | StationAction::RaiseValue
             | StationAction::LowerValue
             | StationAction::HeavierWeight
-            | StationAction::LighterWeight => {}
+            | StationAction::LighterWeight
+            | StationAction::NextLatticeSlice => {}
         }
     }
 
@@ -2592,6 +2593,20 @@ mod tests {
         sculpt_for(&mut station, 2);
         assert_eq!(station.playback.field().mass(), swelled, "no stroke while a lattice is open");
         assert!(station.messages.iter().any(|m| m.contains("a lattice is open")));
+        // V shows a slice through the picked control's patch: its stems and a zero contour.
+        let plain = station.step(SCRIPTED_STEP_S, |_| {}).tools.len();
+        for _ in 0..3 {
+            press(&mut station, "KeyV");
+        }
+        assert_eq!(station.playback.held_lattice().unwrap().slice(), Some(2));
+        let sliced = station.step(SCRIPTED_STEP_S, |_| {});
+        let contour = sliced.tools.iter().filter(|g| g.colour == crate::app::glyphs::CONTOUR_COLOUR).count();
+        assert!(contour > 8, "the ball's section drawn as a contour: {contour}");
+        assert_eq!(sliced.tools.len(), plain + 16 + contour, "a stem per control of the patch");
+        for _ in 0..2 {
+            press(&mut station, "KeyV");
+        }
+        assert_eq!(station.playback.held_lattice().unwrap().slice(), None, "after the last, none");
         // Enter applies it: one undo step, which takes it back bit for bit; redo puts it again.
         press(&mut station, "Enter");
         assert!(station.playback.held_lattice().is_none());

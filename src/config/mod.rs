@@ -124,6 +124,9 @@ pub enum StationAction {
     HeavierWeight,
     /// Make the picked control's NURBS weight lighter.
     LighterWeight,
+    /// Show the open lattice's next slice (ESM §4.2): a patch of controls with stems for their
+    /// values and the function's zero contour on it; after the last, none.
+    NextLatticeSlice,
 }
 
 /// Every action with its name in the bindings file.
@@ -176,6 +179,7 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("lower-value", StationAction::LowerValue),
     ("heavier-weight", StationAction::HeavierWeight),
     ("lighter-weight", StationAction::LighterWeight),
+    ("next-lattice-slice", StationAction::NextLatticeSlice),
 ];
 
 impl StationAction {

@@ -34,6 +34,7 @@ pub(super) struct LatticeFile {
     pub apply_s: Option<f32>,
     #[serde(default = "yes")]
     pub show: bool,
+    pub slice: Option<usize>,
 }
 
 fn four_each() -> [usize; 3] {
@@ -103,6 +104,9 @@ pub struct SceneLattice {
     pub apply_s: f32,
     /// Whether captures draw its control points and lines while it is open.
     pub show: bool,
+    /// The slice drawn with it (ESM §4.2): the patch of controls `k` along Z, with its values'
+    /// stems and the function's zero contour.
+    pub slice: Option<usize>,
     /// Its keys' edits, in time order, each ramping in from the key before it.
     pub edits: Vec<TimedEdit>,
 }
@@ -159,6 +163,12 @@ pub(super) fn resolve_lattices(
             return fail(format!("order must be 2 to 16 (4 is cubic), not {}", l.order));
         }
         let rest = spec.volume().map_err(|e| err(e.to_string()))?;
+        if let Some(k) = l.slice.filter(|&k| k >= l.controls[2]) {
+            return fail(format!(
+                "slice must be a layer of control points along Z, 0 to {}, not {k}",
+                l.controls[2] - 1
+            ));
+        }
         if !(l.open_s.is_finite() && (0.0..=MAX_TIME_S).contains(&l.open_s)) {
             return fail(format!("open_s must be 0 to {MAX_TIME_S} s, not {}", l.open_s));
         }
@@ -261,6 +271,7 @@ pub(super) fn resolve_lattices(
             open_s: l.open_s,
             apply_s,
             show: l.show,
+            slice: l.slice,
             edits: timed,
         });
     }

@@ -113,6 +113,7 @@ mod fit;
 mod grid;
 mod inverse;
 mod knots;
+mod slice;
 mod tensor;
 mod volume;
 
@@ -123,6 +124,7 @@ pub use inverse::InverseMap;
 pub use knots::{
     Basis, BasisDerivatives, KnotStyle, KnotVector, MAX_CONTROLS, MAX_ORDER, MIN_CONTROLS, MIN_ORDER,
 };
+pub use slice::SLICE_SAMPLES;
 pub use volume::{ControlPoint, SplineKind, SplineVolume, Uvw};
 
 /// Why a spline volume, a knot vector, a fit or an evaluation request is refused.

@@ -50,6 +50,17 @@ impl Station<'_> {
                     },
                 }
             }
+            StationAction::NextLatticeSlice => match self.playback.held_lattice_mut() {
+                None => "no lattice is open (F opens one)".to_owned(),
+                Some(held) => match held.next_slice() {
+                    Some(k) => format!(
+                        "lattice slice {} of {}: its controls' values and zero contour",
+                        k + 1,
+                        held.lattice().volume().counts()[2]
+                    ),
+                    None => "lattice slice hidden".to_owned(),
+                },
+            },
             StationAction::DragControl => return true,
             _ => return false,
         };
