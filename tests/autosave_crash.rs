@@ -20,6 +20,8 @@ use argile::app::{load_sculpt, Playback};
 use argile::field::Field;
 use argile::scene::Scene;
 
+mod common;
+
 const STROKES: usize = 48;
 
 /// A session of short strokes, alternately adding, carving and painting, spread over a slab.
@@ -93,7 +95,7 @@ fn argile(state: &Path) -> Command {
 /// Returns the highest stroke count it reported on disk before the kill, and whether it ran
 /// to its end.
 fn run_and_kill(scene: &Path, state: &Path, out: &Path, kill_after: Duration) -> (u64, bool) {
-    let mut child = argile(state)
+    let child = argile(state)
         .args(["save", "--autosave", "--sync-s", "0.05", "--checkpoint-s", "0.15", "--force"])
         .arg(scene)
         .arg("--out")
@@ -102,6 +104,19 @@ fn run_and_kill(scene: &Path, state: &Path, out: &Path, kill_after: Duration) ->
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
+    let mut durable = 0;
+    let finished = watch_and_kill(child, kill_after, |line| {
+        if let Some(n) = line.split("strokes up to ").nth(1).and_then(|r| r.split(' ').next()) {
+            durable = durable.max(n.parse::<u64>().unwrap());
+        }
+    });
+    (durable, finished)
+}
+
+/// Reads `child`'s standard error line by line into `seen` until it exits (it must succeed)
+/// or `kill_after` has passed, when it is killed; then reads the lines still in the pipe,
+/// which were written before the kill. Returns whether it ran to its end.
+fn watch_and_kill(mut child: std::process::Child, kill_after: Duration, mut seen: impl FnMut(&str)) -> bool {
     let stderr = child.stderr.take().unwrap();
     let (tx, rx) = std::sync::mpsc::channel();
     let reader = std::thread::spawn(move || {
@@ -110,37 +125,26 @@ fn run_and_kill(scene: &Path, state: &Path, out: &Path, kill_after: Duration) ->
         }
     });
     let start = Instant::now();
-    let mut durable = 0;
-    let mut finished = false;
     let mut lines = Vec::new();
-    loop {
+    let finished = loop {
         while let Ok(line) = rx.try_recv() {
-            if let Some(n) = line.split("strokes up to ").nth(1).and_then(|r| r.split(' ').next()) {
-                durable = durable.max(n.parse::<u64>().unwrap());
-            }
+            seen(&line);
             lines.push(line);
         }
         if let Some(status) = child.try_wait().unwrap() {
-            assert!(status.success(), "the session failed:\n{}", lines.join("\n"));
-            finished = true;
-            break;
+            assert!(status.success(), "the run failed:\n{}", lines.join("\n"));
+            break true;
         }
         if start.elapsed() >= kill_after {
-            // Read what it reported before the kill: lines still in the pipe were written
-            // before it.
             child.kill().unwrap();
             child.wait().unwrap();
-            break;
+            break false;
         }
         std::thread::sleep(Duration::from_millis(2));
-    }
+    };
     reader.join().unwrap();
-    for line in rx.try_iter() {
-        if let Some(n) = line.split("strokes up to ").nth(1).and_then(|r| r.split(' ').next()) {
-            durable = durable.max(n.parse::<u64>().unwrap());
-        }
-    }
-    (durable, finished)
+    rx.try_iter().for_each(|line| seen(&line));
+    finished
 }
 
 /// The recovered sculpt's path and stroke count, from `argile recover`'s sentence.
@@ -157,7 +161,7 @@ fn recover(state: &Path) -> Option<(PathBuf, usize)> {
         return None;
     }
     let stroke = text.split("(stroke ").nth(1)?.split(')').next()?.parse().ok()?;
-    let path = text.split(") in ").nth(1)?.trim();
+    let path = text.split(") in ").nth(1)?.lines().next()?.trim();
     Some((PathBuf::from(path), stroke))
 }
 
@@ -471,6 +475,137 @@ fn sigkill_of_a_sculpt_of_parts_recovers_every_part_after_a_completed_stroke() {
     assert!(
         recovered_strokes.len() >= 3.min(kills as usize / 4),
         "kills landed at several points of the session: strokes {recovered_strokes:?}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The raises of the desk lattice's value the station script presses (`R`), one every
+/// `RAISE_EVERY` frames after the lattice opens.
+const RAISES: u64 = 8;
+const RAISE_EVERY: u64 = 6;
+
+/// The desk session killed: Shift+F opens a lattice over the slab, R raises the picked
+/// control's value `RAISES` times, then the station idles until its last frame.
+fn lattice_script() -> String {
+    let mut text = String::from("[[event]]\nframe = 2\npress = \"Shift+KeyF\"\n");
+    for i in 1..=RAISES {
+        text += &format!("[[event]]\nframe = {}\npress = \"KeyR\"\n", 2 + i * RAISE_EVERY);
+    }
+    text
+}
+
+/// `argile run` of the station scene in `x`'s window playing `script` for `frames` frames,
+/// saving to `out`, killed after `kill_after` (if it runs that long). Returns how many states
+/// of the open lattice it reported on disk before the kill, and whether it ran to its end.
+fn run_station_and_kill(
+    x: &common::Xvfb,
+    (script, frames): (&Path, u64),
+    state: &Path,
+    out: &Path,
+    kill_after: Duration,
+) -> (usize, bool) {
+    let scene = common::root().join("scenes/tests/station.toml");
+    let child = argile(state)
+        .arg("run")
+        .arg(&scene)
+        .args(["--frames", &frames.to_string(), "--size", "160x120", "--input-script"])
+        .arg(script)
+        .arg("--save-to")
+        .arg(out)
+        .env("DISPLAY", &x.display)
+        .env_remove("WAYLAND_DISPLAY")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stored = 0;
+    let finished = watch_and_kill(child, kill_after, |line| {
+        stored += usize::from(line.contains("the open lattice is on disk"));
+    });
+    (stored, finished)
+}
+
+/// How many raises `lattice` holds over `last` (the lattice after all `RAISES`): every control
+/// as in `last` but one, whose value is `RAISES − k` steps below it.
+fn raises_in(lattice: &argile::io::StoredLattice, last: &argile::io::StoredLattice) -> u64 {
+    assert_eq!((lattice.counts, lattice.min_m, lattice.max_m), (last.counts, last.min_m, last.max_m));
+    let mut raises = RAISES;
+    for (c, l) in lattice.controls.iter().zip(&last.controls) {
+        assert_eq!((c.position_m, c.weight), (l.position_m, l.weight), "only values are raised");
+        if c.value != l.value {
+            let below = (l.value - c.value) / 0.1;
+            assert!((below - below.round()).abs() < 1e-6 && below > 0.5, "{} against {}", c.value, l.value);
+            assert_eq!(raises, RAISES, "one control is raised");
+            raises = RAISES - below.round() as u64;
+        }
+    }
+    raises
+}
+
+#[test]
+fn sigkill_of_the_desk_with_a_lattice_open_recovers_the_lattice_as_it_last_stood() {
+    let dir = std::env::temp_dir().join(format!("argile-crash-lattice-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let script = dir.join("lattice-input.toml");
+    std::fs::write(&script, lattice_script()).unwrap();
+    let frames = 2 + (RAISES + 4) * RAISE_EVERY;
+    let x = common::Xvfb::start();
+
+    // A whole run saves the sculpt with its lattice open (the clay as it was when the lattice
+    // opened, the lattice raised `RAISES` times) and closes its session.
+    let clean = dir.join("clean.argile");
+    let start = Instant::now();
+    let (stored, finished) =
+        run_station_and_kill(&x, (&script, frames), &dir.join("clean"), &clean, Duration::from_secs(120));
+    let whole = start.elapsed();
+    assert!(finished && stored >= 2, "the lattice was stored as it opened and as it was raised ({stored})");
+    assert!(recover(&dir.join("clean")).is_none(), "a session that closed is not recovered");
+    let saved = load_sculpt(&clean).unwrap();
+    let last = saved.lattice.clone().expect("quitting with a lattice open saves it open");
+    let at_rest = saved.field;
+
+    let kills: u64 =
+        std::env::var("ARGILE_CRASH_KILLS").ok().and_then(|k| k.parse::<u64>().ok()).map_or(12, |k| k / 8);
+    let mut seen = Vec::new();
+    for seed in 0..kills.max(1) {
+        let state = dir.join(format!("seed-{seed}"));
+        let out = dir.join(format!("seed-{seed}.argile"));
+        let kill_after = whole.mul_f64(0.2 + 0.85 * uniform(seed + 1000));
+        let (stored, finished) = run_station_and_kill(&x, (&script, frames), &state, &out, kill_after);
+        let recovered = recover(&state);
+        eprintln!(
+            "seed {seed}: killed after {kill_after:?} of {whole:?}, {stored} lattice state(s) on disk, recovered {:?}",
+            recovered.as_ref().map(|r| &r.0)
+        );
+        let Some((path, _)) = recovered else {
+            assert!(finished || stored == 0, "seed {seed}: a lattice on disk is recovered");
+            continue;
+        };
+        assert!(!finished, "seed {seed}: a finished session is closed");
+        let sculpt = load_sculpt(&path).unwrap();
+        assert!(
+            sculpt.field.same_samples(&at_rest),
+            "seed {seed}: the clay as it was when the lattice opened"
+        );
+        match &sculpt.lattice {
+            None => assert_eq!(stored, 0, "seed {seed}: a lattice was on disk and is not recovered"),
+            Some(lattice) => {
+                let raises = raises_in(lattice, &last);
+                assert!(
+                    raises as usize + 1 >= stored,
+                    "seed {seed}: {raises} raise(s) recovered, {stored} lattice state(s) were on disk"
+                );
+                seen.push(raises);
+            }
+        }
+        let _ = std::fs::remove_dir_all(&state);
+    }
+    seen.sort_unstable();
+    seen.dedup();
+    assert!(
+        seen.len() >= 2.min(kills as usize / 4),
+        "kills landed at several of the lattice's states: {seen:?}"
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }

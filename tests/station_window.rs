@@ -5,45 +5,11 @@
 //! Needs `Xvfb` (Debian package `xvfb`, installed by `scripts/setup test`) and a Vulkan device;
 //! fails, never skips, without them.
 
-use std::io::{BufRead, BufReader};
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::Command;
 
 mod common;
-use common::{check_against_golden, out_dir, root};
-
-/// An X server on a display number it picks itself; killed on drop.
-struct Xvfb {
-    child: Child,
-    display: String,
-}
-
-impl Xvfb {
-    fn start() -> Self {
-        let mut child = Command::new("Xvfb")
-            .args(["-displayfd", "1", "-screen", "0", "800x600x24", "-nolisten", "tcp"])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap_or_else(|e| {
-                panic!("cannot start Xvfb ({e}); install the Debian package xvfb (scripts/setup test does)")
-            });
-        let mut line = String::new();
-        BufReader::new(child.stdout.take().expect("piped stdout"))
-            .read_line(&mut line)
-            .expect("Xvfb prints its display number");
-        let number = line.trim();
-        assert!(!number.is_empty() && number.chars().all(|c| c.is_ascii_digit()), "Xvfb said {line:?}");
-        Self { child, display: format!(":{number}") }
-    }
-}
-
-impl Drop for Xvfb {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+use common::{check_against_golden, out_dir, root, Xvfb};
 
 fn run_station(x: &Xvfb, args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_argile"))

@@ -70,6 +70,9 @@ pub struct RecoveredSculpt {
     pub pid: u32,
     /// Why the journal's end was discarded, if it was.
     pub discarded: Option<String>,
+    /// Whether a lattice was held open: the recovered sculpt keeps it open over its clay as it
+    /// was when it opened, shaped as it last stood still.
+    pub lattice: bool,
 }
 
 /// Recovers every session that did not close and whose process is gone, oldest first: each
@@ -111,6 +114,7 @@ pub fn recover_sessions() -> Vec<Result<RecoveredSculpt>> {
                 source: session.info.source,
                 pid: session.info.pid,
                 discarded: recovered.discarded,
+                lattice: recovered.sculpt.lattice.is_some(),
             }))
         })
         .filter_map(Result::transpose)
@@ -171,6 +175,13 @@ pub fn recover_and_report() -> RecoveryCount {
                     r.strokes,
                     r.path.display()
                 );
+                if r.lattice {
+                    println!(
+                        "It held a lattice open: opening {} opens the lattice again as it was last left, over the \
+                         clay as it was when the lattice opened",
+                        r.path.display()
+                    );
+                }
                 if let Some(why) = r.discarded {
                     tracing::info!("recovery discarded the stroke cut short by the crash: {why}");
                 }

@@ -78,6 +78,10 @@ pub struct Playback<'s> {
     /// The lattice the desk or the headset holds open over a part's clay: its part's stroke
     /// stays open until it is applied (one undo step) or put back.
     held: Option<HeldLattice>,
+    /// The held lattice as autosave last stored it, and as it was at the last
+    /// [`Playback::keep_lattice`] (stored once it stays the same from one frame to the next).
+    lattice_kept: Option<crate::io::StoredLattice>,
+    lattice_seen: Option<crate::io::StoredLattice>,
 }
 
 /// Where a scene's region tool stands on the timeline.
@@ -209,6 +213,8 @@ impl<'s> Playback<'s> {
             symmetry: scene.symmetry,
             images: scene.symmetry.images(),
             held: None,
+            lattice_kept: None,
+            lattice_seen: None,
         };
         // Keys at time 0 with their action on stamp at once.
         playback.step_to(0.0);
@@ -243,6 +249,7 @@ impl<'s> Playback<'s> {
         self.push = None;
         // An open lattice resamples the clay it opened over: it ends with that clay.
         self.held = None;
+        (self.lattice_kept, self.lattice_seen) = (None, None);
         for state in &mut self.lattices {
             if matches!(state, LatticeState::Open(..)) {
                 *state = LatticeState::Closed;
@@ -551,9 +558,12 @@ impl<'s> Playback<'s> {
         self.autosave.as_ref()
     }
 
-    /// Ends the stroke still open (journaling it) and hands the autosave session over, to be
-    /// closed once the sculpt is safe.
+    /// Ends the stroke still open (journaling it; a lattice held open is applied) and hands
+    /// the autosave session over, to be closed once the sculpt is safe.
     pub fn finish_autosave(&mut self) -> Option<Autosave> {
+        // A lattice held open ends applied: its step is journaled with its last change, so a
+        // session left unclosed keeps what the lattice did.
+        self.apply_held();
         let mut autosave = self.autosave.take()?;
         if self.field.in_stroke() {
             self.field.end_stroke();
@@ -811,6 +821,23 @@ impl<'s> Playback<'s> {
         let out = f(self, stored.as_ref());
         self.assembly.field_mut(&mut self.field, part).swap_open_stroke();
         out
+    }
+
+    /// Has the autosave session store the held lattice once it has stopped changing (it is the
+    /// same as at the last call), and forget it as soon as it is applied or put back: call once
+    /// a frame, after the hands have driven it. A crash then recovers the lattice as it was when
+    /// it last stood still, over its clay as it was when it opened.
+    pub fn keep_lattice(&mut self) {
+        let now = self.held.as_ref().map(HeldLattice::stored);
+        // A lattice closed is forgotten at once; one held is stored once it stands still.
+        let settled = now.is_none() || now == self.lattice_seen;
+        if settled && now != self.lattice_kept {
+            if let Some(a) = &mut self.autosave {
+                a.set_lattice(now.clone());
+            }
+            self.lattice_kept = now.clone();
+        }
+        self.lattice_seen = now;
     }
 
     /// The lattice held open, if any.
@@ -1342,5 +1369,118 @@ position_m = [0.036, -0.014, 0.0]
         let let_go =
             left_end_sinks(&block_keys(&[(0.0, -0.016, true), (0.3, -0.016, false), (1.0, -0.016, false)]));
         assert!(let_go > held + 2.0, "let go after 0.3 s: {let_go:.2} voxels; held: {held:.2}");
+    }
+
+    /// `scene` played with autosave (syncing fast) in `root`.
+    fn autosaved_bar<'s>(scene: &'s Scene, root: &std::path::Path) -> Playback<'s> {
+        let config = crate::io::autosave::AutosaveConfig {
+            sync_interval: std::time::Duration::from_millis(5),
+            ..Default::default()
+        };
+        Playback::new_autosaved(scene, |field, besides| {
+            let disk = std::sync::Arc::new(crate::io::autosave::LocalDisk);
+            Some(Autosave::start_with_tools(root, field, (None, besides), "test", config, disk).unwrap())
+        })
+        .unwrap()
+    }
+
+    fn bar_scene() -> Scene {
+        let text = "[field]\nvoxel_size_m = 0.002\n[[clay]]\nshape = \"box\"\nsize_m = [0.08, 0.02, 0.02]\n";
+        Scene::parse(text, "bar", None).unwrap()
+    }
+
+    fn temp_root(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("argile-playback-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        dir
+    }
+
+    /// The only session folder under `root` (its owner, this process, still runs, so it is
+    /// not listed as unclosed), and its sculpt recovered.
+    fn recovered(root: &std::path::Path) -> crate::io::autosave::Recovered {
+        let dirs: Vec<_> = std::fs::read_dir(root).unwrap().map(|e| e.unwrap().path()).collect();
+        let [dir] = &dirs[..] else { panic!("one session folder, not {}", dirs.len()) };
+        crate::io::autosave::recover(dir).unwrap()
+    }
+
+    #[test]
+    fn a_crash_with_a_lattice_held_open_recovers_it_as_it_last_stood_over_its_clay_at_rest() {
+        let root = temp_root("held-lattice");
+        let scene = bar_scene();
+        let mut p = autosaved_bar(&scene, &root);
+        let at_rest = p.field().clone();
+        let region = crate::parts::local_bounds(p.field()).expanded(0.005);
+        p.open_lattice(&super::super::held_lattice::held_spec(region)).unwrap();
+        p.keep_lattice();
+        let held = p.held_lattice_mut().unwrap();
+        held.pick_nearest(Vec3::new(0.01, 0.0, 0.0));
+        held.add_value(0.3).unwrap();
+        // One frame with the edit, one with it standing still: then it is stored.
+        p.sync_lattices();
+        p.keep_lattice();
+        p.sync_lattices();
+        p.keep_lattice();
+        let stored = p.held_lattice().unwrap().stored();
+        assert!(!p.field().same_samples(&at_rest), "the raised value swells the clay");
+        // Killed: the playback is gone without closing its session.
+        drop(p);
+        let r = recovered(&root);
+        assert_eq!(r.sculpt.lattice.as_ref(), Some(&stored), "the lattice as it last stood still");
+        assert!(r.sculpt.field.same_samples(&at_rest), "the clay as it was when the lattice opened");
+        // Opened again, the lattice gives the swelled clay back.
+        let again = HeldLattice::reopen(&r.sculpt.field, &stored).unwrap();
+        assert_eq!(again.stored(), stored);
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[test]
+    fn a_lattice_applied_or_put_back_is_not_recovered_open() {
+        let scene = bar_scene();
+        for apply in [true, false] {
+            let root = temp_root(if apply { "applied-lattice" } else { "put-back-lattice" });
+            let mut p = autosaved_bar(&scene, &root);
+            let at_rest = p.field().clone();
+            let region = crate::parts::local_bounds(p.field()).expanded(0.005);
+            p.open_lattice(&super::super::held_lattice::held_spec(region)).unwrap();
+            p.held_lattice_mut().unwrap().add_value(0.3).unwrap();
+            for _ in 0..2 {
+                p.sync_lattices();
+                p.keep_lattice();
+            }
+            match apply {
+                true => assert!(p.apply_lattice()),
+                false => assert!(p.cancel_lattice()),
+            }
+            p.keep_lattice();
+            let field = p.field().clone();
+            let strokes = p.autosave().unwrap().strokes();
+            drop(p);
+            let r = recovered(&root);
+            assert!(r.sculpt.lattice.is_none(), "apply {apply}: no lattice comes back open");
+            assert!(r.sculpt.field.same_samples(&field), "apply {apply}: the clay as it was left");
+            assert_eq!(r.strokes, strokes);
+            assert_eq!(r.sculpt.field.same_samples(&at_rest), !apply);
+            std::fs::remove_dir_all(&root).unwrap();
+        }
+    }
+
+    #[test]
+    fn finishing_autosave_with_a_lattice_held_journals_it_applied() {
+        let root = temp_root("finish-lattice");
+        let scene = bar_scene();
+        let mut p = autosaved_bar(&scene, &root);
+        let region = crate::parts::local_bounds(p.field()).expanded(0.005);
+        p.open_lattice(&super::super::held_lattice::held_spec(region)).unwrap();
+        p.held_lattice_mut().unwrap().add_value(0.3).unwrap();
+        p.sync_lattices();
+        p.keep_lattice();
+        let session = p.finish_autosave().unwrap();
+        assert!(p.held_lattice().is_none(), "the lattice is applied");
+        let field = p.field().clone();
+        drop(session);
+        let r = recovered(&root);
+        assert!(r.sculpt.lattice.is_none());
+        assert!(r.sculpt.field.same_samples(&field), "the lattice's work is journaled, applied");
+        std::fs::remove_dir_all(&root).unwrap();
     }
 }

@@ -31,6 +31,7 @@ mod lattice;
 use super::environment::load_environment;
 use super::frame::build_frame;
 use super::glyphs::tool_glyph;
+use super::held_lattice::HeldLattice;
 use super::playback::Playback;
 use crate::config::{Chord, KeyBindings, Modifiers, StationAction};
 use crate::input::clutch::{Clutch, ClutchGains};
@@ -515,6 +516,8 @@ pub struct Station<'s> {
     saved: Option<PathBuf>,
     /// Strokes (and undos, redos) since the last save or open.
     unsaved_strokes: u64,
+    /// The lattice held open as the last save or open stored it (see [`Station::unsaved_work`]).
+    saved_lattice: Option<crate::io::StoredLattice>,
     /// Where the open key looks for sculpts, the sculpt it opened last, and the sculpt it
     /// will open at the next press despite unsaved strokes (the user was warned).
     open_dir: PathBuf,
@@ -636,6 +639,7 @@ impl<'s> Station<'s> {
             save_to,
             saved: None,
             unsaved_strokes: 0,
+            saved_lattice: None,
             opened: None,
             confirm_open: None,
             autosave_restart: None,
@@ -1382,7 +1386,16 @@ impl<'s> Station<'s> {
         };
         self.saved = Some(path.clone());
         self.unsaved_strokes = 0;
+        self.saved_lattice = self.playback.held_lattice().map(HeldLattice::stored);
         Ok(path)
+    }
+
+    /// What the sculpt file lacks: the strokes (and undos, redos) since the last save or open,
+    /// and one more for a lattice held open that is not as the last save stored it (its work is
+    /// no stroke until it is applied, and would be lost with the session).
+    pub fn unsaved_work(&self) -> u64 {
+        let lattice = self.playback.held_lattice().map(HeldLattice::stored);
+        self.unsaved_strokes + u64::from(lattice.is_some() && lattice != self.saved_lattice)
     }
 
     /// Where a save that cannot write its file writes the sculpt instead (the station uses
@@ -1492,7 +1505,7 @@ impl<'s> Station<'s> {
             })
         });
         if let Some(session) = old {
-            if self.unsaved_strokes == 0 {
+            if self.unsaved_work() == 0 {
                 if let Err(e) = session.close() {
                     self.messages.push(format!("{e:#}"));
                 }
@@ -1515,6 +1528,7 @@ impl<'s> Station<'s> {
         self.save_to = path.to_owned();
         self.opened = Some(path.to_owned());
         self.unsaved_strokes = 0;
+        self.saved_lattice = self.playback.held_lattice().map(HeldLattice::stored);
         self.clay_bounds = crate::math::Aabb::EMPTY;
         Ok(())
     }
@@ -1537,16 +1551,17 @@ impl<'s> Station<'s> {
             ));
             return;
         };
-        if self.unsaved_strokes > 0 && self.confirm_open.as_ref() != Some(&path) {
+        if self.unsaved_work() > 0 && self.confirm_open.as_ref() != Some(&path) {
             let fate = if self.playback.autosave().is_some() {
                 "they are kept for recovery at the next start"
             } else {
                 "they will be lost"
             };
             self.messages.push(format!(
-                "{} unsaved stroke(s): the save key writes them to {}; the open key again opens {} \
+                "{} unsaved stroke(s){}: the save key writes them to {}; the open key again opens {} \
                  anyway ({fate})",
                 self.unsaved_strokes,
+                if self.unsaved_work() > self.unsaved_strokes { " and an open lattice" } else { "" },
                 self.save_to.display(),
                 path.display()
             ));
@@ -1760,6 +1775,7 @@ impl<'s> Station<'s> {
         // Field → mesh → renderer.
         let mesh_started = Instant::now();
         self.playback.sync_lattices();
+        self.playback.keep_lattice();
         let diff = self.mesher.remesh_dirty(self.playback.surface());
         if !diff.is_empty() {
             for key in &diff.removed {
@@ -1989,8 +2005,9 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
     if let Some(e) = app.error.take() {
         // A station that failed (to open its window, its head tracker, ...) before any stroke
         // closes its autosave session; strokes it did make stay in the journal.
+        let unsaved = app.station.unsaved_work();
         if let Some(session) = app.station.playback.finish_autosave() {
-            match app.station.unsaved_strokes {
+            match unsaved {
                 0 => super::autosave::close_session(session),
                 n => eprintln!(
                     "{n} stroke(s) of this run are not saved: the autosave journal in {} keeps them, \
@@ -2034,11 +2051,12 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
         options.frames.is_none() || super::signals::received().is_some() || options.save_to.is_some();
     // Strokes made after a save are saved again.
     let changed = stats.undo_in_memory + stats.undo_on_disk > 0 && saved.is_none();
-    if quitting && (changed || app.station.unsaved_strokes > 0) {
+    if quitting && (changed || app.station.unsaved_work() > 0) {
         saved = Some(app.station.save_at_exit()?);
     }
+    let unsaved = app.station.unsaved_work();
     let session = app.station.playback.finish_autosave();
-    match (session, app.station.unsaved_strokes) {
+    match (session, unsaved) {
         // The sculpt is safe (saved when it changed): the session closes cleanly, so nothing
         // is recovered at the next start.
         (Some(session), 0) => super::autosave::close_session(session),

@@ -627,6 +627,7 @@ impl<'s> XrSculptor<'s> {
         let tools_ms = started.elapsed().as_secs_f64() * 1e3;
         let meshing = std::time::Instant::now();
         self.playback.sync_lattices();
+        self.playback.keep_lattice();
         let diff = self.mesher.remesh_dirty(self.playback.surface());
         if !diff.is_empty() {
             apply(diff);

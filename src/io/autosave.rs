@@ -26,6 +26,10 @@
 //! - [`Autosave::close`] marks the session closed and removes its files; a session folder
 //!   that is neither closed nor owned by a live process is what [`unclosed_sessions`] finds
 //!   and [`recover`] reads.
+//! - A lattice held open ([`Autosave::set_lattice`]) and the parts' layouts live only in
+//!   snapshots: a change of either rewrites the newest snapshot (on the writer thread), with
+//!   the clay the lattice rests on, so a crash recovers it open as it last stood; a stroke
+//!   journaled later on its part is the lattice applied, and recovery then drops it.
 //! - File operations go through [`Disk`], so that tests can make them fail.
 
 use std::collections::HashMap;
@@ -42,7 +46,10 @@ use serde::{Deserialize, Serialize};
 
 use super::journal::{self, Reader};
 use super::process::start_token;
-use super::{decode, encode_bricks, write_atomically, PartBrick, PartLayout, SceneParts, Sculpt, StoredTool};
+use super::{
+    decode, encode_bricks, write_atomically, PartBrick, PartLayout, SceneParts, Sculpt, StoredLattice,
+    StoredTool,
+};
 use crate::field::{Brick, Field, LevelKey};
 
 /// When autosave syncs and checkpoints.
@@ -245,6 +252,8 @@ enum Msg {
     Stroke(u64, Changes),
     /// The parts' layouts as they are now; the reply comes once a snapshot holds them.
     Layouts(Vec<PartLayout>, Sender<()>),
+    /// The lattice held open as it is now (`None`: none is held).
+    Lattice(Option<StoredLattice>),
     Checkpointed(u64, Result<(), String>),
     Close(Sender<Result<()>>),
     /// Stop without closing: the session stays open for recovery.
@@ -312,7 +321,8 @@ impl Autosave {
         let first = snapshot_path(&dir, 0);
         let encoding = Instant::now();
         let (voxel_size_m, iso) = (field.transform().voxel_size_m, field.iso());
-        let bytes = snapshot_bytes((voxel_size_m, iso), mirror.iter(), (scene_toml, &tools), &layouts);
+        let bytes =
+            snapshot_bytes((voxel_size_m, iso), mirror.iter(), (scene_toml, &tools), (&layouts, None));
         let first_written = disk.write_whole(&first, &bytes).map_err(|e| format!("{e:#}"));
         tracing::debug!(
             "autosave: the first snapshot ({} bytes) took {:.1} ms",
@@ -333,6 +343,7 @@ impl Autosave {
             scene_toml: scene_toml.map(Arc::from),
             tools,
             layouts,
+            lattice: None,
             journal: None,
             journals: Vec::new(),
             snapshots: if first_written.is_ok() { vec![(0, first)] } else { Vec::new() },
@@ -382,6 +393,17 @@ impl Autosave {
             // A writer that has stopped has reported why.
             let _ = wait.recv();
         }
+    }
+
+    /// Stores the lattice held open as it is now (`None` once it is applied or its clay put
+    /// back): the writer writes the snapshot of the strokes so far again with it, so that a
+    /// crash while a lattice is open recovers the clay as it was when the lattice opened with
+    /// the lattice over it, shaped as it was stored. Does not wait for the disk; send it when an
+    /// edit of the lattice stops, not on every frame of a drag. A stroke journaled later on the
+    /// lattice's part (the lattice applied) ends it, on disk as in recovery.
+    pub fn set_lattice(&mut self, lattice: Option<StoredLattice>) {
+        // A writer that has stopped has reported why.
+        let _ = self.tx.send(Msg::Lattice(lattice));
     }
 
     /// The session folder.
@@ -442,6 +464,7 @@ struct Job {
     stroke: u64,
     bricks: Vec<(PartKey, Arc<Brick>)>,
     layouts: Vec<PartLayout>,
+    lattice: Option<StoredLattice>,
 }
 
 struct Writer {
@@ -456,6 +479,9 @@ struct Writer {
     tools: Arc<[StoredTool]>,
     /// The parts' layouts (none: one part at rest).
     layouts: Vec<PartLayout>,
+    /// The lattice held open over the clay of `mirror` (which is its part's clay as it was when
+    /// the lattice opened: its stroke is journaled when it is applied).
+    lattice: Option<StoredLattice>,
     journal: Option<Journal>,
     /// Journal files on disk (base, path), oldest first; the last one is `journal`'s.
     journals: Vec<(u64, PathBuf)>,
@@ -492,8 +518,26 @@ impl Writer {
             match msg {
                 Ok(Msg::Stroke(n, changes)) => self.stroke(n, changes),
                 Ok(Msg::Layouts(layouts, done)) => {
-                    self.layouts(layouts);
+                    if layouts != self.layouts {
+                        self.layouts = layouts;
+                        self.rewrite_snapshot();
+                    }
                     let _ = done.send(());
+                }
+                Ok(Msg::Lattice(lattice)) => {
+                    if lattice != self.lattice {
+                        let open = lattice.is_some();
+                        self.lattice = lattice;
+                        if self.rewrite_snapshot() {
+                            let n = self.written;
+                            match open {
+                                true => {
+                                    tracing::debug!("autosave: the open lattice is on disk (snapshot {n})")
+                                }
+                                false => tracing::debug!("autosave: no open lattice on disk (snapshot {n})"),
+                            }
+                        }
+                    }
                 }
                 Ok(Msg::Checkpointed(n, result)) => self.checkpointed(n, result),
                 Ok(Msg::Close(reply)) => {
@@ -572,19 +616,16 @@ impl Writer {
         }
     }
 
-    /// Takes the parts' layouts and writes the snapshot of the strokes so far again with them.
-    fn layouts(&mut self, layouts: Vec<PartLayout>) {
-        if layouts == self.layouts {
-            return;
-        }
+    /// Writes the snapshot of the strokes so far again (atomically, in place of the one of that
+    /// number) with the layouts and the lattice as they are now; returns whether it was written.
+    fn rewrite_snapshot(&mut self) -> bool {
         self.finish_checkpoint();
-        self.layouts = layouts;
         let n = self.written;
         let bytes = snapshot_bytes(
             (self.voxel_size_m, self.iso),
             self.mirror.iter(),
             (self.scene_toml.as_deref(), &self.tools),
-            &self.layouts,
+            (&self.layouts, self.lattice.as_ref()),
         );
         let path = snapshot_path(&self.dir, n);
         match self.disk.write_whole(&path, &bytes) {
@@ -592,14 +633,22 @@ impl Writer {
                 if !self.snapshots.iter().any(|(s, _)| *s == n) {
                     self.snapshots.push((n, path));
                 }
+                true
             }
-            Err(e) => self.fail(format!("{e:#}")),
+            Err(e) => {
+                self.fail(format!("{e:#}"));
+                false
+            }
         }
     }
 
     fn stroke(&mut self, n: u64, mut changes: Changes) {
         // Sorted here, not on the sculpting thread: the same strokes give the same bytes.
         changes.sort_unstable_by_key(|(p, k, _)| (*p, k.sort_key()));
+        // A step closed on the lattice's part is the lattice applied: its clay is journaled.
+        if self.lattice.as_ref().is_some_and(|l| changes.iter().any(|(p, ..)| usize::from(*p) == l.part)) {
+            self.lattice = None;
+        }
         let bytes = (self.journal.is_some()).then(|| journal::record(n, &changes));
         for (part, key, brick) in changes {
             match brick {
@@ -663,6 +712,7 @@ impl Writer {
             stroke: self.written,
             bricks: self.mirror.iter().map(|(k, b)| (*k, Arc::clone(b))).collect(),
             layouts: self.layouts.clone(),
+            lattice: self.lattice.clone(),
         };
         let (dir, disk, tx) = (self.dir.clone(), Arc::clone(&self.disk), self.tx.clone());
         let (voxel, iso, scene, tools) =
@@ -670,7 +720,12 @@ impl Writer {
         let n = job.stroke;
         let spawned = std::thread::Builder::new().name("autosave-checkpoint".into()).spawn(move || {
             let bricks = job.bricks.iter().map(|(k, b)| (k, b));
-            let bytes = snapshot_bytes((voxel, iso), bricks, (scene.as_deref(), &tools), &job.layouts);
+            let bytes = snapshot_bytes(
+                (voxel, iso),
+                bricks,
+                (scene.as_deref(), &tools),
+                (&job.layouts, job.lattice.as_ref()),
+            );
             let result =
                 disk.write_whole(&snapshot_path(&dir, job.stroke), &bytes).map_err(|e| format!("{e:#}"));
             let _ = tx.send(Msg::Checkpointed(job.stroke, result));
@@ -786,12 +841,12 @@ impl Writer {
 }
 
 /// A snapshot of the sculpt: `bricks` of its parts, the first in a field of `(voxel size,
-/// iso-level)`, with the scene's text and tools and the parts' `layouts`.
+/// iso-level)`, with the scene's text and tools, the parts' `layouts` and the lattice held open.
 fn snapshot_bytes<'b>(
     (voxel_size_m, iso): (f32, f32),
     bricks: impl Iterator<Item = (&'b PartKey, &'b Arc<Brick>)>,
     (scene_toml, tools): (Option<&str>, &[StoredTool]),
-    layouts: &[PartLayout],
+    (layouts, lattice): (&[PartLayout], Option<&StoredLattice>),
 ) -> Vec<u8> {
     let (mut first, mut others) = (Vec::new(), Vec::new());
     for ((part, key), brick) in bricks {
@@ -800,7 +855,7 @@ fn snapshot_bytes<'b>(
             p => others.push((u32::from(*p), *key, &**brick)),
         }
     }
-    let scene = SceneParts { toml: scene_toml, tools, layouts, ..SceneParts::default() };
+    let scene = SceneParts { toml: scene_toml, tools, layouts, lattice, ..SceneParts::default() };
     encode_bricks(voxel_size_m, iso, first, scene, others, &mut |_| {})
 }
 
@@ -955,6 +1010,14 @@ pub fn recover(dir: &Path) -> Result<Recovered, RecoveryError> {
                     record.stroke
                 ));
                 break;
+            }
+            // A step on the lattice's part after the snapshot is the lattice applied.
+            if sculpt
+                .lattice
+                .as_ref()
+                .is_some_and(|l| record.bricks.iter().any(|(p, ..)| usize::from(*p) == l.part))
+            {
+                sculpt.lattice = None;
             }
             for (part, key, brick) in record.bricks {
                 let field = match part {

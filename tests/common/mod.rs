@@ -3,7 +3,9 @@
 
 #![allow(dead_code)] // each test crate uses its own part
 
+use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
 
 pub mod xr;
 
@@ -78,4 +80,38 @@ pub fn check_against_golden_within(case: &str, eye: &str, actual: &image::RgbaIm
         c.p99,
         dir.display()
     );
+}
+
+/// An X server on a display number it picks itself; killed on drop.
+pub struct Xvfb {
+    child: Child,
+    /// Its display, for `DISPLAY`.
+    pub display: String,
+}
+
+impl Xvfb {
+    pub fn start() -> Self {
+        let mut child = Command::new("Xvfb")
+            .args(["-displayfd", "1", "-screen", "0", "800x600x24", "-nolisten", "tcp"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap_or_else(|e| {
+                panic!("cannot start Xvfb ({e}); install the Debian package xvfb (scripts/setup test does)")
+            });
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().expect("piped stdout"))
+            .read_line(&mut line)
+            .expect("Xvfb prints its display number");
+        let number = line.trim();
+        assert!(!number.is_empty() && number.chars().all(|c| c.is_ascii_digit()), "Xvfb said {line:?}");
+        Self { child, display: format!(":{number}") }
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
 }
