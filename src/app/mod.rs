@@ -10,6 +10,7 @@ pub mod budget;
 mod calibrate;
 mod capture;
 mod comfort;
+mod document;
 mod environment;
 mod export;
 mod frame;

@@ -28,10 +28,10 @@ use winit::window::{Window, WindowId};
 
 mod lattice;
 
+use super::document::Document;
 use super::environment::load_environment;
 use super::frame::build_frame;
 use super::glyphs::tool_glyph;
-use super::held_lattice::HeldLattice;
 use super::playback::Playback;
 use crate::config::{Chord, KeyBindings, Modifiers, StationAction};
 use crate::input::clutch::{Clutch, ClutchGains};
@@ -428,7 +428,8 @@ pub struct Station<'s> {
     scene: &'s Scene,
     /// The scene as drawn: its rig follows the mouse and the stereo keys.
     view: Scene,
-    playback: Playback<'s>,
+    /// The sculpt: its clay, history, file and autosave session.
+    doc: Document<'s>,
     bindings: KeyBindings,
     mouse: MouseNavigator,
     /// The 6-DoF devices' state (SpaceMice through `mailbox`, gamepads): the desk tool's pose
@@ -512,23 +513,10 @@ pub struct Station<'s> {
     /// Where the pointer was last seen, window pixels.
     pointer_px: Vec2,
     window_px: (u32, u32),
-    save_to: PathBuf,
-    saved: Option<PathBuf>,
-    /// Strokes (and undos, redos) since the last save or open.
-    unsaved_strokes: u64,
-    /// The lattice held open as the last save or open stored it (see [`Station::unsaved_work`]).
-    saved_lattice: Option<crate::io::StoredLattice>,
-    /// Where the open key looks for sculpts, the sculpt it opened last, and the sculpt it
-    /// will open at the next press despite unsaved strokes (the user was warned).
+    /// Where the open key looks for sculpts, and the sculpt it will open at the next press
+    /// despite unsaved work (the user was warned).
     open_dir: PathBuf,
-    opened: Option<PathBuf>,
     confirm_open: Option<PathBuf>,
-    /// How autosave starts again on an opened sculpt, with the scene text its snapshots carry.
-    autosave_restart: Option<(AutosaveConfig, Option<String>)>,
-    /// The text of the scene the station plays, stored in the sculpts it saves.
-    scene_toml: Option<String>,
-    /// Where a save that cannot write its file writes instead.
-    fallback_dir: Option<PathBuf>,
     quit: bool,
     frame_ms: f32,
     times: StepTimes,
@@ -586,10 +574,14 @@ impl<'s> Station<'s> {
             .cloned()
             .unwrap_or_else(|| Tool::new(ToolShape::sphere(0.02), Action::Add, [0.8, 0.5, 0.35, 1.0]));
         let action_index = action_cycle().iter().position(|a| *a == desk_tool.action).unwrap_or(0);
+        let open_dir = save_to
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .map_or_else(|| PathBuf::from("."), Path::to_owned);
         let mut station = Self {
             scene,
             view: scene.clone(),
-            playback,
+            doc: Document::new(playback, save_to),
             bindings,
             mouse,
             desk,
@@ -632,19 +624,8 @@ impl<'s> Station<'s> {
             window_origin: (0, 0),
             pointer_px: Vec2::ZERO,
             window_px,
-            open_dir: save_to
-                .parent()
-                .filter(|p| !p.as_os_str().is_empty())
-                .map_or_else(|| PathBuf::from("."), Path::to_owned),
-            save_to,
-            saved: None,
-            unsaved_strokes: 0,
-            saved_lattice: None,
-            opened: None,
+            open_dir,
             confirm_open: None,
-            autosave_restart: None,
-            scene_toml: None,
-            fallback_dir: None,
             quit: false,
             frame_ms: 0.0,
             times: StepTimes::default(),
@@ -732,7 +713,7 @@ impl<'s> Station<'s> {
 
     /// The clay.
     pub fn field(&self) -> &crate::field::Field {
-        self.playback.field()
+        self.doc.playback.field()
     }
 
     /// Whether the user asked to close.
@@ -903,19 +884,17 @@ impl<'s> Station<'s> {
             StationAction::Undo => {
                 self.stroke = None;
                 self.region_drag = None;
-                match self.playback.undo() {
+                match self.doc.playback.undo() {
                     Ok(true) => {
-                        self.playback.journal();
-                        self.unsaved_strokes += 1;
+                        self.doc.journal();
                     }
                     Ok(false) => self.messages.push("nothing to undo".into()),
                     Err(e) => self.messages.push(format!("undo failed: {e}")),
                 }
             }
             StationAction::Redo => {
-                if self.playback.redo() {
-                    self.playback.journal();
-                    self.unsaved_strokes += 1;
+                if self.doc.playback.redo() {
+                    self.doc.journal();
                 } else {
                     self.messages.push("nothing to redo".into());
                 }
@@ -926,7 +905,7 @@ impl<'s> Station<'s> {
                 Err(e) => self.messages.push(format!("{e:#}")),
             },
             StationAction::NextTool => {
-                let tools = self.playback.tools();
+                let tools = self.doc.playback.tools();
                 if !tools.is_empty() {
                     self.tool_index = (self.tool_index + 1) % tools.len();
                     let scale = self.desk_tool.scale;
@@ -979,14 +958,14 @@ impl<'s> Station<'s> {
             StationAction::InflateRegion | StationAction::DeflateRegion => {
                 const STEP_M: f32 = 0.001;
                 let distance = if action == StationAction::InflateRegion { STEP_M } else { -STEP_M };
-                let images = self.playback.images().to_vec();
-                let (tool, pose, images) = self.playback.in_active_part(
+                let images = self.doc.playback.images().to_vec();
+                let (tool, pose, images) = self.doc.playback.in_active_part(
                     self.desk_tool.clone(),
                     self.desk.poses.get(Target::Tool),
                     &images,
                 );
                 let region = Region::of_tool(&tool, pose);
-                let field = match self.playback.active_target() {
+                let field = match self.doc.playback.active_target() {
                     Ok((field, _)) => field,
                     Err(why) => {
                         self.messages.push(why);
@@ -997,32 +976,31 @@ impl<'s> Station<'s> {
                     field.begin_stroke();
                     let c = inflate(field, &region, distance, &images);
                     field.end_stroke();
-                    self.playback.journal();
-                    self.unsaved_strokes += 1;
+                    self.doc.journal();
                     if c.dirtied == 0 {
                         self.messages.push("no clay surface within the tool to inflate or deflate".into());
                     }
                 }
             }
             StationAction::NextPart | StationAction::PreviousPart => {
-                let count = self.playback.assembly().parts().len();
-                let now = self.playback.assembly().active();
+                let count = self.doc.playback.assembly().parts().len();
+                let now = self.doc.playback.assembly().active();
                 let next = if action == StationAction::NextPart { now + 1 } else { now + count - 1 };
                 self.end_desk_strokes();
-                let part = self.playback.set_active_part(next);
+                let part = self.doc.playback.set_active_part(next);
                 // The device driving the part starts from home over the part as it is.
                 *self.desk.poses.get_mut(Target::Part) = self.home.get(Target::Part);
-                self.part_base = self.playback.assembly().parts()[part].placement;
+                self.part_base = self.doc.playback.assembly().parts()[part].placement;
                 self.part_moving = None;
                 self.part_shown_s = PART_SHOWN_S;
-                self.messages.push(describe_part(self.playback.assembly(), part));
+                self.messages.push(describe_part(self.doc.playback.assembly(), part));
             }
             StationAction::ToggleSymmetry | StationAction::NextSymmetry => {
                 let symmetry = match action {
                     StationAction::ToggleSymmetry => self.symmetry.toggle(),
                     _ => self.symmetry.next_choice(),
                 };
-                self.playback.set_symmetry(symmetry);
+                self.doc.playback.set_symmetry(symmetry);
                 self.messages.push(format!("symmetry {}", symmetry.describe()));
             }
             StationAction::FlipParity => {
@@ -1131,7 +1109,7 @@ impl<'s> Station<'s> {
         };
         // The voxels of the level the tool edits (its size chooses it).
         let acting = self.acting_tool();
-        let field = self.playback.field();
+        let field = self.doc.playback.field();
         let level = acting.level_samples.map_or(0, |n| edit_level_for(field, acting.size_m(), n));
         let voxel_mm = (field.level_transform(level).voxel_size_m * 10_000.0).round() / 10.0;
         let mut lines = vec![
@@ -1142,7 +1120,7 @@ impl<'s> Station<'s> {
                 (self.desk_tool.size_m() * 1000.0).round(),
                 self.desk_tool.action.name(),
                 voxel_mm,
-                match self.playback.symmetry() {
+                match self.doc.playback.symmetry() {
                     s if s.is_none() => String::new(),
                     s => format!(", {}", s.describe()),
                 }
@@ -1164,7 +1142,7 @@ impl<'s> Station<'s> {
                 }
             ),
         ];
-        let (parts, active) = (self.playback.assembly().parts(), self.playback.assembly().active());
+        let (parts, active) = (self.doc.playback.assembly().parts(), self.doc.playback.assembly().active());
         if parts.len() > 1 {
             let locked = if parts[active].locked { ", locked" } else { "" };
             lines
@@ -1354,54 +1332,20 @@ impl<'s> Station<'s> {
     /// Saves (see [`Station::save`]); `kept` says where the sculpt is when nothing can be written.
     fn save_keeping(&mut self, kept: &'static str) -> Result<PathBuf> {
         let view = self.stored_view();
-        let scene = self.scene_toml.as_deref();
-        let bytes = super::sculpt::encode_playback(&mut self.playback, scene, Some(&view));
-        let write = |path: &Path| super::sculpt::write_sculpt(&bytes, path);
-        let path = match write(&self.save_to) {
-            Ok(()) => self.save_to.clone(),
-            Err(e) => {
-                let Some(dir) = &self.fallback_dir else { return Err(e.context(kept)) };
-                let stem = self.save_to.file_stem().map_or("sculpt".into(), |s| s.to_string_lossy());
-                let stamp = std::time::SystemTime::now()
-                    .duration_since(std::time::UNIX_EPOCH)
-                    .map_or(0, |d| d.as_secs());
-                let other = dir.join(format!("{stem}-{stamp}.{}", super::SCULPT_EXTENSION));
-                let written = std::fs::create_dir_all(dir)
-                    .with_context(|| format!("cannot create {}", dir.display()))
-                    .and_then(|()| write(&other));
-                if let Err(again) = written {
-                    return Err(e.context(format!(
-                        "{kept} (nor could it be saved to {}: {again:#})",
-                        other.display()
-                    )));
-                }
-                self.messages.push(format!(
-                    "cannot save to {}: {e:#}; saved the sculpt to {} instead, where the save key writes from now on",
-                    self.save_to.display(),
-                    other.display()
-                ));
-                self.save_to = other.clone();
-                other
-            }
-        };
-        self.saved = Some(path.clone());
-        self.unsaved_strokes = 0;
-        self.saved_lattice = self.playback.held_lattice().map(HeldLattice::stored);
-        Ok(path)
+        let saved = self.doc.save(Some(&view), kept)?;
+        self.messages.extend(saved.moved);
+        Ok(saved.path)
     }
 
-    /// What the sculpt file lacks: the strokes (and undos, redos) since the last save or open,
-    /// and one more for a lattice held open that is not as the last save stored it (its work is
-    /// no stroke until it is applied, and would be lost with the session).
+    /// What the sculpt file lacks (see [`Document::unsaved_work`]).
     pub fn unsaved_work(&self) -> u64 {
-        let lattice = self.playback.held_lattice().map(HeldLattice::stored);
-        self.unsaved_strokes + u64::from(lattice.is_some() && lattice != self.saved_lattice)
+        self.doc.unsaved_work()
     }
 
     /// Where a save that cannot write its file writes the sculpt instead (the station uses
     /// `saved/` in the state folder).
     pub fn set_fallback_dir(&mut self, dir: Option<PathBuf>) {
-        self.fallback_dir = dir;
+        self.doc.set_fallback_dir(dir);
     }
 
     /// The view as a sculpt stores it: the camera's turn and distance, the scene's pose, the
@@ -1457,7 +1401,7 @@ impl<'s> Station<'s> {
     /// stores): saving stores it with the clay, and a sculpt opened later that was made in it
     /// brings back its freeform tools.
     pub fn set_scene_toml(&mut self, text: Option<String>) {
-        self.scene_toml = text;
+        self.doc.set_scene_toml(text);
     }
 
     /// The open key looks for sculpts in `dir`.
@@ -1468,7 +1412,7 @@ impl<'s> Station<'s> {
     /// Autosave starts again with `config` on a sculpt opened later; its snapshots carry
     /// `scene_toml`.
     pub fn set_autosave_restart(&mut self, config: AutosaveConfig, scene_toml: Option<String>) {
-        self.autosave_restart = Some((config, scene_toml));
+        self.doc.set_autosave_restart(config, scene_toml);
     }
 
     /// Opens the sculpt file at `path`: its clay replaces the station's (the scene's tools,
@@ -1479,56 +1423,28 @@ impl<'s> Station<'s> {
     /// start when it holds unsaved strokes. A file that cannot be read changes nothing and the
     /// error names it.
     pub fn open(&mut self, path: &Path) -> Result<()> {
-        let sculpt = crate::io::read_file_within(path, &super::budget::sculpt_limit(), &mut |_| {})?;
-        let same_scene = sculpt.scene_toml.is_some() && sculpt.scene_toml == self.scene_toml;
+        let opened = self.doc.open(path)?;
         self.stroke = None;
         self.region_drag = None;
-        // The tools first: the autosave session started on the new clay stores them.
-        if same_scene && self.playback.restore_tools(&sculpt.tools) > 0 {
-            let stored = self.playback.tools().get(self.tool_index).map(|t| t.shape.clone());
+        if opened.tools_restored {
+            let stored = self.doc.playback.tools().get(self.tool_index).map(|t| t.shape.clone());
             if let Some(shape @ ToolShape::Freeform(_)) = stored {
                 if matches!(self.desk_tool.shape, ToolShape::Freeform(_)) {
                     self.desk_tool.shape = shape;
                 }
             }
         }
-        if let Some(view) = sculpt.view.as_ref().filter(|_| same_scene) {
+        if let Some(view) = &opened.view {
             self.apply_view(view);
         }
-        let restart = self.autosave_restart.clone();
-        let source = path.display().to_string();
-        let parts = super::assembly::parts_of(&sculpt)
-            .with_context(|| format!("{}: a part's layout cannot be placed", path.display()))?;
-        let old = self.playback.replace_sculpt(sculpt.field, parts, sculpt.others, |field, tools| {
-            restart.and_then(|(config, toml)| {
-                super::autosave::start_autosave(field, (toml.as_deref(), tools), &source, config)
-            })
-        });
-        if let Some(session) = old {
-            if self.unsaved_work() == 0 {
-                if let Err(e) = session.close() {
-                    self.messages.push(format!("{e:#}"));
-                }
-            }
-            // Else dropped unclosed: the next start recovers its strokes.
+        self.messages.extend(opened.notes);
+        if self.doc.playback.held_lattice().is_some() {
+            self.messages.push("Enter applies the lattice, Backspace puts the clay back".into());
         }
-        if let Some(stored) = &sculpt.lattice {
-            self.messages.push(match self.playback.reopen_lattice(stored) {
-                Ok(()) => {
-                    "the lattice left open is open again: Enter applies it, Backspace puts the clay back"
-                        .into()
-                }
-                Err(e) => format!("{}: {e}; the clay is as it was before the lattice", path.display()),
-            });
-        }
-        let active = self.playback.assembly().active();
-        self.part_base = self.playback.assembly().parts()[active].placement;
+        let active = self.doc.playback.assembly().active();
+        self.part_base = self.doc.playback.assembly().parts()[active].placement;
         self.part_moving = None;
         *self.desk.poses.get_mut(Target::Part) = self.home.get(Target::Part);
-        self.save_to = path.to_owned();
-        self.opened = Some(path.to_owned());
-        self.unsaved_strokes = 0;
-        self.saved_lattice = self.playback.held_lattice().map(HeldLattice::stored);
         self.clay_bounds = crate::math::Aabb::EMPTY;
         Ok(())
     }
@@ -1543,7 +1459,7 @@ impl<'s> Station<'s> {
                 return;
             }
         };
-        let Some(path) = next_sculpt(&list, self.opened.as_deref()).map(Path::to_owned) else {
+        let Some(path) = next_sculpt(&list, self.doc.opened()).map(Path::to_owned) else {
             self.messages.push(format!(
                 "no sculpt (.argile) in {} to open: the save key writes one there, and \
                  `argile run --open-dir DIR` names another folder",
@@ -1552,7 +1468,7 @@ impl<'s> Station<'s> {
             return;
         };
         if self.unsaved_work() > 0 && self.confirm_open.as_ref() != Some(&path) {
-            let fate = if self.playback.autosave().is_some() {
+            let fate = if self.doc.playback.autosave().is_some() {
                 "they are kept for recovery at the next start"
             } else {
                 "they will be lost"
@@ -1560,9 +1476,9 @@ impl<'s> Station<'s> {
             self.messages.push(format!(
                 "{} unsaved stroke(s){}: the save key writes them to {}; the open key again opens {} \
                  anyway ({fate})",
-                self.unsaved_strokes,
-                if self.unsaved_work() > self.unsaved_strokes { " and an open lattice" } else { "" },
-                self.save_to.display(),
+                self.doc.unsaved_strokes(),
+                if self.unsaved_work() > self.doc.unsaved_strokes() { " and an open lattice" } else { "" },
+                self.doc.save_to().display(),
                 path.display()
             ));
             self.confirm_open = Some(path);
@@ -1577,7 +1493,7 @@ impl<'s> Station<'s> {
             )),
             Err(e) => {
                 // Skipped at the next press.
-                self.opened = Some(path);
+                self.doc.skip(path);
                 self.messages.push(format!("{e:#}"));
             }
         }
@@ -1596,7 +1512,7 @@ impl<'s> Station<'s> {
         .find(|&(a, _)| self.holding(a))
         .map(|(_, op)| op)
         .filter(|_| !applying);
-        let field = match self.playback.active_target() {
+        let field = match self.doc.playback.active_target() {
             Ok((field, _)) => field,
             Err(why) => {
                 if held.is_some() && self.messages.last() != Some(&why) {
@@ -1623,8 +1539,7 @@ impl<'s> Station<'s> {
             (None, Some(_)) => {
                 self.region_drag = None;
                 field.end_stroke();
-                self.playback.journal();
-                self.unsaved_strokes += 1;
+                self.doc.journal();
                 None
             }
             _ => None,
@@ -1640,11 +1555,10 @@ impl<'s> Station<'s> {
     fn end_desk_strokes(&mut self) {
         let open = self.stroke.take().is_some() | self.region_drag.take().is_some();
         if open {
-            if let Ok((field, _)) = self.playback.active_target() {
+            if let Ok((field, _)) = self.doc.playback.active_target() {
                 field.end_stroke();
             }
-            self.playback.journal();
-            self.unsaved_strokes += 1;
+            self.doc.journal();
         }
     }
 
@@ -1660,14 +1574,14 @@ impl<'s> Station<'s> {
             translation_m: base.translation_m + (pose.position_m - home.position_m),
             scale: base.scale,
         };
-        let part = self.playback.assembly().active();
-        if self.playback.assembly().parts()[part].placement != placement && pose != home {
-            self.playback.set_part_placement(part, placement);
+        let part = self.doc.playback.assembly().active();
+        if self.doc.playback.assembly().parts()[part].placement != placement && pose != home {
+            self.doc.playback.set_part_placement(part, placement);
             self.part_moving = Some(placement);
             self.part_shown_s = PART_SHOWN_S;
         } else if self.part_moving.take().is_some() {
-            self.playback.keep_layouts();
-            self.unsaved_strokes += 1;
+            self.doc.playback.keep_layouts();
+            self.doc.edited();
         }
     }
 
@@ -1719,15 +1633,15 @@ impl<'s> Station<'s> {
         self.times.input_ms = ms_since(started);
 
         // Tools: the scene's scripted hands, then the desk tool.
-        let t = self.playback.time_s() + dt_s;
-        self.playback.advance_to(t, |_| {});
+        let t = self.doc.playback.time_s() + dt_s;
+        self.doc.playback.advance_to(t, |_| {});
         let mut applying = self.holding(StationAction::Apply) || self.device_apply;
         self.drive_active_part();
         // The desk tool acts on the active part, in its frame.
-        let images = self.playback.images().to_vec();
-        let (acting, local, images) = self.playback.in_active_part(self.acting_tool(), pose, &images);
-        let (desk_tool, _, _) = self.playback.in_active_part(self.desk_tool.clone(), pose, &[]);
-        let lattice_open = self.playback.held_lattice().is_some();
+        let images = self.doc.playback.images().to_vec();
+        let (acting, local, images) = self.doc.playback.in_active_part(self.acting_tool(), pose, &images);
+        let (desk_tool, _, _) = self.doc.playback.in_active_part(self.desk_tool.clone(), pose, &[]);
+        let lattice_open = self.doc.playback.held_lattice().is_some();
         if lattice_open {
             self.drive_lattice(local.position_m);
             let region_keys =
@@ -1740,7 +1654,7 @@ impl<'s> Station<'s> {
             }
             applying = false;
         }
-        match self.playback.active_target() {
+        match self.doc.playback.active_target() {
             Err(why) => {
                 if applying && self.messages.last() != Some(&why) {
                     self.messages.push(why);
@@ -1759,8 +1673,7 @@ impl<'s> Station<'s> {
                     }
                 } else if self.stroke.take().is_some() {
                     field.end_stroke();
-                    self.playback.journal();
-                    self.unsaved_strokes += 1;
+                    self.doc.journal();
                     self.confirm_open = None;
                 }
             }
@@ -1774,9 +1687,9 @@ impl<'s> Station<'s> {
 
         // Field → mesh → renderer.
         let mesh_started = Instant::now();
-        self.playback.sync_lattices();
-        self.playback.keep_lattice();
-        let diff = self.mesher.remesh_dirty(self.playback.surface());
+        self.doc.playback.sync_lattices();
+        self.doc.playback.keep_lattice();
+        let diff = self.mesher.remesh_dirty(self.doc.playback.surface());
         if !diff.is_empty() {
             for key in &diff.removed {
                 self.chunk_bounds.remove(key);
@@ -1796,10 +1709,10 @@ impl<'s> Station<'s> {
                 self.view.rig.interaxial_m = self.view.rig.interaxial_m.min(allowed);
             }
         }
-        let mut frame = build_frame(&self.view, &self.playback.hands(), true);
-        frame.tools.extend(super::frame::lattice_glyphs(&self.playback));
-        frame.tools.extend(super::frame::symmetry_glyphs(&self.playback));
-        frame.tools.extend(super::frame::region_glyphs(&self.playback));
+        let mut frame = build_frame(&self.view, &self.doc.playback.hands(), true);
+        frame.tools.extend(super::frame::lattice_glyphs(&self.doc.playback));
+        frame.tools.extend(super::frame::symmetry_glyphs(&self.doc.playback));
+        frame.tools.extend(super::frame::region_glyphs(&self.doc.playback));
         if let Some((drag, _)) = &self.region_drag {
             let carried = drag.carried_regions();
             frame.tools.extend(
@@ -1820,7 +1733,7 @@ impl<'s> Station<'s> {
         }
         let head_pose = match (&mut self.head, &self.scene.head) {
             (Some(tracker), _) => Some(tracker.pose()),
-            (None, Some(path)) => Some(path.pose_at(self.playback.time_s())),
+            (None, Some(path)) => Some(path.pose_at(self.doc.playback.time_s())),
             (None, None) => None,
         };
         if let (Some(head), Some(tracked)) = (head_pose, self.tracked_rig()) {
@@ -1855,14 +1768,14 @@ impl<'s> Station<'s> {
         let colour = Vec4::from(tool.colour).truncate().extend(0.35);
         frame.tools.push(tool_glyph(&tool.shape, pose, tool.scale, colour));
         // Its images under the symmetry, fainter.
-        for image in self.playback.images().iter().skip(1) {
+        for image in self.doc.playback.images().iter().skip(1) {
             let ghost = colour.truncate().extend(0.5 * colour.w);
             frame.tools.push(tool_glyph(&tool.shape, image.pose(&pose).0, tool.scale, ghost));
         }
         // The active part's box, for a while after it was picked or moved.
         self.part_shown_s = (self.part_shown_s - dt_s).max(0.0);
         if self.part_shown_s > 0.0 {
-            frame.tools.extend(super::frame::part_glyph(&self.playback, super::frame::PART_COLOUR));
+            frame.tools.extend(super::frame::part_glyph(&self.doc.playback, super::frame::PART_COLOUR));
         }
         let second = self.desk.poses.get(Target::SecondTool);
         if second != self.home.get(Target::SecondTool) {
@@ -1900,7 +1813,7 @@ impl<'s> Station<'s> {
         };
         let contact = driven.map_or(Contact::default(), |(pose, stroking)| {
             let (touching, density) =
-                contact_under(self.playback.surface_now(), pose, self.desk_tool.half_extents_m());
+                contact_under(self.doc.playback.surface_now(), pose, self.desk_tool.half_extents_m());
             Contact { touching, density, stroking }
         });
         let feedback = self.feedback.get_or_insert_with(|| {
@@ -2006,15 +1919,12 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
         // A station that failed (to open its window, its head tracker, ...) before any stroke
         // closes its autosave session; strokes it did make stay in the journal.
         let unsaved = app.station.unsaved_work();
-        if let Some(session) = app.station.playback.finish_autosave() {
-            match unsaved {
-                0 => super::autosave::close_session(session),
-                n => eprintln!(
-                    "{n} stroke(s) of this run are not saved: the autosave journal in {} keeps them, \
-                     and `argile recover` gives them back",
-                    session.dir().display()
-                ),
-            }
+        if let Some(Err(dir)) = app.station.doc.end_session() {
+            eprintln!(
+                "{unsaved} stroke(s) of this run are not saved: the autosave journal in {} keeps them, \
+                 and `argile recover` gives them back",
+                dir.display()
+            );
         }
         return Err(e);
     }
@@ -2043,8 +1953,8 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
             median(3)
         );
     }
-    let mut saved = app.station.saved.clone();
-    let stats = app.station.playback.field().history_stats();
+    let mut saved = app.station.doc.saved().map(Path::to_owned);
+    let stats = app.station.doc.playback.field().history_stats();
     // Quitting saves unsaved strokes, and so do a stopping signal and a scripted run given a
     // place to save (`--save-to`).
     let quitting =
@@ -2055,20 +1965,15 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
         saved = Some(app.station.save_at_exit()?);
     }
     let unsaved = app.station.unsaved_work();
-    let session = app.station.playback.finish_autosave();
-    match (session, unsaved) {
-        // The sculpt is safe (saved when it changed): the session closes cleanly, so nothing
-        // is recovered at the next start.
-        (Some(session), 0) => super::autosave::close_session(session),
-        // A scripted run with nowhere to save leaves its strokes in the journal, unclosed.
-        (Some(session), n) => {
-            println!(
-                "{n} stroke(s) of this run are not saved (no --save-to): the autosave journal in {} keeps \
-                 them, and `argile recover` gives them back",
-                session.dir().display()
-            );
-        }
-        (None, _) => {}
+    // The sculpt is safe (saved when it changed): the session closes cleanly, so nothing is
+    // recovered at the next start. A scripted run with nowhere to save leaves its strokes in
+    // the journal, unclosed.
+    if let Some(Err(dir)) = app.station.doc.end_session() {
+        println!(
+            "{unsaved} stroke(s) of this run are not saved (no --save-to): the autosave journal in {} keeps \
+             them, and `argile recover` gives them back",
+            dir.display()
+        );
     }
     Ok(StationReport { frames: app.frames, screenshot: app.screenshot, saved })
 }
@@ -2491,7 +2396,7 @@ mod tests {
         let frame = station.step(SCRIPTED_STEP_S, |_| {});
         assert!(frame.tools.len() >= 3, "the tool, its mirror image and the plane are drawn");
         sculpt_for(&mut station, 3);
-        let field = station.playback.field();
+        let field = station.doc.playback.field();
         let t = *field.transform();
         let at = |x: f32| field.density(t.world_to_index(Vec3::new(x, 0.0, 0.0)).round().as_ivec3());
         assert!(at(0.06) > 0.9 && at(-0.06) > 0.9, "both sides: {} {}", at(0.06), at(-0.06));
@@ -2503,15 +2408,15 @@ mod tests {
             }
         }
         station.act(StationAction::Undo);
-        assert_eq!(station.playback.field().mass(), 0.0, "one undo takes back both sides");
+        assert_eq!(station.doc.playback.field().mass(), 0.0, "one undo takes back both sides");
         // Shift+Y steps on to mirror X and Z: four images of one stroke.
         station.set_modifiers(Modifiers { shift: true, ..Modifiers::default() });
         station.key(KeyCode::KeyY, true);
         station.key(KeyCode::KeyY, false);
-        assert_eq!(station.playback.images().len(), 4);
+        assert_eq!(station.doc.playback.images().len(), 4);
         station.set_modifiers(Modifiers::default());
         station.key(KeyCode::KeyY, true);
-        assert_eq!(station.playback.images().len(), 1, "Y switches it off");
+        assert_eq!(station.doc.playback.images().len(), 1, "Y switches it off");
     }
 
     #[test]
@@ -2520,10 +2425,10 @@ mod tests {
         let mut station = small_station(&scene);
         station.mouse.tool_position_m = Vec3::ZERO;
         sculpt_for(&mut station, 2);
-        let ball = station.playback.field().clone();
+        let ball = station.doc.playback.field().clone();
         let mass = ball.mass();
         let at = |station: &Station<'_>, p: Vec3| {
-            let f = station.playback.field();
+            let f = station.doc.playback.field();
             f.density(f.transform().world_to_index(p).round().as_ivec3())
         };
         assert!(at(&station, Vec3::ZERO) > 0.9);
@@ -2542,27 +2447,27 @@ mod tests {
         };
         carry(&mut station, KeyCode::KeyG);
         assert!(at(&station, Vec3::ZERO) < 0.1 && at(&station, Vec3::new(0.08, 0.0, 0.0)) > 0.9, "moved");
-        let moved = station.playback.field().mass();
+        let moved = station.doc.playback.field().mass();
         assert!((moved - mass).abs() < 1e-3 * mass, "{mass} → {moved}");
         station.act(StationAction::Undo);
-        assert!(station.playback.field().same_samples(&ball), "one undo takes the move back");
+        assert!(station.doc.playback.field().same_samples(&ball), "one undo takes the move back");
         // K held: a copy goes with the tool; the ball stays.
         carry(&mut station, KeyCode::KeyK);
         assert!(at(&station, Vec3::ZERO) > 0.9 && at(&station, Vec3::new(0.08, 0.0, 0.0)) > 0.9, "copied");
         station.act(StationAction::Undo);
-        assert!(station.playback.field().same_samples(&ball));
+        assert!(station.doc.playback.field().same_samples(&ball));
         // I and Shift+I: the surface within the tool grows, then shrinks.
         station.mouse.tool_position_m = Vec3::new(0.03, 0.0, 0.0);
         station.step(SCRIPTED_STEP_S, |_| {});
         station.act(StationAction::InflateRegion);
-        assert!(station.playback.field().mass() > mass, "inflated");
+        assert!(station.doc.playback.field().mass() > mass, "inflated");
         station.act(StationAction::DeflateRegion);
         station.act(StationAction::DeflateRegion);
-        assert!(station.playback.field().mass() < mass, "deflated");
+        assert!(station.doc.playback.field().mass() < mass, "deflated");
         for _ in 0..3 {
             station.act(StationAction::Undo);
         }
-        assert!(station.playback.field().same_samples(&ball), "one undo step each");
+        assert!(station.doc.playback.field().same_samples(&ball), "one undo step each");
         // B held at the ball's edge: the clay there follows the tool out.
         station.mouse.tool_position_m = Vec3::new(0.03, 0.0, 0.0);
         station.key(KeyCode::KeyB, true);
@@ -2581,8 +2486,8 @@ mod tests {
         let mut station = small_station(&scene);
         station.mouse.tool_position_m = Vec3::ZERO;
         sculpt_for(&mut station, 2);
-        let ball = station.playback.field().clone();
-        let (mass, steps) = (ball.mass(), station.playback.field().history_stats().undo_in_memory);
+        let ball = station.doc.playback.field().clone();
+        let (mass, steps) = (ball.mass(), station.doc.playback.field().history_stats().undo_in_memory);
         let press = |station: &mut Station<'_>, chord: &str| {
             let chord = Chord::parse(chord).unwrap();
             station.modifiers = chord.modifiers;
@@ -2593,30 +2498,30 @@ mod tests {
         };
         // Shift+F: a lattice over the whole ball, drawn, the clay untouched.
         let frame = press(&mut station, "Shift+KeyF");
-        let held = station.playback.held_lattice().expect("a lattice is open");
+        let held = station.doc.playback.held_lattice().expect("a lattice is open");
         assert_eq!(held.lattice().volume().counts(), [4, 4, 4]);
         assert!(frame.tools.len() > 64, "its 64 controls, their lines and the picked one are drawn");
-        assert!(station.playback.field().same_samples(&ball));
+        assert!(station.doc.playback.field().same_samples(&ball));
         // The tool picks the control nearest it; R three times swells the clay there.
         station.mouse.tool_position_m = Vec3::splat(0.012);
         station.step(SCRIPTED_STEP_S, |_| {});
-        let picked = station.playback.held_lattice().unwrap().picked();
+        let picked = station.doc.playback.held_lattice().unwrap().picked();
         assert!(picked.iter().all(|&i| i == 2), "the interior control nearest the tool: {picked:?}");
         for _ in 0..3 {
             press(&mut station, "KeyR");
         }
-        let swelled = station.playback.field().mass();
+        let swelled = station.doc.playback.field().mass();
         assert!(swelled > mass * 1.01, "raised values swell the clay: {mass} → {swelled}");
         // The tools wait while it is open.
         sculpt_for(&mut station, 2);
-        assert_eq!(station.playback.field().mass(), swelled, "no stroke while a lattice is open");
+        assert_eq!(station.doc.playback.field().mass(), swelled, "no stroke while a lattice is open");
         assert!(station.messages.iter().any(|m| m.contains("a lattice is open")));
         // V shows a slice through the picked control's patch: its stems and a zero contour.
         let plain = station.step(SCRIPTED_STEP_S, |_| {}).tools.len();
         for _ in 0..3 {
             press(&mut station, "KeyV");
         }
-        assert_eq!(station.playback.held_lattice().unwrap().slice(), Some(2));
+        assert_eq!(station.doc.playback.held_lattice().unwrap().slice(), Some(2));
         let sliced = station.step(SCRIPTED_STEP_S, |_| {});
         let contour = sliced.tools.iter().filter(|g| g.colour == crate::app::glyphs::CONTOUR_COLOUR).count();
         assert!(contour > 8, "the ball's section drawn as a contour: {contour}");
@@ -2624,22 +2529,22 @@ mod tests {
         for _ in 0..2 {
             press(&mut station, "KeyV");
         }
-        assert_eq!(station.playback.held_lattice().unwrap().slice(), None, "after the last, none");
+        assert_eq!(station.doc.playback.held_lattice().unwrap().slice(), None, "after the last, none");
         // Enter applies it: one undo step, which takes it back bit for bit; redo puts it again.
         press(&mut station, "Enter");
-        assert!(station.playback.held_lattice().is_none());
-        assert_eq!(station.playback.field().history_stats().undo_in_memory, steps + 1);
+        assert!(station.doc.playback.held_lattice().is_none());
+        assert_eq!(station.doc.playback.field().history_stats().undo_in_memory, steps + 1);
         station.act(StationAction::Undo);
         station.step(SCRIPTED_STEP_S, |_| {});
-        assert!(station.playback.field().same_samples(&ball), "one undo takes the lattice back");
+        assert!(station.doc.playback.field().same_samples(&ball), "one undo takes the lattice back");
         station.act(StationAction::Redo);
-        assert_eq!(station.playback.field().mass(), swelled);
+        assert_eq!(station.doc.playback.field().mass(), swelled);
         station.act(StationAction::Undo);
         // F around the tool, D held drags the picked control 1 cm out, Backspace puts it all
         // back and leaves no step.
         station.mouse.tool_position_m = Vec3::new(0.02, 0.0, 0.0);
         press(&mut station, "KeyF");
-        let spec = *station.playback.held_lattice().unwrap().lattice().spec();
+        let spec = *station.doc.playback.held_lattice().unwrap().lattice().spec();
         assert!((spec.region.size().x - 0.12).abs() < 1e-4, "twice the tool's size about it: {spec:?}");
         station.key(KeyCode::KeyD, true);
         station.step(SCRIPTED_STEP_S, |_| {});
@@ -2647,18 +2552,18 @@ mod tests {
         station.step(SCRIPTED_STEP_S, |_| {});
         station.key(KeyCode::KeyD, false);
         station.step(SCRIPTED_STEP_S, |_| {});
-        assert!(!station.playback.field().same_samples(&ball), "the drag warped the clay");
+        assert!(!station.doc.playback.field().same_samples(&ball), "the drag warped the clay");
         press(&mut station, "Backspace");
-        assert!(station.playback.held_lattice().is_none());
-        assert!(station.playback.field().same_samples(&ball), "put back bit for bit");
-        assert_eq!(station.playback.field().history_stats().undo_in_memory, steps, "no step left");
+        assert!(station.doc.playback.held_lattice().is_none());
+        assert!(station.doc.playback.field().same_samples(&ball), "put back bit for bit");
+        assert_eq!(station.doc.playback.field().history_stats().undo_in_memory, steps, "no step left");
         // Undo while one is open closes it the same way.
         press(&mut station, "KeyF");
         press(&mut station, "KeyR");
         station.act(StationAction::Undo);
-        assert!(station.playback.held_lattice().is_none());
-        assert!(station.playback.field().same_samples(&ball));
-        assert_eq!(station.playback.field().history_stats().undo_in_memory, steps);
+        assert!(station.doc.playback.held_lattice().is_none());
+        assert!(station.doc.playback.field().same_samples(&ball));
+        assert_eq!(station.doc.playback.field().history_stats().undo_in_memory, steps);
     }
 
     #[test]
@@ -2671,7 +2576,7 @@ mod tests {
         let mut station = Station::new(&scene, KeyBindings::shipped(), (64, 64), path.clone());
         station.mouse.tool_position_m = Vec3::ZERO;
         sculpt_for(&mut station, 2);
-        let ball = station.playback.field().clone();
+        let ball = station.doc.playback.field().clone();
         let steps = ball_steps(&station);
         station.act(StationAction::OpenPartLattice);
         station.mouse.tool_position_m = Vec3::splat(0.012);
@@ -2681,17 +2586,20 @@ mod tests {
         }
         station.act(StationAction::HeavierWeight);
         station.step(SCRIPTED_STEP_S, |_| {});
-        let shaped = station.playback.field().clone();
+        let shaped = station.doc.playback.field().clone();
         assert!(!shaped.same_samples(&ball));
         station.save().unwrap();
-        assert!(station.playback.field().same_samples(&shaped), "saving leaves the lattice's work in place");
-        assert!(station.playback.held_lattice().is_some(), "and the lattice open");
+        assert!(
+            station.doc.playback.field().same_samples(&shaped),
+            "saving leaves the lattice's work in place"
+        );
+        assert!(station.doc.playback.held_lattice().is_some(), "and the lattice open");
         // The file: the clay as the lattice found it, its history, and the lattice.
         let stored = crate::app::load_sculpt(&path).unwrap();
         assert!(stored.field.same_samples(&ball));
         assert_eq!(stored.field.history_stats().undo_in_memory, steps);
         let lattice = stored.lattice.clone().expect("the open lattice is stored");
-        assert_eq!(lattice, station.playback.held_lattice().unwrap().stored());
+        assert_eq!(lattice, station.doc.playback.held_lattice().unwrap().stored());
         // What only wants the shape gets it applied.
         let info = crate::app::describe_sculpt(&path).unwrap();
         assert!(
@@ -2703,13 +2611,13 @@ mod tests {
         // Opened again, the lattice is open as it was left, and one undo step when applied.
         let mut again = Station::new(&scene, KeyBindings::shipped(), (64, 64), dir.join("other.argile"));
         again.open(&path).unwrap();
-        let held = again.playback.held_lattice().expect("open again");
+        let held = again.doc.playback.held_lattice().expect("open again");
         assert_eq!(held.stored(), lattice);
-        assert!(again.playback.field().same_samples(&shaped), "shaped as it was saved");
+        assert!(again.doc.playback.field().same_samples(&shaped), "shaped as it was saved");
         again.act(StationAction::ApplyLattice);
         assert_eq!(ball_steps(&again), steps + 1);
         again.act(StationAction::Undo);
-        assert!(again.playback.field().same_samples(&ball));
+        assert!(again.doc.playback.field().same_samples(&ball));
         // A version that cannot keep it refuses rather than lose it.
         let old = dir.join("v5.argile");
         let options = crate::io::EncodeOptions { version: 5, history: true };
@@ -2719,7 +2627,7 @@ mod tests {
     }
 
     fn ball_steps(station: &Station<'_>) -> usize {
-        station.playback.field().history_stats().undo_in_memory
+        station.doc.playback.field().history_stats().undo_in_memory
     }
 
     #[test]
@@ -2728,7 +2636,7 @@ mod tests {
         let mut station = small_station(&scene);
         let mut applied = 0;
         station.step(SCRIPTED_STEP_S, |_| applied += 1);
-        assert_eq!(station.playback.field().mass(), 0.0, "nothing sculpted yet");
+        assert_eq!(station.doc.playback.field().mass(), 0.0, "nothing sculpted yet");
         // Sculpt while moving, over many frames: still one stroke, one undo step.
         station.key(KeyCode::Space, true);
         station.key(KeyCode::ArrowRight, true);
@@ -2738,19 +2646,19 @@ mod tests {
         station.key(KeyCode::Space, false);
         station.key(KeyCode::ArrowRight, false);
         station.step(SCRIPTED_STEP_S, |_| applied += 1);
-        let sculpted = station.playback.field().mass();
+        let sculpted = station.doc.playback.field().mass();
         assert!(sculpted > 0.0 && applied > 0, "holding apply adds clay and remeshes");
 
         station.set_modifiers(Modifiers { ctrl: true, ..Default::default() });
         station.key(KeyCode::KeyZ, true);
         station.key(KeyCode::KeyZ, false);
-        assert_eq!(station.playback.field().mass(), 0.0, "ctrl+z undoes the stroke");
+        assert_eq!(station.doc.playback.field().mass(), 0.0, "ctrl+z undoes the stroke");
         station.key(KeyCode::KeyY, true);
         station.key(KeyCode::KeyY, false);
-        assert_eq!(station.playback.field().mass(), sculpted, "ctrl+y redoes it");
+        assert_eq!(station.doc.playback.field().mass(), sculpted, "ctrl+y redoes it");
         station.set_modifiers(Modifiers::default());
         station.key(KeyCode::KeyZ, true);
-        assert_eq!(station.playback.field().mass(), sculpted, "z alone is not undo");
+        assert_eq!(station.doc.playback.field().mass(), sculpted, "z alone is not undo");
 
         // S cycles the shapes at the same size, back to the sphere; ] grows the tool.
         let size = station.desk_tool.size_m();
@@ -2821,7 +2729,7 @@ mod tests {
         let moved = station.desk.poses.get(Target::Tool).position_m - start;
         assert!(moved.dot(station.view.rig.right()) > 0.01, "the tool went right: {moved}");
         assert_eq!(station.mouse.tool_position_m, station.desk.poses.get(Target::Tool).position_m);
-        assert!(station.playback.field().mass() > 0.0, "the stroke button sculpts");
+        assert!(station.doc.playback.field().mass() > 0.0, "the stroke button sculpts");
         mailbox.push_event(ReaderEvent::Buttons {
             id,
             change: ButtonChange { pressed: 0, released: 1 },
@@ -2829,7 +2737,10 @@ mod tests {
         });
         station.devices(SCRIPTED_STEP_S, &[], Vec::new());
         station.step(SCRIPTED_STEP_S, |_| {});
-        assert!(station.stroke.is_none() && !station.playback.field().in_stroke(), "release ends the stroke");
+        assert!(
+            station.stroke.is_none() && !station.doc.playback.field().in_stroke(),
+            "release ends the stroke"
+        );
     }
 
     #[test]
@@ -2983,7 +2894,7 @@ mod tests {
             steps.push((v.eyes[0].projection.x_axis.x - last.eyes[0].projection.x_axis.x).abs());
             last = v;
         }
-        let head = scene.head.as_ref().unwrap().pose_at(station.playback.time_s());
+        let head = scene.head.as_ref().unwrap().pose_at(station.doc.playback.time_s());
         let tracked = station.tracked_rig().unwrap().views(&head);
         assert!(close(&last, &tracked), "then the tracked view");
         let size = |v: &crate::render::StereoViews| {
@@ -3097,7 +3008,7 @@ mod tests {
             }
             let shown = station.hud_lines()[0].clone();
             sculpt_for(&mut station, 3);
-            let field = station.playback.field();
+            let field = station.doc.playback.field();
             assert!(field.mass() > 0.0, "the stroke added clay");
             let levels: Vec<usize> =
                 (0..crate::field::LEVELS).filter(|&l| field.level_brick_count(l) > 0).collect();
@@ -3148,8 +3059,8 @@ mod tests {
         use crate::input::calibration::SixDof;
         let scene = two_part_scene();
         let mut station = small_station(&scene);
-        let left = station.playback.field().clone();
-        let right = station.playback.assembly().others()[0].clone();
+        let left = station.doc.playback.field().clone();
+        let right = station.doc.playback.assembly().others()[0].clone();
         assert!(station.hud_lines().iter().any(|l| l == "part 1 of 2: left"));
         station.key(KeyCode::KeyN, true);
         station.key(KeyCode::KeyN, false);
@@ -3180,13 +3091,13 @@ mod tests {
         // A stroke at the right ball's top (world): clay of the right part, in its frame.
         station.mouse.tool_position_m = Vec3::new(0.08, 0.02, 0.0);
         sculpt_for(&mut station, 2);
-        assert!(station.playback.field().same_samples(&left), "the left part is untouched");
-        let grown = &station.playback.assembly().others()[0];
+        assert!(station.doc.playback.field().same_samples(&left), "the left part is untouched");
+        let grown = &station.doc.playback.assembly().others()[0];
         assert!(grown.mass() > right.mass());
         let local = scene.parts[1].placement.local_point(Vec3::new(0.08, 0.026, 0.0));
         assert!(FieldReader::new(grown).density_at(grown.transform().world_to_index(local)) > 0.5);
         let surface = |station: &mut Station<'_>, p: Vec3| {
-            let f = station.playback.surface();
+            let f = station.doc.playback.surface();
             FieldReader::new(f).density_world(p)
         };
         assert!(surface(&mut station, Vec3::new(0.08, 0.026, 0.0)) > 0.5, "drawn where it was laid");
@@ -3200,20 +3111,20 @@ mod tests {
             station.devices(SCRIPTED_STEP_S, &[push], Vec::new());
             station.step(SCRIPTED_STEP_S, |_| {});
         }
-        let moved = station.playback.assembly().parts()[1].placement.translation_m;
+        let moved = station.doc.playback.assembly().parts()[1].placement.translation_m;
         assert!(moved.x > 0.081 && moved.y.abs() < 1e-6, "the part moved along X: {moved}");
-        assert!(station.playback.field().same_samples(&left), "the left part stays");
+        assert!(station.doc.playback.field().same_samples(&left), "the left part stays");
         assert!(
             surface(&mut station, Vec3::new(0.08 - 0.0195, 0.0, 0.0)) < 0.5,
             "the right ball left its old place"
         );
         // Undo takes back the stroke on the right part.
         station.act(StationAction::Undo);
-        assert!(station.playback.assembly().others()[0].same_samples(&right));
+        assert!(station.doc.playback.assembly().others()[0].same_samples(&right));
         // Back to the first part.
         station.key(KeyCode::KeyN, true);
         station.key(KeyCode::KeyN, false);
-        assert_eq!(station.playback.assembly().active(), 0);
+        assert_eq!(station.doc.playback.assembly().active(), 0);
     }
 
     #[test]
@@ -3372,20 +3283,20 @@ mod tests {
             station.devices(SCRIPTED_STEP_S, &[], Vec::new());
             station.step(SCRIPTED_STEP_S, |_| {});
         }
-        assert!(station.stroke.is_some() && station.playback.field().in_stroke());
-        let mass = station.playback.field().mass();
+        assert!(station.stroke.is_some() && station.doc.playback.field().in_stroke());
+        let mass = station.doc.playback.field().mass();
         // Unplugged with the button held: the reader reports the loss, releasing it.
         mailbox.push_event(ReaderEvent::Lost { id: DeviceId(1), released: 1, reason: "unplugged".into() });
         station.devices(SCRIPTED_STEP_S, &[], Vec::new());
         station.step(SCRIPTED_STEP_S, |_| {});
-        assert!(station.stroke.is_none() && !station.playback.field().in_stroke(), "the stroke ended");
+        assert!(station.stroke.is_none() && !station.doc.playback.field().in_stroke(), "the stroke ended");
         let at = station.desk.poses.get(Target::Tool).position_m;
         for _ in 0..5 {
             station.devices(SCRIPTED_STEP_S, &[], Vec::new());
             station.step(SCRIPTED_STEP_S, |_| {});
         }
         assert_eq!(station.desk.poses.get(Target::Tool).position_m, at, "a lost device moves nothing");
-        assert_eq!(station.playback.field().mass(), mass, "nor sculpts");
+        assert_eq!(station.doc.playback.field().mass(), mass, "nor sculpts");
         // Plugged back (a new id): it drives the tool again.
         mailbox.push_event(ReaderEvent::Connected { id: DeviceId(2), info });
         for _ in 0..10 {
@@ -3444,7 +3355,7 @@ mod tests {
             station.set_scene_toml(scene_text.map(str::to_owned));
             assert!(matches!(&station.desk_tool.shape, ToolShape::Freeform(f) if f.mass() == 0.0));
             station.open(&path).unwrap();
-            let tools_made = station.playback.tools()[0].shape == made && station.desk_tool.shape == made;
+            let tools_made = station.doc.playback.tools()[0].shape == made && station.desk_tool.shape == made;
             assert_eq!(tools_made, restored, "in {scene_text:?}");
             assert_eq!(station.stored_view() == view, restored, "the view too, in {scene_text:?}");
         }
@@ -3504,7 +3415,7 @@ mod tests {
         maker.save().unwrap();
         let older_mass = maker.field().mass();
         sculpt(&mut maker);
-        maker.save_to = dir.join("newer.argile");
+        maker.doc = Document::new(maker.doc.playback, dir.join("newer.argile"));
         maker.save().unwrap();
         let newer_mass = maker.field().mass();
         assert!(newer_mass > older_mass && older_mass > 0.0);
@@ -3523,7 +3434,7 @@ mod tests {
             station.key(KeyCode::KeyO, true);
             station.key(KeyCode::KeyO, false);
             station.set_modifiers(Modifiers::default());
-            let diff = remesh_dirty(station.playback.field_mut());
+            let diff = remesh_dirty(station.doc.playback.field_mut());
             // What the open key said (not the parallax budget's word on the clay).
             let said: Vec<String> =
                 station.messages.drain(..).filter(|m| !m.contains("stereo disparity")).collect();

@@ -32,6 +32,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
+use super::document::Document;
 use super::frame::build_frame;
 use super::glyphs::{action_colour, buttons, controller_glyph, palette, tool_glyph, Button};
 use super::playback::Playback;
@@ -163,7 +164,8 @@ enum Grab {
 #[derive(Debug)]
 pub struct XrSculptor<'s> {
     scene: &'s Scene,
-    playback: Playback<'s>,
+    /// The sculpt: its clay, history, file and autosave session (as the desk's).
+    doc: Document<'s>,
     placement: Placement,
     /// Index of the dominant hand in `[left, right]`.
     dominant: usize,
@@ -184,10 +186,6 @@ pub struct XrSculptor<'s> {
     touching: bool,
     /// The scene's clock, seconds.
     time_s: f32,
-    save_to: PathBuf,
-    saved: Option<PathBuf>,
-    /// The text of the scene, stored in the sculpts it saves.
-    scene_toml: Option<String>,
     /// Time spent in the last step: tools and simulation, meshing (ms).
     times: (f64, f64),
     /// The palette button the tool hand points at.
@@ -214,7 +212,7 @@ impl<'s> XrSculptor<'s> {
         let action_index = action_cycle().iter().position(|a| *a == tool.action).unwrap_or(0);
         Self {
             scene,
-            playback,
+            doc: Document::new(playback, save_to),
             placement: recentred(scene.rig.target_m, None),
             dominant: if left_handed { 0 } else { 1 },
             tool,
@@ -227,9 +225,6 @@ impl<'s> XrSculptor<'s> {
             previous: Default::default(),
             touching: false,
             time_s: 0.0,
-            save_to,
-            saved: None,
-            scene_toml: None,
             times: (0.0, 0.0),
             pointed: None,
             symmetry: SymmetrySwitch::new(scene.symmetry),
@@ -241,7 +236,7 @@ impl<'s> XrSculptor<'s> {
 
     /// The text of the scene, stored with the clay when saving.
     pub fn set_scene_toml(&mut self, text: Option<String>) {
-        self.scene_toml = text;
+        self.doc.set_scene_toml(text);
     }
 
     /// Lets the tool edit by its size with at most `samples` voxels across it where its scene
@@ -253,7 +248,7 @@ impl<'s> XrSculptor<'s> {
 
     /// The clay.
     pub fn field(&self) -> &crate::field::Field {
-        self.playback.field()
+        self.doc.playback.field()
     }
 
     /// Where the sculpture is in the room.
@@ -276,14 +271,27 @@ impl<'s> XrSculptor<'s> {
         self.pointed
     }
 
-    /// Writes the sculpt to the save path, atomically, first closing a stroke in progress.
+    /// Writes the sculpt to the save path, atomically, first closing a stroke in progress;
+    /// where that cannot be written, to the fallback folder (see
+    /// [`XrSculptor::set_fallback_dir`]), as the desk does.
     pub fn save(&mut self) -> Result<PathBuf> {
         self.end_stroke();
-        let path = self.save_to.clone();
-        let bytes = super::sculpt::encode_playback(&mut self.playback, self.scene_toml.as_deref(), None);
-        super::sculpt::write_sculpt(&bytes, &path)?;
-        self.saved = Some(path.clone());
-        Ok(path)
+        let saved = self
+            .doc
+            .save(None, "the sculpt stays in memory; `argile xr --save-to FILE` saves it elsewhere")?;
+        self.messages.extend(saved.moved);
+        Ok(saved.path)
+    }
+
+    /// Where a save that cannot write its file writes the sculpt instead (the headset uses
+    /// `saved/` in the state folder, as the desk does).
+    pub fn set_fallback_dir(&mut self, dir: Option<PathBuf>) {
+        self.doc.set_fallback_dir(dir);
+    }
+
+    /// What the sculpt file lacks (see [`Document::unsaved_work`]).
+    pub fn unsaved_work(&self) -> u64 {
+        self.doc.unsaved_work()
     }
 
     /// The dominant hand's tool as it acts in the scene: its room size kept whatever the
@@ -305,8 +313,8 @@ impl<'s> XrSculptor<'s> {
 
     fn undo(&mut self) {
         self.end_stroke();
-        match self.playback.undo() {
-            Ok(true) => self.playback.journal(),
+        match self.doc.playback.undo() {
+            Ok(true) => self.doc.journal(),
             Ok(false) => self.messages.push("nothing to undo".into()),
             Err(e) => self.messages.push(format!("undo failed: {e}")),
         }
@@ -314,8 +322,8 @@ impl<'s> XrSculptor<'s> {
 
     fn redo(&mut self) {
         self.end_stroke();
-        if self.playback.redo() {
-            self.playback.journal();
+        if self.doc.playback.redo() {
+            self.doc.journal();
         } else {
             self.messages.push("nothing to redo".into());
         }
@@ -324,10 +332,10 @@ impl<'s> XrSculptor<'s> {
     /// Closes the stroke in progress, journaling it.
     fn end_stroke(&mut self) {
         if self.stroke.take().is_some() {
-            if let Ok((field, _)) = self.playback.active_target() {
+            if let Ok((field, _)) = self.doc.playback.active_target() {
                 field.end_stroke();
             }
-            self.playback.journal();
+            self.doc.journal();
         }
     }
 
@@ -369,18 +377,20 @@ impl<'s> XrSculptor<'s> {
     /// applies the one open (one undo step).
     fn lattice_button(&mut self) {
         self.end_stroke();
-        if self.playback.apply_lattice() {
+        if self.doc.playback.apply_lattice() {
+            self.doc.edited();
             self.messages.push("lattice applied (undo takes it back)".into());
             return;
         }
-        let part = self.playback.assembly().active();
-        let clay = crate::parts::local_bounds(self.playback.assembly().field(self.playback.field(), part));
+        let part = self.doc.playback.assembly().active();
+        let clay =
+            crate::parts::local_bounds(self.doc.playback.assembly().field(self.doc.playback.field(), part));
         if clay.is_empty() {
             self.messages.push("the active part holds no clay to open a lattice over".into());
             return;
         }
         let region = clay.expanded(super::held_lattice::PART_MARGIN * clay.size().max_element());
-        self.messages.push(match self.playback.open_lattice(&super::held_lattice::held_spec(region)) {
+        self.messages.push(match self.doc.playback.open_lattice(&super::held_lattice::held_spec(region)) {
             Ok(()) => {
                 "lattice open: the trigger drags the control nearest the tool, the thumbstick its value; \
                        the lattice button applies it, undo puts the clay back"
@@ -397,8 +407,9 @@ impl<'s> XrSculptor<'s> {
     fn drive_lattice(&mut self, input: &FrameInput, pose: Option<Pose>, on_palette: bool, dt_s: f32) -> bool {
         let d = self.dominant;
         let (now, before) = (input.hands[d], self.previous[d]);
-        let local = pose.map(|pose| self.playback.in_active_part(self.tool.clone(), pose, &[]).1.position_m);
-        let Some(held) = self.playback.held_lattice_mut() else { return false };
+        let local =
+            pose.map(|pose| self.doc.playback.in_active_part(self.tool.clone(), pose, &[]).1.position_m);
+        let Some(held) = self.doc.playback.held_lattice_mut() else { return false };
         let mut failed = None;
         if let Some(point) = local {
             held.pick_nearest(point);
@@ -432,7 +443,7 @@ impl<'s> XrSculptor<'s> {
         }
         let y = now.thumbstick.y;
         // With a lattice open the thumbstick sets the picked control's value instead.
-        if y.abs() > 0.2 && self.playback.held_lattice().is_none() {
+        if y.abs() > 0.2 && self.doc.playback.held_lattice().is_none() {
             self.tool.scale *= RESIZE_PER_S.powf(y * dt_s);
         }
         let flick = |x: f32| {
@@ -468,22 +479,22 @@ impl<'s> XrSculptor<'s> {
             self.set_symmetry(symmetry);
         } else if other.secondary && !other_before.secondary {
             self.end_stroke();
-            let count = self.playback.assembly().parts().len();
-            let part = self.playback.set_active_part(self.playback.assembly().active() + 1);
-            let name = &self.playback.assembly().parts()[part].name;
+            let count = self.doc.playback.assembly().parts().len();
+            let part = self.doc.playback.set_active_part(self.doc.playback.assembly().active() + 1);
+            let name = &self.doc.playback.assembly().parts()[part].name;
             self.messages.push(format!("active part {} of {count}: {name}", part + 1));
         }
     }
 
     /// Strokes and pushes from now on act through `symmetry`; the user is told.
     fn set_symmetry(&mut self, symmetry: Symmetry) {
-        self.playback.set_symmetry(symmetry);
+        self.doc.playback.set_symmetry(symmetry);
         self.messages.push(format!("symmetry {}", symmetry.describe()));
     }
 
     /// The symmetry strokes act through now.
     pub fn symmetry(&self) -> &Symmetry {
-        self.playback.symmetry()
+        self.doc.playback.symmetry()
     }
 
     /// Grips: one hand drags and turns the sculpture, two also scale it; on a sculpt of several
@@ -494,7 +505,7 @@ impl<'s> XrSculptor<'s> {
             .filter_map(|i| hands[i].grip.filter(|_| hands[i].squeeze >= SQUEEZE_ON).map(|p| (i, p)))
             .collect();
         let support = 1 - self.dominant;
-        let parted = self.playback.assembly().parts().len() > 1;
+        let parted = self.doc.playback.assembly().parts().len() > 1;
         let was_part = matches!(self.grab, Some(Grab::Part { .. }));
         self.grab = match (gripping.as_slice(), self.grab) {
             ([(i, p)], Some(Grab::Part { start, hand_start, scale })) if *i == support => {
@@ -512,11 +523,12 @@ impl<'s> XrSculptor<'s> {
                     translation_m: moved.translation_m,
                     scale: start.scale * scale,
                 };
-                self.playback.set_part_placement(self.playback.assembly().active(), placed);
+                self.doc.playback.set_part_placement(self.doc.playback.assembly().active(), placed);
                 Some(Grab::Part { start, hand_start, scale })
             }
             ([(i, p)], _) if *i == support && parted => {
-                let start = self.playback.assembly().parts()[self.playback.assembly().active()].placement;
+                let start =
+                    self.doc.playback.assembly().parts()[self.doc.playback.assembly().active()].placement;
                 Some(Grab::Part { start, hand_start: self.placement.pose_to_world(*p), scale: 1.0 })
             }
             ([(_, a), (_, b)], Some(Grab::Two { start, hands_start })) => {
@@ -534,8 +546,9 @@ impl<'s> XrSculptor<'s> {
             _ => None,
         };
         if was_part && !matches!(self.grab, Some(Grab::Part { .. })) {
-            // Let go: the autosave session keeps where the part is.
-            self.playback.keep_layouts();
+            // Let go: the autosave session keeps where the part is, the file does not yet.
+            self.doc.playback.keep_layouts();
+            self.doc.edited();
         }
     }
 
@@ -570,15 +583,15 @@ impl<'s> XrSculptor<'s> {
             let pose = self.placement.pose_to_world(grip);
             live[1 - self.dominant] = Some(PlaybackHand { tool, pose, active, part: 0 });
         }
-        self.playback.set_live_hands(live);
+        self.doc.playback.set_live_hands(live);
         self.time_s += dt_s;
-        self.playback.advance_to(self.time_s, |_| {});
+        self.doc.playback.advance_to(self.time_s, |_| {});
         // The playback draws with the push tool; the stroke below is for the other actions.
         let applying_stroke = applying && pushing_tool.is_none();
         let tool = self.acting_tool(hand.trigger.clamp(0.0, 1.0));
         let side = if self.dominant == 0 { Hand::Left } else { Hand::Right };
         if let Some(pose) = tool_pose {
-            let density = contact_density(self.playback.surface_now(), pose, tool.half_extents_m());
+            let density = contact_density(self.doc.playback.surface_now(), pose, tool.half_extents_m());
             let touching = density >= TOUCH_DENSITY;
             if touching && !self.touching {
                 haptics.push(Haptic { hand: side, amplitude: TOUCH_PULSE.0, duration_ns: TOUCH_PULSE.1 });
@@ -595,9 +608,9 @@ impl<'s> XrSculptor<'s> {
             self.touching = false;
         }
         // The tool acts on the active part, in its frame.
-        let images = self.playback.images().to_vec();
-        let placed = tool_pose.map(|pose| self.playback.in_active_part(tool.clone(), pose, &images));
-        match (applying_stroke, placed, self.playback.active_target()) {
+        let images = self.doc.playback.images().to_vec();
+        let placed = tool_pose.map(|pose| self.doc.playback.in_active_part(tool.clone(), pose, &images));
+        match (applying_stroke, placed, self.doc.playback.active_target()) {
             (true, Some((tool, pose, images)), Ok((field, _))) => {
                 if self.stroke.is_none() {
                     field.begin_stroke();
@@ -620,15 +633,15 @@ impl<'s> XrSculptor<'s> {
                     if let Ok((field, _)) = target {
                         field.end_stroke();
                     }
-                    self.playback.journal();
+                    self.doc.journal();
                 }
             }
         }
         let tools_ms = started.elapsed().as_secs_f64() * 1e3;
         let meshing = std::time::Instant::now();
-        self.playback.sync_lattices();
-        self.playback.keep_lattice();
-        let diff = self.mesher.remesh_dirty(self.playback.surface());
+        self.doc.playback.sync_lattices();
+        self.doc.playback.keep_lattice();
+        let diff = self.mesher.remesh_dirty(self.doc.playback.surface());
         if !diff.is_empty() {
             apply(diff);
         }
@@ -656,7 +669,7 @@ impl XrSculptor<'_> {
     ) -> (Frame, [Vec<Held>; 2]) {
         let mut frame = build_frame(self.scene, &[], true);
         let mut held: [Vec<Held>; 2] = Default::default();
-        let tools = self.playback.tools();
+        let tools = self.doc.playback.tools();
         if let Some((pose, applying)) = dominant {
             held[self.dominant].push(Held::Tool(frame.tools.len()));
             let tool = match self.tool_index.filter(|_| self.tool.action == Action::Push) {
@@ -666,19 +679,19 @@ impl XrSculptor<'_> {
             let colour = action_colour(&tool.action).extend(if applying { 0.6 } else { 0.35 });
             frame.tools.push(tool_glyph(&tool.shape, pose, tool.scale, colour));
             // Its images under the symmetry, fainter, with the planes and the axis.
-            for image in self.playback.images().iter().skip(1) {
+            for image in self.doc.playback.images().iter().skip(1) {
                 let ghost = colour.truncate().extend(0.5 * colour.w);
                 frame.tools.push(tool_glyph(&tool.shape, image.pose(&pose).0, tool.scale, ghost));
             }
         }
-        frame.tools.extend(super::frame::symmetry_glyphs(&self.playback));
-        frame.tools.extend(super::frame::lattice_glyphs(&self.playback));
+        frame.tools.extend(super::frame::symmetry_glyphs(&self.doc.playback));
+        frame.tools.extend(super::frame::lattice_glyphs(&self.doc.playback));
         // The active part's box while the support hand carries it.
         if matches!(self.grab, Some(Grab::Part { .. })) {
-            frame.tools.extend(super::frame::part_glyph(&self.playback, super::frame::PART_COLOUR));
+            frame.tools.extend(super::frame::part_glyph(&self.doc.playback, super::frame::PART_COLOUR));
         }
         let other = if self.dominant == 0 { Hand::Right } else { Hand::Left };
-        if let Some((i, pose)) = self.playback.hand(other) {
+        if let Some((i, pose)) = self.doc.playback.hand(other) {
             let t = &tools[i];
             let colour = action_colour(&t.action).extend(self.scene.tools[i].glyph_opacity);
             frame.tools.push(tool_glyph(&t.shape, pose, t.scale, colour));
@@ -760,6 +773,7 @@ pub fn run_xr(
     };
     let mut sculptor = XrSculptor::new(scene, playback, save_to, options.left_handed);
     sculptor.set_scene_toml(options.scene_toml.clone());
+    sculptor.set_fallback_dir(super::state_dir().map(|d| d.join("saved")));
     sculptor.set_hand_samples((!options.edit_finest).then_some(HAND_SIZE_SAMPLES));
     let mut report = XrReport {
         runtime: first.runtime().to_owned(),
@@ -860,7 +874,7 @@ pub fn run_xr(
                             back.runtime()
                         );
                         validation = back.renderer().validation_log();
-                        let diff = sculptor.mesher.mesh_all(sculptor.playback.surface());
+                        let diff = sculptor.mesher.mesh_all(sculptor.doc.playback.surface());
                         if let Err(e) = back.renderer_mut().apply(diff) {
                             break Err(
                                 anyhow::Error::new(e).context("cannot draw the sculpt in the new session")
@@ -884,9 +898,7 @@ pub fn run_xr(
         drop(station);
         return Err(match sculptor.save() {
             Ok(p) => {
-                if let Some(session) = sculptor.playback.finish_autosave() {
-                    super::autosave::close_session(session);
-                }
+                sculptor.doc.end_session();
                 e.context(format!("the headset session failed (the sculpt is saved in {})", p.display()))
             }
             Err(s) => e.context(format!(
@@ -902,8 +914,14 @@ pub fn run_xr(
     if station.is_some() {
         report.saved = Some(sculptor.save()?);
     }
-    if let Some(session) = sculptor.playback.finish_autosave() {
-        super::autosave::close_session(session);
+    let unsaved = sculptor.unsaved_work();
+    if let Some(Err(dir)) = sculptor.doc.end_session() {
+        // Work done after the last save (the run ended with its instance lost): kept.
+        println!(
+            "{unsaved} change(s) of this run are not saved: the autosave journal in {} keeps them, and \
+             `argile recover` gives them back",
+            dir.display()
+        );
     }
     // OpenXR and then Vulkan go (XrStation's drop order) before the report is returned, so
     // what the validation layer says of the teardown is read too.
@@ -1095,6 +1113,29 @@ mod tests {
 
     fn sculptor(scene: &Scene, left_handed: bool) -> XrSculptor<'_> {
         XrSculptor::new(scene, Playback::new(scene), "unused.argile".into(), left_handed)
+    }
+
+    #[test]
+    fn a_headset_save_that_cannot_write_its_file_saves_to_the_fallback_folder() {
+        let dir = std::env::temp_dir().join(format!("argile-xr-fallback-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        // A file where the save folder should be: no write there succeeds, even as root.
+        std::fs::write(dir.join("not-a-folder"), "x").unwrap();
+        let scene = ball();
+        let blocked = dir.join("not-a-folder").join("ball.argile");
+        let mut s = XrSculptor::new(&scene, Playback::new(&scene), blocked, false);
+        let e = format!("{:#}", s.save().unwrap_err());
+        assert!(e.contains("stays in memory") && e.contains("not-a-folder"), "{e}");
+        s.set_fallback_dir(Some(dir.join("saved")));
+        let path = s.save().unwrap();
+        assert!(path.starts_with(dir.join("saved")), "{path:?}");
+        let said = s.messages.pop().unwrap();
+        assert!(said.contains("cannot save to") && said.contains(&path.display().to_string()), "{said}");
+        let saved = crate::io::read_file(&path, &mut |_| {}).unwrap();
+        assert!(saved.field.same_samples(s.field()));
+        assert_eq!(s.save().unwrap(), path, "saves go there from now on");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     fn at(x: f32, y: f32, z: f32) -> Option<Pose> {
@@ -1326,18 +1367,18 @@ mod tests {
             frame(s, [left, hand(b.centre(palette), 0.0, 0.0)])
         };
         let out = press(&mut s, Button::Lattice);
-        assert!(s.playback.held_lattice().is_some(), "{:?}", s.messages);
+        assert!(s.doc.playback.held_lattice().is_some(), "{:?}", s.messages);
         assert!(out.frame.tools.len() > 64, "the lattice's controls and lines are drawn");
         // The hand goes to the control at (2, 2, 2): picked; the trigger drags it 2 cm (room).
         let control =
-            s.playback.held_lattice().unwrap().lattice().volume().control(2, 2, 2).unwrap().position_m;
+            s.doc.playback.held_lattice().unwrap().lattice().volume().control(2, 2, 2).unwrap().position_m;
         let room = s.placement().matrix().transform_point3(control);
         frame(&mut s, [left, hand(room, 0.0, 0.0)]);
-        assert_eq!(s.playback.held_lattice().unwrap().picked(), [2, 2, 2]);
+        assert_eq!(s.doc.playback.held_lattice().unwrap().picked(), [2, 2, 2]);
         frame(&mut s, [left, hand(room, 1.0, 0.0)]);
         frame(&mut s, [left, hand(room + Vec3::new(0.02, 0.0, 0.0), 1.0, 0.0)]);
         frame(&mut s, [left, hand(room + Vec3::new(0.02, 0.0, 0.0), 0.0, 0.0)]);
-        let held = s.playback.held_lattice().unwrap();
+        let held = s.doc.playback.held_lattice().unwrap();
         let moved = held.lattice().volume().control(2, 2, 2).unwrap().position_m - control;
         let expected = 0.02 / s.placement().scale;
         assert!((moved.x - expected).abs() < 1e-5 && moved.y.abs() < 1e-6, "{moved} vs {expected}");
@@ -1348,13 +1389,14 @@ mod tests {
         for _ in 0..30 {
             frame(&mut s, [left, hand(room, 0.0, 1.0)]);
         }
-        let raised = s.playback.held_lattice().unwrap().lattice().volume().control(2, 2, 2).unwrap().value;
+        let raised =
+            s.doc.playback.held_lattice().unwrap().lattice().volume().control(2, 2, 2).unwrap().value;
         assert!((raised - value - 30.0 * 0.5 / 90.0).abs() < 1e-4, "{value} → {raised}");
         assert_eq!(s.tool().scale, size);
         let shaped = s.field().clone();
         // Pressed again, the button applies it: one undo step, taken back exactly.
         press(&mut s, Button::Lattice);
-        assert!(s.playback.held_lattice().is_none());
+        assert!(s.doc.playback.held_lattice().is_none());
         assert!(s.field().same_samples(&shaped));
         assert_eq!(s.field().history_stats().undo_in_memory, steps + 1);
         press(&mut s, Button::Undo);
@@ -1366,7 +1408,7 @@ mod tests {
         frame(&mut s, [left, hand(room, 0.0, 0.0)]);
         assert!(!s.field().same_samples(&ball));
         press(&mut s, Button::Undo);
-        assert!(s.playback.held_lattice().is_none());
+        assert!(s.doc.playback.held_lattice().is_none());
         assert!(s.field().same_samples(&ball));
         assert_eq!(s.field().history_stats().undo_in_memory, steps);
     }
@@ -1410,7 +1452,7 @@ mod tests {
         // The other hand's second button makes the head the active part.
         frame(&mut s, [HandState { secondary: true, ..HandState::default() }, HandState::default()]);
         frame(&mut s, [HandState::default(), HandState::default()]);
-        assert_eq!(s.playback.assembly().active(), 1);
+        assert_eq!(s.doc.playback.assembly().active(), 1);
         assert!(s.messages.last().unwrap().contains("active part 2 of 2: head"));
         // The support (left) grip carries the head up 10 cm of the room, the sculpture stays.
         let grip = |y: f32, stick: f32| HandState {
@@ -1428,20 +1470,20 @@ mod tests {
             sculpture,
             "one grip of the support hand moves the part, not the sculpture"
         );
-        let head = s.playback.assembly().parts()[1].placement;
+        let head = s.doc.playback.assembly().parts()[1].placement;
         let up = head.translation_m - Vec3::new(0.0, 0.08, 0.0);
         assert!((up - Vec3::Y * 0.1 / sculpture.scale).length() < 1e-4, "{up}");
         // Its thumbstick up, held for a second, doubles it.
         for _ in 0..90 {
             frame(&mut s, [grip(1.4, 1.0), HandState::default()]);
         }
-        let grown = s.playback.assembly().parts()[1].placement.scale;
+        let grown = s.doc.playback.assembly().parts()[1].placement.scale;
         assert!((grown - 2.0).abs() < 0.05, "{grown}");
         frame(&mut s, [HandState::default(), HandState::default()]);
         // The composed surface shows the head where it was carried, the body where it was.
-        let head_now = s.playback.assembly().parts()[1].placement.translation_m;
-        let _ = s.playback.surface();
-        let mut reader = FieldReader::new(s.playback.surface_now());
+        let head_now = s.doc.playback.assembly().parts()[1].placement.translation_m;
+        let _ = s.doc.playback.surface();
+        let mut reader = FieldReader::new(s.doc.playback.surface_now());
         assert!(reader.density_world(head_now + Vec3::Y * 0.035) > 0.5, "the head, twice its size");
         assert!(reader.density_world(Vec3::ZERO) > 0.5, "the body stays");
     }

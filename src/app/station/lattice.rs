@@ -18,20 +18,20 @@ impl Station<'_> {
                 self.end_desk_strokes();
                 self.open_lattice(action == StationAction::OpenPartLattice)
             }
-            StationAction::ApplyLattice => match self.playback.apply_lattice() {
+            StationAction::ApplyLattice => match self.doc.playback.apply_lattice() {
                 true => {
-                    self.unsaved_strokes += 1;
+                    self.doc.edited();
                     "lattice applied (undo takes it back)".to_owned()
                 }
                 false => "no lattice is open (F opens one)".to_owned(),
             },
-            StationAction::CancelLattice => match self.playback.cancel_lattice() {
+            StationAction::CancelLattice => match self.doc.playback.cancel_lattice() {
                 true => "lattice closed: the clay is as it was".to_owned(),
                 false => "no lattice is open (F opens one)".to_owned(),
             },
             StationAction::RaiseValue | StationAction::LowerValue => {
                 let delta = if action == StationAction::RaiseValue { VALUE_STEP } else { -VALUE_STEP };
-                match self.playback.held_lattice_mut() {
+                match self.doc.playback.held_lattice_mut() {
                     None => "no lattice is open (F opens one)".to_owned(),
                     Some(held) => match held.add_value(delta) {
                         Ok(v) => format!("control {:?}: value {v:.2}", held.picked()),
@@ -42,7 +42,7 @@ impl Station<'_> {
             StationAction::HeavierWeight | StationAction::LighterWeight => {
                 let factor =
                     if action == StationAction::HeavierWeight { WEIGHT_STEP } else { 1.0 / WEIGHT_STEP };
-                match self.playback.held_lattice_mut() {
+                match self.doc.playback.held_lattice_mut() {
                     None => "no lattice is open (F opens one)".to_owned(),
                     Some(held) => match held.scale_weight(factor) {
                         Ok(w) => format!("control {:?}: weight {w:.2}", held.picked()),
@@ -50,7 +50,7 @@ impl Station<'_> {
                     },
                 }
             }
-            StationAction::NextLatticeSlice => match self.playback.held_lattice_mut() {
+            StationAction::NextLatticeSlice => match self.doc.playback.held_lattice_mut() {
                 None => "no lattice is open (F opens one)".to_owned(),
                 Some(held) => match held.next_slice() {
                     Some(k) => format!(
@@ -72,20 +72,21 @@ impl Station<'_> {
     /// clay; says what it did.
     fn open_lattice(&mut self, whole_part: bool) -> String {
         let region = if whole_part {
-            let part = self.playback.assembly().active();
-            let clay =
-                crate::parts::local_bounds(self.playback.assembly().field(self.playback.field(), part));
+            let part = self.doc.playback.assembly().active();
+            let clay = crate::parts::local_bounds(
+                self.doc.playback.assembly().field(self.doc.playback.field(), part),
+            );
             if clay.is_empty() {
                 return "the active part holds no clay to open a lattice over".to_owned();
             }
             clay.expanded(PART_MARGIN * clay.size().max_element())
         } else {
             let pose = self.desk.poses.get(Target::Tool);
-            let (tool, local, _) = self.playback.in_active_part(self.desk_tool.clone(), pose, &[]);
+            let (tool, local, _) = self.doc.playback.in_active_part(self.desk_tool.clone(), pose, &[]);
             let half = AROUND_TOOL * tool.half_extents_m().max_element();
             Aabb::from_centre_half(local.position_m, Vec3::splat(half))
         };
-        match self.playback.open_lattice(&held_spec(region)) {
+        match self.doc.playback.open_lattice(&held_spec(region)) {
             Ok(()) => {
                 let size = region.size() * 1000.0;
                 format!(
@@ -102,7 +103,7 @@ impl Station<'_> {
     /// part's frame) is picked, and dragged while the drag key is held.
     pub(super) fn drive_lattice(&mut self, point: Vec3) {
         let dragging = self.holding(StationAction::DragControl);
-        let Some(held) = self.playback.held_lattice_mut() else { return };
+        let Some(held) = self.doc.playback.held_lattice_mut() else { return };
         held.pick_nearest(point);
         if let Err(e) = held.drag(point, dragging) {
             let message = format!("the control stays: {e}");
