@@ -24,7 +24,9 @@
 //!
 //! Each stage owns its data and hands the next a small plain value (poses, dirty brick keys,
 //! [`mesh::MeshDiff`], [`render::StereoViews`]); no stage reaches back up the flow. [`app`] is the
-//! only module that knows them all. `tests/architecture.rs` checks the dependency rules.
+//! only module that knows them all; [`bench`] runs the `argile bench` workloads over them as a
+//! user of the library would, and no module names it. `tests/architecture.rs` checks the
+//! dependency rules.
 //!
 //! Conventions: world space in metres, right-handed, +Y up; density in [0, 1] with the surface
 //! at the iso-level (0.5); colours linear RGBA.
@@ -40,6 +42,7 @@
 )]
 
 pub mod app;
+pub mod bench;
 pub mod clay;
 pub mod config;
 pub mod field;

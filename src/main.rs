@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{Context, Result};
-use argile::app::{self, bench, RenderOptions};
+use argile::app::{self, RenderOptions};
+use argile::bench;
 use argile::io::autosave::AutosaveConfig;
 use argile::mesh::export::ExportFormat;
 use argile::scene::Scene;

@@ -167,6 +167,33 @@ const RULES: &[(&str, &[&str])] = &[
     ),
 ];
 
+/// `bench` uses the other modules as a user would; none of them may name it (only `main.rs`).
+#[test]
+fn no_module_but_the_command_line_names_bench() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut found = Vec::new();
+    let mut stack = vec![src.clone()];
+    while let Some(dir) = stack.pop() {
+        for e in std::fs::read_dir(&dir).unwrap().flatten() {
+            let p = e.path();
+            if p == src.join("bench") || p == src.join("main.rs") {
+                continue;
+            }
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                let text = std::fs::read_to_string(&p).unwrap();
+                for (n, line) in text.lines().enumerate() {
+                    if names(line, "crate::bench") || names(line, "super::bench") {
+                        found.push(format!("{}:{}: {}", p.display(), n + 1, line.trim()));
+                    }
+                }
+            }
+        }
+    }
+    assert!(found.is_empty(), "modules naming `bench` (DESIGN.md):\n{}", found.join("\n"));
+}
+
 /// Modules where `unsafe` may appear (DESIGN.md: "`unsafe` is confined to `render` and `xr`").
 const UNSAFE_ALLOWED: &[&str] = &["render", "xr"];
 

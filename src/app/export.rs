@@ -25,11 +25,6 @@ pub struct ExportSummary {
     pub bytes: u64,
 }
 
-/// The end of `scene`'s timeline: its last key or capture, seconds.
-pub(super) fn end_s(scene: &Scene) -> f32 {
-    scene.captures.iter().map(|c| c.time_s).fold(scene.timeline.duration_s(), f32::max)
-}
-
 /// `scene`'s surface at the end of its timeline (after its last key and capture): its clay,
 /// or the composition of its parts.
 pub fn final_field(scene: &Scene) -> Field {
@@ -38,7 +33,7 @@ pub fn final_field(scene: &Scene) -> Field {
 
 /// The clay of `playback` at the end of its scene's timeline.
 fn played_to_end(mut playback: Playback<'_>) -> Field {
-    playback.advance_to(end_s(playback.scene()), |_| {});
+    playback.advance_to(playback.scene().end_s(), |_| {});
     playback.into_surface()
 }
 
@@ -137,7 +132,7 @@ fn export_parts(
     } else {
         let scene = Scene::load(input)?;
         let mut playback = Playback::build(&scene)?;
-        playback.advance_to(end_s(&scene), |_| {});
+        playback.advance_to(scene.end_s(), |_| {});
         playback.close_steps();
         let parts = playback.assembly().parts().to_vec();
         let (first, _, others) = playback.into_parts();

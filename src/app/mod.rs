@@ -4,8 +4,6 @@
 
 mod assembly;
 mod autosave;
-pub mod bench;
-mod bench_io;
 pub mod budget;
 mod calibrate;
 mod capture;

@@ -6,7 +6,6 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 
 use super::autosave::start_autosave;
-use super::export::end_s;
 use super::playback::Playback;
 use crate::field::{BRICK_SIZE, LEVELS};
 use crate::io::autosave::AutosaveConfig;
@@ -58,7 +57,7 @@ pub fn save_scene_sculpt(
     let mut playback = Playback::new_autosaved(&scene, |field, tools| {
         autosave.and_then(|config| start_autosave(field, (Some(&text), tools), &source, config))
     })?;
-    let end = end_s(&scene);
+    let end = scene.end_s();
     // A stopping signal (handled where autosave runs) ends the timeline early: the sculpt as
     // far as it got is saved, and the session closed.
     if !playback.advance_until(end, |_| {}, || super::signals::received().is_some()) {
@@ -180,7 +179,7 @@ pub fn convert_sculpt(
             .with_context(|| format!("cannot read scene file {}", input.display()))?;
         let scene = Scene::parse(&text, &input.display().to_string(), input.parent())?;
         let mut playback = Playback::build(&scene)?;
-        playback.advance_to(end_s(&scene), |_| {});
+        playback.advance_to(scene.end_s(), |_| {});
         let tools = playback.stored_tools();
         let (field, parts, others) = playback.into_parts();
         Sculpt { field, scene_toml: Some(text), tools, view: None, parts, others, lattice: None }

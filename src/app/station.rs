@@ -1337,7 +1337,8 @@ impl<'s> Station<'s> {
         Ok(saved.path)
     }
 
-    /// What the sculpt file lacks (see [`Document::unsaved_work`]).
+    /// What the sculpt file lacks: the strokes (and undos, redos) since the last save or open,
+    /// and one more for a lattice held open that is not as the last save stored it.
     pub fn unsaved_work(&self) -> u64 {
         self.doc.unsaved_work()
     }
@@ -1939,11 +1940,7 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
         }
     }
     if options.frames.is_some() && !app.stage_ms.is_empty() {
-        let median = |i: usize| {
-            let mut v: Vec<f64> = app.stage_ms.iter().map(|s| s[i]).collect();
-            v.sort_by(f64::total_cmp);
-            v[v.len() / 2]
-        };
+        let median = |i: usize| crate::math::median(app.stage_ms.iter().map(|s| s[i]).collect());
         println!(
             "frame stages, median ms over {} frames: input {:.3}, tools {:.3}, mesh {:.3}, render + composition + present {:.2}",
             app.stage_ms.len(),

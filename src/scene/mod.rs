@@ -300,6 +300,11 @@ pub struct VirtualClaySettings {
 }
 
 impl Scene {
+    /// The end of the scene's timeline: its last key or capture, seconds.
+    pub fn end_s(&self) -> f32 {
+        self.captures.iter().map(|c| c.time_s).fold(self.timeline.duration_s(), f32::max)
+    }
+
     /// Loads and validates a scene file.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
         let text = crate::io::text::read_text(path, crate::io::text::SCENE_LIMIT)

@@ -8,8 +8,8 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result};
 use serde_json::{json, Value};
 
-use super::bench::{median, sphere_field, BenchSize};
-use super::sculpt::load_sculpt_with_progress;
+use super::{median, sphere_field, BenchSize};
+use crate::app::load_sculpt_with_progress;
 use crate::field::Field;
 use crate::io::autosave::{Autosave, AutosaveConfig, LocalDisk};
 use crate::io::{encode, write_atomically};

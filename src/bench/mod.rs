@@ -1,13 +1,16 @@
 //! The standard workloads of `argile bench`: each yields one JSON object per measurement.
+//! The workloads use the other modules as a user of the library would; no other module
+//! names this one.
+
+mod io;
+mod xr;
 
 use std::time::Instant;
 
 use anyhow::Result;
 use serde_json::{json, Value};
 
-use super::capture::renderer_for;
-use super::frame::build_frame;
-use super::playback::Playback;
+use crate::app::{build_frame, renderer_for, Assembly, Playback};
 use crate::field::Field;
 use crate::math::{IVec3, Vec3};
 use crate::mesh::{mesh_all, ChunkMesh, MeshDiff, Mesher};
@@ -171,17 +174,7 @@ impl BenchSize {
     };
 }
 
-pub(super) fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n == 0 {
-        f64::NAN
-    } else if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
+use crate::math::median;
 
 /// Runs the workloads, handing each result to `emit`.
 pub fn run(workloads: &[Workload], size: BenchSize, mut emit: impl FnMut(Value)) -> Result<()> {
@@ -197,13 +190,13 @@ pub fn run(workloads: &[Workload], size: BenchSize, mut emit: impl FnMut(Value))
             Workload::InputFrame => bench_input(size, &mut emit),
             Workload::Compose => bench_compose(size, &mut emit)?,
             Workload::FrameDesktop => bench_frame_desktop(size, &mut emit)?,
-            Workload::JournalStroke => super::bench_io::journal_stroke(size, &mut emit)?,
-            Workload::SaveLarge => super::bench_io::save_large(size, &mut emit)?,
-            Workload::LoadLarge => super::bench_io::load_large(size, &mut emit)?,
+            Workload::JournalStroke => io::journal_stroke(size, &mut emit)?,
+            Workload::SaveLarge => io::save_large(size, &mut emit)?,
+            Workload::LoadLarge => io::load_large(size, &mut emit)?,
             Workload::ClayBend => bench_clay_bend(size, &mut emit),
             Workload::LatticeDrag => bench_lattice_drag(size, &mut emit)?,
             Workload::RegionMove => bench_region_move(size, &mut emit)?,
-            Workload::FrameXr => super::xr_station::bench_frame_xr(size.image_px, size.frames, &mut emit)?,
+            Workload::FrameXr => xr::frame_xr(size.image_px, size.frames, &mut emit)?,
         }
     }
     Ok(())
@@ -524,7 +517,7 @@ fn bench_mesh_full(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> 
 
 /// The sphere field `first` (of `radius` voxels at the origin) as the first part of a sculpt of
 /// two: the second a ball of 2 mm voxels beside it, turned and scaled, which no stamp reaches.
-fn two_part_assembly(first: &Field, radius: f32) -> super::assembly::Assembly {
+fn two_part_assembly(first: &Field, radius: f32) -> Assembly {
     use crate::math::Quat;
     use crate::parts::Placement;
     use crate::scene::ScenePart;
@@ -538,7 +531,7 @@ fn two_part_assembly(first: &Field, radius: f32) -> super::assembly::Assembly {
         ScenePart::whole(first.transform().voxel_size_m),
         ScenePart { name: "ball".into(), voxel_size_m: 0.002, placement, ..ScenePart::whole(0.002) },
     ];
-    super::assembly::Assembly::new(parts, vec![ball], first)
+    Assembly::new(parts, vec![ball], first)
 }
 
 fn bench_remesh_stamp(size: BenchSize, emit: &mut impl FnMut(Value)) {
@@ -1042,7 +1035,7 @@ fn bench_compose(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> {
 /// right, so every frame stamps, re-meshes and uploads. Medians of each stage; the swapchain's
 /// present is not part of an offscreen frame.
 fn bench_frame_desktop(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()> {
-    use super::station::{Station, SCRIPTED_STEP_S};
+    use crate::app::{Station, SCRIPTED_STEP_S};
     use crate::config::KeyBindings;
     use winit::keyboard::KeyCode;
     let scene = Scene::default_scene();
