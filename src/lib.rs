@@ -57,4 +57,5 @@ pub mod scene;
 pub mod spline;
 pub mod stereo;
 pub mod tool;
+pub mod ui;
 pub mod xr;

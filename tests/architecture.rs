@@ -152,6 +152,23 @@ const RULES: &[(&str, &[&str])] = &[
     ),
     ("xr", &["crate::field", "crate::mesh", "crate::clay", "crate::tool", "crate::app"]),
     (
+        "ui",
+        &[
+            "crate::field",
+            "crate::tool",
+            "crate::mesh",
+            "crate::input",
+            "crate::xr",
+            "crate::app",
+            "crate::io",
+            "ash",
+            "openxr",
+            "hidapi",
+            "gilrs",
+            "winit",
+        ],
+    ),
+    (
         "io",
         &[
             "crate::render",

@@ -590,6 +590,7 @@ fn the_glyph_shapes_match_golden() {
         show_environment: false,
         background: Vec3::ZERO,
         hud: Vec::new(),
+        panel: None,
     };
     renderer.draw(&frame).unwrap();
     let image = renderer.read_back().unwrap();

@@ -8,6 +8,8 @@
 use std::path::Path;
 use std::process::Command;
 
+use image::GenericImageView;
+
 mod common;
 use common::{check_against_golden, out_dir, root, Xvfb};
 
@@ -22,34 +24,44 @@ fn run_station(x: &Xvfb, args: &[&str]) -> std::process::Output {
         .expect("the argile binary runs")
 }
 
-#[test]
-fn a_scripted_session_in_a_window_matches_its_golden_and_saves_the_sculpt() {
+/// A fresh X server and the test's output folder, with the paths of its screenshot and saved
+/// sculpt cleared of any earlier run's files.
+struct Run {
+    x: Xvfb,
+    dir: std::path::PathBuf,
+    shot: std::path::PathBuf,
+    saved: std::path::PathBuf,
+}
+
+fn start(name: &str) -> Run {
     let x = Xvfb::start();
-    let dir = out_dir("station");
+    let dir = out_dir(name);
     std::fs::create_dir_all(&dir).unwrap();
-    let shot = dir.join("station-window-screenshot.png");
-    let saved = dir.join("station.argile");
+    let (shot, saved) = (dir.join(format!("{name}-screenshot.png")), dir.join(format!("{name}.argile")));
     let _ = std::fs::remove_file(&shot);
     let _ = std::fs::remove_file(&saved);
+    Run { x, dir, shot, saved }
+}
+
+impl Run {
+    /// `argile run` on `scene` with the validation layer, the input `script`, a screenshot
+    /// and a save at the end, and `args` (frames, size, mode).
+    fn scripted(&self, scene: &Path, script: &Path, args: &[&str]) -> std::process::Output {
+        let (scene, script) = (scene.to_str().unwrap(), script.to_str().unwrap());
+        let (shot, saved) = (self.shot.to_str().unwrap(), self.saved.to_str().unwrap());
+        let fixed =
+            [scene, "--validation", "--input-script", script, "--screenshot", shot, "--save-to", saved];
+        run_station(&self.x, &[&fixed[..], args].concat())
+    }
+}
+
+#[test]
+fn a_scripted_session_in_a_window_matches_its_golden_and_saves_the_sculpt() {
+    let run = start("station");
+    let (shot, saved) = (&run.shot, &run.saved);
     let scene = root().join("scenes/tests/station.toml");
     let script = root().join("tests/fixtures/station-input.toml");
-    let out = run_station(
-        &x,
-        &[
-            scene.to_str().unwrap(),
-            "--frames",
-            "16",
-            "--size",
-            "320x240",
-            "--validation",
-            "--input-script",
-            script.to_str().unwrap(),
-            "--screenshot",
-            shot.to_str().unwrap(),
-            "--save-to",
-            saved.to_str().unwrap(),
-        ],
-    );
+    let out = run.scripted(&scene, &script, &["--frames", "16", "--size", "320x240"]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
     // Any validation message (leaked objects at teardown included) makes the run fail.
@@ -58,13 +70,13 @@ fn a_scripted_session_in_a_window_matches_its_golden_and_saves_the_sculpt() {
     assert!(stdout.contains("frame stages, median ms over 16 frames: input"), "{stdout}");
     assert!(stdout.contains(&format!("saved the sculpt to {}", saved.display())), "{stdout}");
 
-    let image = image::open(&shot).expect("the screenshot was written").to_rgba8();
+    let image = image::open(shot).expect("the screenshot was written").to_rgba8();
     assert_eq!(image.dimensions(), (320, 240));
     check_against_golden("station", "window", &image);
 
     // The saved sculpt is the slab with one groove through it (about 18% of its clay: a 4 cm
     // wide, 15 cm long cut through 4 cm); the second groove, undone, would take as much again.
-    let sculpt = argile::app::load_sculpt(&saved).expect("the saved sculpt loads");
+    let sculpt = argile::app::load_sculpt(saved).expect("the saved sculpt loads");
     let slab = argile::app::final_field(&argile::scene::Scene::load(&scene).unwrap());
     let (carved, whole) = (sculpt.field.mass(), slab.mass());
     assert!(carved < 0.9 * whole && carved > 0.74 * whole, "one groove's worth carved: {carved} of {whole}");
@@ -293,4 +305,70 @@ fn a_scripted_run_that_can_save_nowhere_fails_and_its_journal_keeps_the_strokes(
     let recover = recover_in(&state);
     let said = String::from_utf8_lossy(&recover.stdout);
     assert!(recover.status.success() && said.contains("its sculpt is recovered"), "{said}");
+}
+
+/// The density and colour of `field` at `p` (metres).
+fn sample(field: &argile::field::Field, p: [f32; 3]) -> (f32, [f32; 4]) {
+    let mut reader = argile::field::FieldReader::new(field);
+    let index = field.transform().world_to_index(argile::math::Vec3::from(p));
+    (reader.density_at(index), reader.colour_at(index))
+}
+
+#[test]
+fn the_desk_panel_picks_the_tool_its_size_and_colour_undoes_from_its_history_and_matches_its_goldens() {
+    let run = start("panel");
+    let (x, dir, shot, saved) = (&run.x, &run.dir, &run.shot, &run.saved);
+    let scene = root().join("scenes/tests/station.toml");
+    let script = root().join("tests/fixtures/panel-input.toml");
+    let out =
+        run.scripted(&scene, &script, &["--frames", "24", "--size", "960x540", "--display-mode", "mono"]);
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "the station failed:\n{stdout}\n{stderr}");
+    let image = image::open(shot).expect("the screenshot was written").to_rgba8();
+    check_against_golden("panel", "mono", &image);
+
+    // The first stroke painted a 50 mm box's band moss green across the slab's upper half
+    // (a 20 mm box would not reach its middle); the second, lower one was taken back from
+    // the history, so the slab's lower edge keeps its colour.
+    let sculpt = argile::app::load_sculpt(saved).expect("the saved sculpt loads");
+    let field = &sculpt.field;
+    let front = 0.018;
+    for p in [[0.06, 0.045, front], [0.06, 0.0, front]] {
+        let (density, [r, g, b, _]) = sample(field, p);
+        assert!(density > 0.5 && g > r && g > 2.0 * b, "moss green at {p:?}: {r} {g} {b}");
+    }
+    let (density, [r, g, _, _]) = sample(field, [0.06, -0.06, front]);
+    assert!(density > 0.5 && r > 2.0 * g, "the slab's own colour where the undone stroke was: {r} {g}");
+    let slab = argile::app::final_field(&argile::scene::Scene::load(&scene).unwrap());
+    assert!((field.mass() - slab.mass()).abs() < 1e-3 * slab.mass(), "paint moves no clay");
+    let history = field.history_stats();
+    assert_eq!((history.undo_in_memory + history.undo_on_disk, history.redo), (1, 1), "{history:?}");
+
+    // A stereo mode: the same panel in each eye's half, at zero parallax.
+    let shot = dir.join("panel-side-by-side.png");
+    let out = run_station(
+        x,
+        &[
+            scene.to_str().unwrap(),
+            "--frames",
+            "3",
+            "--size",
+            "960x540",
+            "--display-mode",
+            "side-by-side",
+            "--validation",
+            "--screenshot",
+            shot.to_str().unwrap(),
+        ],
+    );
+    assert!(out.status.success(), "the station failed:\n{}", String::from_utf8_lossy(&out.stderr));
+    let image = image::open(&shot).unwrap().to_rgba8();
+    let (left, right) = (image.view(0, 0, 480, 540).to_image(), image.view(480, 0, 480, 540).to_image());
+    // Zero parallax: the panel's pixels are the same in both eyes.
+    let panel_differs = (0..540)
+        .flat_map(|y| (0..200).map(move |x| (x, y)))
+        .filter(|&(x, y)| left.get_pixel(x, y) != right.get_pixel(x, y))
+        .count();
+    assert_eq!(panel_differs, 0, "pixels of the panel that differ between the eyes");
+    check_against_golden("panel", "side-by-side", &image);
 }

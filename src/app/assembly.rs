@@ -229,6 +229,15 @@ impl Assembly {
         Ok(any)
     }
 
+    /// How many steps of the sculpt undo can take back and redo can put back.
+    pub fn history_len(&self, first: &Field) -> (usize, usize) {
+        if self.others.is_empty() {
+            let s = first.history_stats();
+            return (s.undo_in_memory + s.undo_on_disk, s.redo);
+        }
+        (self.undo.len(), self.redo.len())
+    }
+
     /// Closes the strokes open on the parts after the first.
     pub fn end_strokes(&mut self) {
         for field in &mut self.others {

@@ -180,6 +180,7 @@ pub fn build_frame(scene: &Scene, hands: &[(usize, crate::math::Pose)], show_too
         show_environment: scene.environment.show,
         background: scene.environment.background,
         hud: Vec::new(),
+        panel: None,
     }
 }
 

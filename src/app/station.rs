@@ -57,6 +57,7 @@ use crate::stereo::{HeadTrackedRig, Placement, StereoRig};
 use crate::tool::{
     edit_level_for, Action, Ellipsoid, Falloff, Solid, Stroke, Tool, ToolShape, HAND_SIZE_SAMPLES,
 };
+use crate::ui::{Panel, PanelCommand, PanelView, PointerEvent};
 
 /// The time step of a scripted run, seconds.
 pub const SCRIPTED_STEP_S: f32 = 1.0 / 60.0;
@@ -66,6 +67,32 @@ const POINTER_SPEED_M_PER_S: f32 = 0.1;
 const SIZE_STEP: f32 = 1.25;
 /// How much one press moves the convergence plane or changes the interaxial distance.
 const STEREO_STEP: f32 = 1.1;
+/// The range of the panel's size slider, millimetres (wider when the tool already is).
+const PANEL_SIZE_MM: (f32, f32) = (1.0, 200.0);
+/// The most step names the panel's history keeps.
+const STEP_NAMES_KEPT: usize = 256;
+
+/// The rate per second of an action that has one.
+fn rate_of(action: Action) -> Option<f32> {
+    match action {
+        Action::Build { rate_per_s }
+        | Action::SoftRemove { rate_per_s }
+        | Action::SoftPaint { rate_per_s }
+        | Action::Smooth { rate_per_s, .. } => Some(rate_per_s),
+        _ => None,
+    }
+}
+
+/// `action` at `rate` per second, where it has a rate.
+fn with_rate(action: Action, rate: f32) -> Action {
+    match action {
+        Action::Build { .. } => Action::Build { rate_per_s: rate },
+        Action::SoftRemove { .. } => Action::SoftRemove { rate_per_s: rate },
+        Action::SoftPaint { .. } => Action::SoftPaint { rate_per_s: rate },
+        Action::Smooth { centre_weight, .. } => Action::Smooth { centre_weight, rate_per_s: rate },
+        other => other,
+    }
+}
 
 /// How the station runs.
 #[derive(Clone, Debug, Default)]
@@ -157,6 +184,11 @@ pub enum ScriptEvent {
     },
     /// Wheel steps (positive: away from the user).
     Wheel(f32),
+    /// The pointer moved to a pixel of the window.
+    Move(Vec2),
+    /// The left button pressed and released at a pixel of the window (the pointer moves there
+    /// first).
+    Click(Vec2),
 }
 
 /// Input events at given frames, from a TOML file:
@@ -165,7 +197,8 @@ pub enum ScriptEvent {
 /// [[event]]
 /// frame = 3
 /// press = "Ctrl+KeyZ"          # or hold = "Space", release = "Space", wheel = 2.0,
-///                              # or drag = { button = "left", from_px = [10, 10], to_px = [60, 10] }
+///                              # or drag = { button = "left", from_px = [10, 10], to_px = [60, 10] },
+///                              # or click = [40, 30], move = [40, 30] (window pixels)
 /// ```
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct InputScript {
@@ -189,6 +222,9 @@ struct EventSpec {
     release: Option<String>,
     wheel: Option<f32>,
     drag: Option<DragSpec>,
+    click: Option<[f32; 2]>,
+    #[serde(rename = "move")]
+    move_to: Option<[f32; 2]>,
 }
 
 #[derive(Deserialize)]
@@ -255,10 +291,23 @@ impl InputScript {
                     steps: d.steps,
                 });
             }
+            let pixel = |p: [f32; 2], what: &str| {
+                if p.iter().all(|c| c.is_finite() && c.abs() <= 1e5) {
+                    Ok(Vec2::from(p))
+                } else {
+                    Err(at(span.clone(), format!("`{what}` must be a window pixel, not {p:?}")))
+                }
+            };
+            if let Some(p) = e.click {
+                parsed.push(ScriptEvent::Click(pixel(p, "click")?));
+            }
+            if let Some(p) = e.move_to {
+                parsed.push(ScriptEvent::Move(pixel(p, "move")?));
+            }
             if parsed.len() != 1 {
                 return Err(at(
                     span,
-                    "an event gives exactly one of press, hold, release, wheel or drag".into(),
+                    "an event gives exactly one of press, hold, release, wheel, drag, click or move".into(),
                 ));
             }
             events.push((e.frame, parsed.remove(0)));
@@ -278,6 +327,8 @@ impl InputScript {
 /// Where a station step spent its time, milliseconds.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StepTimes {
+    /// The panel: laid out, its commands done, tessellated.
+    pub panel_ms: f64,
     /// Keys held, pointer and view.
     pub input_ms: f64,
     /// The scripted hands' and the desk tool's strokes into the field.
@@ -524,6 +575,14 @@ pub struct Station<'s> {
     pub messages: Vec<String>,
     /// Re-meshes what each frame's edits dirtied, reusing its buffers from frame to frame.
     mesher: Mesher,
+    /// The desk panel, and whether the left button went down on it (its release is then the
+    /// panel's too).
+    panel: Panel,
+    panel_press: bool,
+    /// Names of the desk's undo steps, oldest first, and of those undone, next last (the
+    /// panel's history; steps it did not see, a scene's, are numbered instead).
+    step_names: Vec<String>,
+    redo_names: Vec<String>,
 }
 
 impl<'s> Station<'s> {
@@ -631,6 +690,12 @@ impl<'s> Station<'s> {
             times: StepTimes::default(),
             messages: Vec::new(),
             mesher: Mesher::default(),
+            // Hidden until the window shows it (`run_station`): a station without one has no use
+            // for it.
+            panel: Panel::hidden(),
+            panel_press: false,
+            step_names: Vec::new(),
+            redo_names: Vec::new(),
         };
         station.set_calibration(station.calibration);
         station.resize(window_px);
@@ -761,6 +826,9 @@ impl<'s> Station<'s> {
         if let MouseEvent::Move(at) = event {
             self.pointer_px = at;
         }
+        if self.panel_takes(event) {
+            return;
+        }
         let in_eye = |p: Vec2| self.display_mode.pointer_in_eye(p, self.window_px).0;
         let event = match event {
             MouseEvent::Press(button, at) => MouseEvent::Press(button, in_eye(at)),
@@ -865,6 +933,12 @@ impl<'s> Station<'s> {
             ScriptEvent::Hold(key) => self.key(key, true),
             ScriptEvent::Release(key) => self.key(key, false),
             ScriptEvent::Wheel(steps) => self.mouse(MouseEvent::Wheel(steps)),
+            ScriptEvent::Move(at) => self.mouse(MouseEvent::Move(at)),
+            ScriptEvent::Click(at) => {
+                self.mouse(MouseEvent::Move(at));
+                self.mouse(MouseEvent::Press(MouseButton::Left, at));
+                self.mouse(MouseEvent::Release(MouseButton::Left));
+            }
             ScriptEvent::Drag { button, from_px, to_px, steps } => {
                 self.mouse(MouseEvent::Press(button, from_px));
                 for i in 1..=steps {
@@ -887,6 +961,9 @@ impl<'s> Station<'s> {
                 match self.doc.playback.undo() {
                     Ok(true) => {
                         self.doc.journal();
+                        if let Some(name) = self.step_names.pop() {
+                            self.redo_names.push(name);
+                        }
                     }
                     Ok(false) => self.messages.push("nothing to undo".into()),
                     Err(e) => self.messages.push(format!("undo failed: {e}")),
@@ -895,6 +972,9 @@ impl<'s> Station<'s> {
             StationAction::Redo => {
                 if self.doc.playback.redo() {
                     self.doc.journal();
+                    if let Some(name) = self.redo_names.pop() {
+                        self.step_names.push(name);
+                    }
                 } else {
                     self.messages.push("nothing to redo".into());
                 }
@@ -977,6 +1057,7 @@ impl<'s> Station<'s> {
                     let c = inflate(field, &region, distance, &images);
                     field.end_stroke();
                     self.doc.journal();
+                    self.stepped(if distance > 0.0 { "inflate".into() } else { "deflate".into() });
                     if c.dirtied == 0 {
                         self.messages.push("no clay surface within the tool to inflate or deflate".into());
                     }
@@ -1039,6 +1120,7 @@ impl<'s> Station<'s> {
                     self.fit_views();
                 }
             }
+            StationAction::TogglePanel => self.set_panel_shown(!self.panel.shown()),
             StationAction::Apply
             | StationAction::Clutch
             | StationAction::GrabRegion
@@ -1065,6 +1147,173 @@ impl<'s> Station<'s> {
 
     /// The convergence plane's range: from twice the near plane to half the far one, so that
     /// the zero-parallax plane never lies where nothing is drawn.
+    /// Shows or hides the desk panel (the `toggle-panel` key does too).
+    pub fn set_panel_shown(&mut self, shown: bool) {
+        self.panel.set_shown(shown);
+        self.panel_press = false;
+    }
+
+    /// Hands `event` to the panel; returns whether it was the panel's: the pointer over the
+    /// panel (and the view not being turned), or the left button that went down on it.
+    fn panel_takes(&mut self, event: MouseEvent) -> bool {
+        if !self.panel.shown() {
+            return false;
+        }
+        let in_eye = |p: Vec2| self.display_mode.pointer_in_eye(p, self.window_px).0.to_array();
+        match event {
+            MouseEvent::Move(at) => {
+                self.panel.pointer(PointerEvent::Moved(in_eye(at)));
+                self.panel_press || (self.panel.wants_pointer() && !self.mouse.left_held())
+            }
+            MouseEvent::Press(button, at) => {
+                self.panel.pointer(PointerEvent::Moved(in_eye(at)));
+                let taken = self.panel.wants_pointer();
+                if taken && button == MouseButton::Left {
+                    self.panel.pointer(PointerEvent::Primary(true));
+                    self.panel_press = true;
+                }
+                taken
+            }
+            MouseEvent::Release(MouseButton::Left) if self.panel_press => {
+                self.panel.pointer(PointerEvent::Primary(false));
+                self.panel_press = false;
+                true
+            }
+            MouseEvent::Release(_) => false,
+            MouseEvent::Wheel(steps) => {
+                let taken = self.panel.wants_pointer();
+                if taken {
+                    self.panel.pointer(PointerEvent::Wheel(steps));
+                }
+                taken
+            }
+        }
+    }
+
+    /// What the panel shows now.
+    fn panel_view(&self) -> PanelView {
+        let tool = &self.desk_tool;
+        let size_m = tool.size_m();
+        let cycle = shape_cycle(1.0);
+        let shape = cycle.iter().position(|(_, n)| *n == shape_name(&tool.shape));
+        let (undo, redo) = self.doc.playback.assembly().history_len(self.doc.playback.field());
+        // The names kept for the newest steps; older ones (a scene's) by number alone.
+        let undo_list = (0..undo)
+            .map(|i| {
+                let k = (self.step_names.len() + i).checked_sub(undo);
+                format!("{}. {}", i + 1, k.map_or("step", |k| self.step_names[k].as_str()))
+            })
+            .collect();
+        let redo_list = (0..redo)
+            .map(|i| {
+                let k = self.redo_names.len().checked_sub(1 + i);
+                format!("{}. {}", undo + i + 1, k.map_or("step", |k| self.redo_names[k].as_str()))
+            })
+            .collect();
+        let modes: Vec<DisplayMode> =
+            DisplayMode::ALL.iter().copied().filter(|m| self.quad_buffer || m.layers() == 1).collect();
+        let mut status = self.hud_lines();
+        status.extend(self.messages.iter().rev().take(3).rev().cloned());
+        let size_mm = size_m * 1000.0;
+        PanelView {
+            shapes: cycle.iter().map(|(_, n)| *n).collect(),
+            shape,
+            actions: action_cycle().iter().map(|a| a.name()).collect(),
+            action: action_cycle()
+                .iter()
+                .position(|a| a.name() == tool.action.name())
+                .unwrap_or(self.action_index),
+            size_mm,
+            size_range_mm: (PANEL_SIZE_MM.0.min(size_mm), PANEL_SIZE_MM.1.max(size_mm)),
+            rate_per_s: rate_of(tool.action),
+            spacing: tool.spacing,
+            colour: [tool.colour[0], tool.colour[1], tool.colour[2]],
+            undo: undo_list,
+            redo: redo_list,
+            display_mode: modes.iter().position(|m| *m == self.display_mode).unwrap_or(0),
+            display_modes: modes.iter().map(|m| m.name()).collect(),
+            save_to: self.doc.save_to().display().to_string(),
+            save_name: self
+                .doc
+                .save_to()
+                .file_name()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
+            unsaved: self.unsaved_work(),
+            status,
+        }
+    }
+
+    /// Does what the panel asked.
+    fn panel_command(&mut self, command: PanelCommand) {
+        match command {
+            PanelCommand::Shape(i) => {
+                let size = self.desk_tool.shape.half_extents_m().min_element();
+                if let Some((shape, _)) = shape_cycle(size).get(i) {
+                    self.desk_tool.shape = shape.clone();
+                }
+            }
+            PanelCommand::Action(i) => {
+                if let Some(action) = action_cycle().get(i) {
+                    self.action_index = i;
+                    self.desk_tool.action = *action;
+                }
+            }
+            PanelCommand::SizeMm(mm) => {
+                let now = self.desk_tool.size_m();
+                if mm.is_finite() && mm > 0.0 && now > 0.0 {
+                    self.desk_tool.scale *= mm * 1e-3 / now;
+                }
+            }
+            PanelCommand::Rate(rate) => {
+                if rate.is_finite() && rate > 0.0 {
+                    self.desk_tool.action = with_rate(self.desk_tool.action, rate);
+                }
+            }
+            PanelCommand::Spacing(spacing) => {
+                if spacing.is_finite() {
+                    self.desk_tool.spacing = spacing.clamp(0.05, 1.0);
+                }
+            }
+            PanelCommand::Colour(rgb) => {
+                if rgb.iter().all(|c| c.is_finite()) {
+                    let [r, g, b] = rgb.map(|c| c.clamp(0.0, 1.0));
+                    self.desk_tool.colour = [r, g, b, self.desk_tool.colour[3]];
+                }
+            }
+            PanelCommand::Undo(n) => (0..n).for_each(|_| self.act(StationAction::Undo)),
+            PanelCommand::Redo(n) => (0..n).for_each(|_| self.act(StationAction::Redo)),
+            PanelCommand::DisplayMode(i) => {
+                let usable =
+                    DisplayMode::ALL.iter().copied().filter(|m| self.quad_buffer || m.layers() == 1).nth(i);
+                if let Some(mode) = usable {
+                    self.display_mode = mode;
+                    self.fit_views();
+                }
+            }
+            PanelCommand::Save => self.act(StationAction::Save),
+        }
+    }
+
+    /// A desk step (a stroke, a region moved) ended: its name goes to the panel's history, and
+    /// what was undone can no longer be redone.
+    fn stepped(&mut self, name: String) {
+        self.step_names.push(name);
+        self.redo_names.clear();
+        if self.step_names.len() > STEP_NAMES_KEPT {
+            self.step_names.drain(..self.step_names.len() - STEP_NAMES_KEPT);
+        }
+    }
+
+    /// The desk tool's stroke as the history names it.
+    fn stroke_name(&self) -> String {
+        format!(
+            "{} {} {} mm",
+            self.desk_tool.action.name(),
+            shape_name(&self.desk_tool.shape),
+            (self.desk_tool.size_m() * 1000.0).round()
+        )
+    }
+
     fn convergence_range(&self) -> (f32, f32) {
         let rig = &self.view.rig;
         (rig.near_m * 2.0, (rig.far_m * 0.5).max(rig.near_m * 2.0))
@@ -1541,6 +1790,8 @@ impl<'s> Station<'s> {
                 self.region_drag = None;
                 field.end_stroke();
                 self.doc.journal();
+                self.step_names.push("region".into());
+                self.redo_names.clear();
                 None
             }
             _ => None,
@@ -1560,6 +1811,8 @@ impl<'s> Station<'s> {
                 field.end_stroke();
             }
             self.doc.journal();
+            let name = self.stroke_name();
+            self.stepped(name);
         }
     }
 
@@ -1593,6 +1846,15 @@ impl<'s> Station<'s> {
     /// Runs the tools and the field for `dt_s` seconds and returns the frame to draw; mesh
     /// changes go to `apply`.
     pub fn step(&mut self, dt_s: f32, mut apply: impl FnMut(&crate::mesh::MeshDiff)) -> crate::render::Frame {
+        let started = Instant::now();
+        // The panel first: what its controls ask for acts in this frame.
+        let view = self.panel_view();
+        let extent = (self.view.output.width_px, self.view.output.height_px);
+        let (commands, panel_paint) = self.panel.run(&view, extent, self.clock_s);
+        for command in commands {
+            self.panel_command(command);
+        }
+        self.times.panel_ms = ms_since(started);
         let started = Instant::now();
         // The view first: the pointer moves in it.
         let (lo, hi) = self.convergence_range();
@@ -1676,6 +1938,8 @@ impl<'s> Station<'s> {
                     field.end_stroke();
                     self.doc.journal();
                     self.confirm_open = None;
+                    let name = self.stroke_name();
+                    self.stepped(name);
                 }
             }
         }
@@ -1764,7 +2028,9 @@ impl<'s> Station<'s> {
             frame.views.eyes.swap(0, 1);
         }
         self.place_key_light(&mut frame.lights);
-        frame.hud = self.hud_lines();
+        // The panel shows what the heads-up display would.
+        frame.hud = if panel_paint.is_some() { Vec::new() } else { self.hud_lines() };
+        frame.panel = panel_paint;
         let tool = &self.desk_tool;
         let colour = Vec4::from(tool.colour).truncate().extend(0.35);
         frame.tools.push(tool_glyph(&tool.shape, pose, tool.scale, colour));
@@ -1881,6 +2147,7 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
                 station.set_calibration(c);
             }
             station.set_input_settings(&input);
+            station.set_panel_shown(true);
             if let Some(config) = &options.autosave {
                 station.set_autosave_restart(config.clone(), options.scene_toml.clone());
             }
@@ -2271,6 +2538,109 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("not a key name"), "{e}");
+        let s = InputScript::parse(
+            "[[event]]\nframe = 1\nclick = [40, 30]\n[[event]]\nframe = 2\nmove = [41.5, 30]\n",
+            "s.toml",
+        )
+        .unwrap();
+        assert_eq!(s.events[0].1, ScriptEvent::Click(Vec2::new(40.0, 30.0)));
+        assert_eq!(s.events[1].1, ScriptEvent::Move(Vec2::new(41.5, 30.0)));
+        let e =
+            InputScript::parse("[[event]]\nframe = 1\nclick = [1e9, 0]\n", "s.toml").unwrap_err().to_string();
+        assert!(e.contains("window pixel"), "{e}");
+    }
+
+    /// Clicks the panel widget whose command is `wanted`, found by clicking down the panel's
+    /// band of a fresh station on `scene` (the layout is the same in every station of a size).
+    fn panel_point(scene: &Scene, wanted: impl Fn(&Station<'_>) -> bool) -> Option<Vec2> {
+        for y in (6..540).step_by(6) {
+            for x in (10..230).step_by(16) {
+                let mut station =
+                    Station::new(scene, KeyBindings::shipped(), (960, 540), "unused.argile".into());
+                station.set_panel_shown(true);
+                station.step(SCRIPTED_STEP_S, |_| {});
+                let at = Vec2::new(x as f32, y as f32);
+                station.script(&ScriptEvent::Click(at));
+                station.step(SCRIPTED_STEP_S, |_| {});
+                station.step(SCRIPTED_STEP_S, |_| {});
+                if wanted(&station) {
+                    return Some(at);
+                }
+            }
+        }
+        None
+    }
+
+    #[test]
+    fn the_panel_picks_the_tool_its_size_and_colour_and_the_pointer_over_it_leaves_the_view_alone() {
+        let scene = ball_scene();
+        let shipped = Station::new(&scene, KeyBindings::shipped(), (960, 540), "unused.argile".into());
+        let (size, colour) = (shipped.desk_tool.size_m(), shipped.desk_tool.colour);
+        let boxed = panel_point(&scene, |s| shape_name(&s.desk_tool.shape) == "box").expect("a box button");
+        let painting = panel_point(&scene, |s| s.desk_tool.action == Action::Paint).expect("a paint button");
+        let sized =
+            panel_point(&scene, |s| (s.desk_tool.size_m() - size).abs() > 1e-4).expect("a size slider");
+        let coloured = panel_point(&scene, |s| s.desk_tool.colour != colour).expect("a swatch");
+        // The controls lie in the panel's band, top to bottom as drawn: shapes, actions, size,
+        // swatches.
+        assert!(boxed.y < painting.y && painting.y < sized.y && sized.y < coloured.y);
+        // The pointer over the panel does not turn the view; over the scene it does.
+        let mut station = Station::new(&scene, KeyBindings::shipped(), (960, 540), "unused.argile".into());
+        station.set_panel_shown(true);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        let turn = station.mouse.scene_rotation;
+        let drag = |from: Vec2| ScriptEvent::Drag {
+            button: MouseButton::Left,
+            from_px: from,
+            to_px: from + Vec2::new(40.0, 0.0),
+            steps: 4,
+        };
+        station.script(&drag(Vec2::new(60.0, 400.0)));
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert_eq!(station.mouse.scene_rotation, turn, "a drag on the panel leaves the view");
+        station.script(&drag(Vec2::new(600.0, 300.0)));
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert_ne!(station.mouse.scene_rotation, turn, "a drag on the scene turns it");
+        // F1 hides it: the whole window is the view's again.
+        station.key(KeyCode::F1, true);
+        station.key(KeyCode::F1, false);
+        let turn = station.mouse.scene_rotation;
+        station.script(&drag(Vec2::new(60.0, 400.0)));
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert_ne!(station.mouse.scene_rotation, turn, "hidden, the panel takes nothing");
+    }
+
+    #[test]
+    fn the_panels_history_names_the_desk_strokes_and_a_click_goes_back_to_one() {
+        let scene = ball_scene();
+        let mut station = Station::new(&scene, KeyBindings::shipped(), (960, 540), "unused.argile".into());
+        station.set_panel_shown(true);
+        sculpt_for(&mut station, 3);
+        let one = station.field().clone();
+        station.mouse.tool_position_m += Vec3::new(0.05, 0.0, 0.0);
+        sculpt_for(&mut station, 3);
+        let view = station.panel_view();
+        assert_eq!(view.undo.len(), 2, "{:?}", view.undo);
+        assert!(
+            view.undo[0].starts_with("1. add sphere") && view.undo[1].starts_with("2. add sphere"),
+            "{:?}",
+            view.undo
+        );
+        station.panel_command(PanelCommand::Undo(1));
+        assert!(station.field().same_samples(&one), "back to after the first stroke");
+        let view = station.panel_view();
+        assert_eq!((view.undo.len(), view.redo.len()), (1, 1));
+        assert!(view.redo[0].starts_with("2. add sphere"), "{:?}", view.redo);
+        station.panel_command(PanelCommand::Undo(1));
+        assert_eq!(station.field().mass(), 0.0, "back to the start");
+        station.panel_command(PanelCommand::Redo(2));
+        assert_eq!(station.panel_view().undo.len(), 2, "both redone");
+        // A new stroke after an undo: nothing to redo any more.
+        station.panel_command(PanelCommand::Undo(1));
+        station.mouse.tool_position_m -= Vec3::new(0.0, 0.05, 0.0);
+        sculpt_for(&mut station, 2);
+        let view = station.panel_view();
+        assert_eq!((view.undo.len(), view.redo.len()), (2, 0));
     }
 
     /// An empty scene whose first tool adds clay with a 3 cm ball.

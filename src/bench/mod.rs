@@ -1043,12 +1043,13 @@ fn bench_frame_desktop(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<
     for mode in DisplayMode::ALL.into_iter().filter(|m| m.layers() == 1) {
         let mut station = Station::new(&scene, KeyBindings::shipped(), window, "unused.argile".into());
         station.set_surface(mode, "offscreen", 1)?;
+        station.set_panel_shown(true);
         let eye = mode.eye_size_for_output(window);
         let mut renderer = renderer_for(&scene, Some(eye), false, None)?;
         renderer.apply(&mesh_all(station.field()))?;
         station.key(KeyCode::Space, true);
         station.key(KeyCode::ArrowRight, true);
-        let mut stages: [Vec<f64>; 7] = Default::default();
+        let mut stages: [Vec<f64>; 8] = Default::default();
         for frame_index in 0..size.frames + 2 {
             let started = Instant::now();
             let mut failed = None;
@@ -1074,6 +1075,7 @@ fn bench_frame_desktop(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<
             if frame_index >= 2 {
                 let times = station.times();
                 for (v, x) in stages.iter_mut().zip([
+                    times.panel_ms,
                     times.input_ms,
                     times.tools_ms,
                     times.mesh_ms - upload_ms,
@@ -1086,7 +1088,7 @@ fn bench_frame_desktop(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<
                 }
             }
         }
-        let [input, tools, mesh, upload, render, compose, total] = stages.map(median);
+        let [panel, input, tools, mesh, upload, render, compose, total] = stages.map(median);
         emit(json!({
             "workload": "frame-desktop",
             "mode": mode.name(),
@@ -1094,6 +1096,7 @@ fn bench_frame_desktop(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<
             "window_px": [window.0, window.1],
             "eye_px": [eye.0, eye.1],
             "frames": size.frames,
+            "median_panel_ms": panel,
             "median_input_ms": input,
             "median_tools_ms": tools,
             "median_mesh_ms": mesh,

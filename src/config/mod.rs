@@ -127,6 +127,8 @@ pub enum StationAction {
     /// Show the open lattice's next slice (ESM §4.2): a patch of controls with stems for their
     /// values and the function's zero contour on it; after the last, none.
     NextLatticeSlice,
+    /// Show or hide the desk panel (tool, history, view, file).
+    TogglePanel,
 }
 
 /// Every action with its name in the bindings file.
@@ -180,6 +182,7 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("heavier-weight", StationAction::HeavierWeight),
     ("lighter-weight", StationAction::LighterWeight),
     ("next-lattice-slice", StationAction::NextLatticeSlice),
+    ("toggle-panel", StationAction::TogglePanel),
 ];
 
 impl StationAction {

@@ -178,19 +178,9 @@ impl Composer {
         .map_err(RenderError::vk("vkAllocateDescriptorSets"))?[0];
         // texelFetch ignores filtering; the sampler only completes the descriptor.
         let sampler = Sampler::linear(device, 0.0)?;
-        let image_info = [vk::DescriptorImageInfo {
-            sampler: sampler.raw,
-            image_view: source,
-            image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-        }];
-        let write = vk::WriteDescriptorSet::default()
-            .dst_set(set)
-            .dst_binding(0)
-            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-            .image_info(&image_info);
         // SAFETY: the set is not in use; the view and sampler outlive the composer (the view
         // is the caller's contract, the sampler is a field).
-        unsafe { d.update_descriptor_sets(&[write], &[]) };
+        unsafe { super::gpu::pipeline::write_sampled(d, set, 0, source, sampler.raw) };
         Ok(Self {
             pipelines: Default::default(),
             handles,
@@ -214,6 +204,7 @@ impl Composer {
                 depth_test: false,
                 depth_write: false,
                 blend: false,
+                premultiplied: false,
                 fragment_constant: Some(shader_mode(mode)),
             };
             *slot = Some(Pipeline::new(

@@ -140,6 +140,8 @@ pub struct Frame {
     /// Heads-up display lines (ASCII), drawn at zero parallax in the top-left corner; none
     /// draws nothing.
     pub hud: Vec<String>,
+    /// The panels, drawn over everything at zero parallax; none draws nothing.
+    pub panel: Option<super::PanelPaint>,
 }
 
 /// The number of lights the clay shader evaluates.

@@ -33,6 +33,7 @@ mod environment;
 mod frame;
 mod gpu;
 mod hud;
+mod panel;
 mod renderer;
 mod shapes;
 mod target;
@@ -41,6 +42,7 @@ mod xr_target;
 
 pub use frame::*;
 pub use gpu::{choose_device, DeviceInfo, DeviceKind, ValidationLog, DEVICE_VARIABLE};
+pub use panel::{PanelBatch, PanelPaint, PanelTexture, PanelVertex, MAX_TEXTURE_SIDE};
 pub use renderer::{
     probe_devices, DeviceProbe, Renderer, RendererDesc, StereoImage, ViewPasses, VulkanHandles, VulkanMaker,
     VIEW_PASSES_VARIABLE,

@@ -15,16 +15,19 @@ use super::compose::{ComposeFramebuffers, ComposedOutput, Composer, COMPOSED_FOR
 use super::environment::{build_radiance_cube, irradiance_sh9, reflection_lod, CubeMap};
 use super::gpu::buffer::{Buffer, MemoryUse};
 use super::gpu::device::Device;
-use super::gpu::image::{read_layers, record_copy_to_buffer, transition, Image, ImageDesc, Sampler};
+use super::gpu::image::{
+    read_layers, record_copy_to_buffer, transition, Image, ImageDesc, Sampler, FRAGMENT_READ, TRANSFER_WRITE,
+};
 use super::gpu::instance::Instance;
 use super::gpu::pipeline::{DescriptorPool, Layout, Pipeline, PipelineDesc, PUSH_CONSTANT_BYTES};
 use super::gpu::swapchain::{color_range, surface_extensions, Surface, SwapchainDesc};
+use super::panel::PanelGpu;
 use super::shapes::{centred_box, full_screen_quad, icosphere, torus_spine, unit_box, unit_cylinder};
 use super::target::{begin_pass, StereoTarget, ViewPass};
 pub use super::target::{ViewPasses, VIEW_PASSES_VARIABLE};
 use super::window::{to_rgba, Presented, WindowHandles, WindowOutput};
 use super::xr_target::{SwapchainImages, SwapchainTarget};
-use super::{Environment, Frame, GlyphShape, Light, RenderError, ValidationLog, MAX_LIGHTS};
+use super::{Environment, Frame, GlyphShape, Light, PanelPaint, RenderError, ValidationLog, MAX_LIGHTS};
 use crate::math::Vec3;
 use crate::mesh::{MeshDiff, Vertex};
 use crate::stereo::display::{DisplayMode, Parity};
@@ -134,7 +137,7 @@ impl ArenaStorage for ArenaBuffers {
 
 /// Replaces `buffer` by one of at least `bytes` with the same contents at the same offsets (no
 /// frame is in flight between frames, so the old one can go at once).
-fn grow(
+pub(super) fn grow(
     device: &Arc<Device>,
     buffer: &mut Buffer,
     bytes: u64,
@@ -187,6 +190,8 @@ struct Pipelines {
     clay: Pipeline,
     glyph: Pipeline,
     hud: Pipeline,
+    /// Viewport and scissor set when recording (each batch is clipped).
+    panel: Pipeline,
 }
 
 /// The heads-up display's quads (host-visible, rewritten when the text or the size changes).
@@ -277,6 +282,7 @@ pub struct Renderer {
     /// Where screenshots of the window are read back (made on first use).
     screenshot: Option<Buffer>,
     hud: HudMesh,
+    panel: PanelGpu,
     command_buffer: vk::CommandBuffer,
     fence: vk::Fence,
     drawn: bool,
@@ -495,6 +501,7 @@ impl Renderer {
                 text: Vec::new(),
                 extent: (0, 0),
             },
+            panel: PanelGpu::new(&device)?,
             command_buffer,
             fence,
             drawn: false,
@@ -561,6 +568,17 @@ impl Renderer {
         Ok(())
     }
 
+    /// Applies the panels' texture updates and writes their meshes (none: nothing drawn).
+    fn write_panel(&mut self, paint: Option<&PanelPaint>) -> Result<(), RenderError> {
+        match paint {
+            Some(paint) => self.panel.write(paint, self.target.extent, self.layout.panel_set),
+            None => {
+                self.panel.batches.clear();
+                Ok(())
+            }
+        }
+    }
+
     fn write_uniforms(&mut self, frame: &Frame) {
         let mut u = FrameUniforms::default();
         for (eye, view) in u.eyes.iter_mut().zip(&frame.views.eyes) {
@@ -602,6 +620,7 @@ impl Renderer {
     pub fn draw(&mut self, frame: &Frame) -> Result<(), RenderError> {
         self.write_uniforms(frame);
         self.write_hud(&frame.hud)?;
+        self.write_panel(frame.panel.as_ref())?;
         self.submit(|cb| self.record_stereo(cb, frame), None, None)?;
         self.finish()?;
         self.drawn = true;
@@ -727,6 +746,7 @@ impl Renderer {
         }
         self.write_uniforms(frame);
         self.write_hud(&frame.hud)?;
+        self.write_panel(frame.panel.as_ref())?;
         let shot_buffer = self.screenshot.as_ref().filter(|_| screenshot).map(|b| b.raw);
         let window = self.window.as_ref().expect("checked above");
         let composer = window.composer.as_ref().expect("made above");
@@ -865,6 +885,7 @@ impl Renderer {
                 d.cmd_draw_indexed(cb, self.hud.index_count, 1, 0, 0, 0);
             }
         }
+        self.panel.record(cb, self.layout.pipeline, pipelines.panel.raw);
     }
 
     fn draw_shape(&self, cb: vk::CommandBuffer, shape: &ShapeMesh) {
@@ -966,6 +987,7 @@ impl Renderer {
         let passes = swapchain.passes(&self.target, colour, depth)?;
         self.write_uniforms(frame);
         self.write_hud(&frame.hud)?;
+        self.write_panel(frame.panel.as_ref())?;
         self.submit(
             |cb| {
                 for (pass, pipelines) in passes.iter().zip(&self.pipelines) {
@@ -1055,11 +1077,7 @@ impl Renderer {
                 vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
                 vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
             ),
-            (
-                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                vk::PipelineStageFlags::FRAGMENT_SHADER,
-                vk::AccessFlags::SHADER_READ,
-            ),
+            FRAGMENT_READ,
         );
         composer.record(cb, framebuffers, (mode, parity), (extent.width, extent.height));
         transition(
@@ -1118,6 +1136,7 @@ fn make_pipelines(
         depth_test: true,
         depth_write: false,
         blend: false,
+        premultiplied: false,
         fragment_constant: None,
     };
     let pipelines_for = |pass: &ViewPass| -> Result<Pipelines, RenderError> {
@@ -1175,6 +1194,25 @@ fn make_pipelines(
                 blend: true,
                 ..base
             })?,
+            panel: Pipeline::new(
+                device,
+                &PipelineDesc {
+                    name: "panel",
+                    vertex: spirv!("panel.vert"),
+                    fragment: spirv!("panel.frag"),
+                    attributes: 3,
+                    cull: vk::CullModeFlags::NONE,
+                    depth_test: false,
+                    depth_write: false,
+                    blend: true,
+                    premultiplied: true,
+                    ..base
+                },
+                layout.pipeline,
+                pass.render_pass,
+                None,
+                target.samples,
+            )?,
         })
     };
     target.passes.iter().map(pipelines_for).collect()
@@ -1227,11 +1265,7 @@ fn upload_cube(device: &Arc<Device>, cube: &CubeMap) -> Result<Image, RenderErro
             image.raw,
             range,
             (vk::ImageLayout::UNDEFINED, vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty()),
-            (
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::TRANSFER_WRITE,
-            ),
+            TRANSFER_WRITE,
         );
         // SAFETY: the image is in TRANSFER_DST_OPTIMAL and the regions lie inside the staging
         // buffer and the image.
@@ -1244,22 +1278,7 @@ fn upload_cube(device: &Arc<Device>, cube: &CubeMap) -> Result<Image, RenderErro
                 &regions,
             )
         };
-        transition(
-            d,
-            cb,
-            image.raw,
-            range,
-            (
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::TRANSFER_WRITE,
-            ),
-            (
-                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                vk::PipelineStageFlags::FRAGMENT_SHADER,
-                vk::AccessFlags::SHADER_READ,
-            ),
-        );
+        transition(d, cb, image.raw, range, TRANSFER_WRITE, FRAGMENT_READ);
     })?;
     Ok(image)
 }
@@ -1373,6 +1392,7 @@ mod tests {
             show_environment: true,
             background: Vec3::ZERO,
             hud: Vec::new(),
+            panel: None,
         };
         renderer.draw(&frame).unwrap();
         let format = vk::Format::R8G8B8A8_UNORM;

@@ -162,6 +162,23 @@ impl Drop for Sampler {
     }
 }
 
+/// An image's use on one side of a [`transition`]: layout, stage and access.
+pub(crate) type ImageUse = (vk::ImageLayout, vk::PipelineStageFlags, vk::AccessFlags);
+
+/// Being written by a copy.
+pub(crate) const TRANSFER_WRITE: ImageUse = (
+    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+    vk::PipelineStageFlags::TRANSFER,
+    vk::AccessFlags::TRANSFER_WRITE,
+);
+
+/// Being sampled by fragment shaders.
+pub(crate) const FRAGMENT_READ: ImageUse = (
+    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+    vk::PipelineStageFlags::FRAGMENT_SHADER,
+    vk::AccessFlags::SHADER_READ,
+);
+
 /// A pipeline barrier that moves `image` (all of `range`) between layouts.
 pub(crate) fn transition(
     device: &ash::Device,

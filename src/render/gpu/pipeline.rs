@@ -28,16 +28,20 @@ pub(crate) struct PipelineDesc {
     pub(crate) depth_write: bool,
     /// Premultiplied-free alpha blending (`src·a + dst·(1−a)`).
     pub(crate) blend: bool,
+    /// With `blend`, the source is premultiplied by its alpha (`src + dst·(1−a)`).
+    pub(crate) premultiplied: bool,
     /// The value of the fragment shader's specialization constant 0 (`constant_id = 0`), for
     /// shaders that have one.
     pub(crate) fragment_constant: Option<u32>,
 }
 
-/// The descriptor set layout and pipeline layout shared by every pipeline: binding 0 the frame
-/// uniforms, binding 1 the radiance cube map; 128 bytes of push constants.
+/// The descriptor set layouts and pipeline layout shared by every pipeline: set 0 binding 0 the
+/// frame uniforms, binding 1 the radiance cube map; set 1 binding 0 a panel texture (only the
+/// panel pipeline reads it); 128 bytes of push constants.
 pub(crate) struct Layout {
     pub(crate) pipeline: vk::PipelineLayout,
     pub(crate) set: vk::DescriptorSetLayout,
+    pub(crate) panel_set: vk::DescriptorSetLayout,
     device: Arc<Device>,
 }
 
@@ -57,28 +61,42 @@ impl Layout {
                 .stage_flags(vk::ShaderStageFlags::FRAGMENT),
         ];
         let d = &device.raw;
-        // SAFETY: valid create infos on a live device.
-        let set = unsafe {
-            d.create_descriptor_set_layout(
-                &vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings),
-                None,
-            )
-        }
-        .map_err(RenderError::vk("vkCreateDescriptorSetLayout"))?;
+        let set = set_layout(d, &bindings)?;
+        let texture = [vk::DescriptorSetLayoutBinding::default()
+            .binding(0)
+            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+            .descriptor_count(1)
+            .stage_flags(vk::ShaderStageFlags::FRAGMENT)];
+        let panel_set = set_layout(d, &texture)?;
         let ranges = [vk::PushConstantRange::default().stage_flags(all).offset(0).size(PUSH_CONSTANT_BYTES)];
-        let sets = [set];
+        let sets = [*set, *panel_set];
         let info = vk::PipelineLayoutCreateInfo::default().set_layouts(&sets).push_constant_ranges(&ranges);
-        // SAFETY: as above; the set layout is live.
-        let pipeline = match unsafe { d.create_pipeline_layout(&info, None) } {
-            Ok(p) => p,
-            Err(e) => {
-                // SAFETY: nothing uses the set layout yet.
-                unsafe { d.destroy_descriptor_set_layout(set, None) };
-                return Err(RenderError::vk("vkCreatePipelineLayout")(e));
-            }
-        };
-        Ok(Self { pipeline, set, device: device.clone() })
+        // SAFETY: as above; the set layouts are live.
+        let pipeline = unsafe { d.create_pipeline_layout(&info, None) }
+            .map_err(RenderError::vk("vkCreatePipelineLayout"))?;
+        let (set, panel_set) =
+            (scopeguard::ScopeGuard::into_inner(set), scopeguard::ScopeGuard::into_inner(panel_set));
+        Ok(Self { pipeline, set, panel_set, device: device.clone() })
     }
+}
+
+/// A descriptor set layout of `bindings`, destroyed again if the caller fails before it keeps it.
+fn set_layout<'d>(
+    d: &'d ash::Device,
+    bindings: &[vk::DescriptorSetLayoutBinding<'_>],
+) -> Result<
+    scopeguard::ScopeGuard<vk::DescriptorSetLayout, impl FnOnce(vk::DescriptorSetLayout) + 'd>,
+    RenderError,
+> {
+    // SAFETY: a valid create info on a live device.
+    let set = unsafe {
+        d.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(bindings), None)
+    }
+    .map_err(RenderError::vk("vkCreateDescriptorSetLayout"))?;
+    Ok(scopeguard::guard(set, move |set| {
+        // SAFETY: nothing uses the set layout yet.
+        unsafe { d.destroy_descriptor_set_layout(set, None) }
+    }))
 }
 
 impl Drop for Layout {
@@ -88,6 +106,7 @@ impl Drop for Layout {
         unsafe {
             self.device.raw.destroy_pipeline_layout(self.pipeline, None);
             self.device.raw.destroy_descriptor_set_layout(self.set, None);
+            self.device.raw.destroy_descriptor_set_layout(self.panel_set, None);
         }
     }
 }
@@ -184,14 +203,7 @@ impl Pipeline {
         let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
             .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
         let fixed = extent.unwrap_or_default();
-        let viewports = [vk::Viewport {
-            x: 0.0,
-            y: 0.0,
-            width: fixed.width as f32,
-            height: fixed.height as f32,
-            min_depth: 0.0,
-            max_depth: 1.0,
-        }];
+        let viewports = [full_viewport(fixed)];
         let scissors = [vk::Rect2D { offset: vk::Offset2D::default(), extent: fixed }];
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let (viewport, dynamic) = match extent {
@@ -219,7 +231,11 @@ impl Pipeline {
         let attachment = [if desc.blend {
             vk::PipelineColorBlendAttachmentState::default()
                 .blend_enable(true)
-                .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
+                .src_color_blend_factor(if desc.premultiplied {
+                    vk::BlendFactor::ONE
+                } else {
+                    vk::BlendFactor::SRC_ALPHA
+                })
                 .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
                 .color_blend_op(vk::BlendOp::ADD)
                 .src_alpha_blend_factor(vk::BlendFactor::ONE)
@@ -327,4 +343,43 @@ impl Drop for DescriptorPool {
         // SAFETY: no frame using the set is in flight when the renderer drops the pool.
         unsafe { self.device.raw.destroy_descriptor_pool(self.raw, None) };
     }
+}
+
+/// The viewport over all of `extent`, depths 0 to 1.
+pub(crate) fn full_viewport(extent: vk::Extent2D) -> vk::Viewport {
+    vk::Viewport {
+        x: 0.0,
+        y: 0.0,
+        width: extent.width as f32,
+        height: extent.height as f32,
+        min_depth: 0.0,
+        max_depth: 1.0,
+    }
+}
+
+/// Points binding `binding` of `set` at `view` (in `SHADER_READ_ONLY_OPTIMAL`) sampled by
+/// `sampler`.
+///
+/// # Safety
+/// `set` must not be in use by a pending command buffer, and `view` and `sampler` must outlive
+/// its use.
+pub(crate) unsafe fn write_sampled(
+    device: &ash::Device,
+    set: vk::DescriptorSet,
+    binding: u32,
+    view: vk::ImageView,
+    sampler: vk::Sampler,
+) {
+    let image_info = [vk::DescriptorImageInfo {
+        sampler,
+        image_view: view,
+        image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+    }];
+    let write = vk::WriteDescriptorSet::default()
+        .dst_set(set)
+        .dst_binding(binding)
+        .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+        .image_info(&image_info);
+    // SAFETY: the caller's contract.
+    unsafe { device.update_descriptor_sets(&[write], &[]) };
 }

@@ -1,0 +1,564 @@
+//! The panels' model: what the desk panel shows and the commands it emits, laid out with egui
+//! and tessellated into a [`PanelPaint`] that `render` draws in both eyes at zero parallax.
+//!
+//! The station hands the panel a [`PanelView`] each frame (a plain snapshot: the tool, the
+//! history, the view, the file) and the pointer's events in the eye image's pixels; the panel
+//! answers with [`PanelCommand`]s, which the station applies as it applies its keys, and with
+//! the paint. The panel knows nothing of the field or the devices. Input goes in as egui
+//! events built here, from real and scripted pointer events alike, so a scripted session
+//! drives the panel exactly as a hand does.
+
+use egui::{Color32, Pos2, Rect, Vec2};
+
+use crate::render::{PanelBatch, PanelPaint, PanelTexture, PanelVertex, MAX_TEXTURE_SIDE};
+
+/// What the desk panel shows: a plain snapshot the station makes each frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PanelView {
+    /// The tool's shapes.
+    pub shapes: Vec<&'static str>,
+    /// Which of them the tool has (none: a shape not in the list, a scene's freeform one).
+    pub shape: Option<usize>,
+    /// The tool's actions.
+    pub actions: Vec<&'static str>,
+    /// Which of them it does.
+    pub action: usize,
+    /// The tool's size (its smallest extent), millimetres.
+    pub size_mm: f32,
+    /// The range the size slider spans, millimetres.
+    pub size_range_mm: (f32, f32),
+    /// The action's rate per second, where it has one (build, soft remove, paint, smooth).
+    pub rate_per_s: Option<f32>,
+    /// Stamps along a stroke, as a fraction of the tool's size.
+    pub spacing: f32,
+    /// The colour the tool adds or paints, linear RGB.
+    pub colour: [f32; 3],
+    /// The undo history: the steps that can be undone, oldest first.
+    pub undo: Vec<String>,
+    /// The steps that can be redone, next first.
+    pub redo: Vec<String>,
+    /// The display modes the window can show.
+    pub display_modes: Vec<&'static str>,
+    /// Which of them it shows.
+    pub display_mode: usize,
+    /// Where saving writes.
+    pub save_to: String,
+    /// The name of that file (shown; the whole path on hover).
+    pub save_name: String,
+    /// The changes the file lacks.
+    pub unsaved: u64,
+    /// Status lines (what the heads-up display shows while the panel is hidden) and the
+    /// latest messages.
+    pub status: Vec<String>,
+}
+
+/// What the panel asks of the station.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PanelCommand {
+    /// The tool takes the shape of this index of [`PanelView::shapes`].
+    Shape(usize),
+    /// The tool does the action of this index of [`PanelView::actions`].
+    Action(usize),
+    /// The tool's size, millimetres.
+    SizeMm(f32),
+    /// The action's rate per second.
+    Rate(f32),
+    /// The stamp spacing, a fraction of the size.
+    Spacing(f32),
+    /// The tool's colour, linear RGB.
+    Colour([f32; 3]),
+    /// Undo this many steps.
+    Undo(usize),
+    /// Redo this many steps.
+    Redo(usize),
+    /// Show the display mode of this index of [`PanelView::display_modes`].
+    DisplayMode(usize),
+    /// Save the sculpt.
+    Save,
+}
+
+/// A pointer event on the panel, in the eye image's pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PointerEvent {
+    /// The pointer is at this pixel.
+    Moved([f32; 2]),
+    /// The primary button went down (`true`) or up, where the pointer is.
+    Primary(bool),
+    /// The wheel turned, lines (positive: away from the user).
+    Wheel(f32),
+    /// The pointer left the window.
+    Left,
+}
+
+/// The panel's width, points.
+const PANEL_WIDTH_PT: f32 = 240.0;
+
+/// The desk panel: see the module docs.
+pub struct Panel {
+    ctx: egui::Context,
+    shown: bool,
+    events: Vec<egui::Event>,
+    /// Events held for the frame after next: a release that came in the same frame as its
+    /// press (a quick click, a scripted one), so that controls that follow a held button (a
+    /// slider) see it down for a frame.
+    deferred: Vec<egui::Event>,
+    pointer: Option<Pos2>,
+    /// The pointer is over the panel (or a popup of it) or held by one of its controls.
+    wants_pointer: bool,
+    /// One of its controls held the pointer at the end of the last frame run (a drag).
+    using_pointer: bool,
+    /// The right edge of the panel as last laid out, points.
+    right_pt: f32,
+    wants_keyboard: bool,
+    /// The pixels per point the textures were made for.
+    pixels_per_point: f32,
+}
+
+impl std::fmt::Debug for Panel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Panel").field("shown", &self.shown).finish_non_exhaustive()
+    }
+}
+
+impl Default for Panel {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Pixels per point for an image `width` pixels wide: 1 below 1280 pixels, then in steps of a
+/// half up to 3, so the panel keeps about the same share of a wide window.
+pub fn pixels_per_point(width: u32) -> f32 {
+    ((width as f32 / 1280.0 * 2.0).floor() / 2.0).clamp(1.0, 3.0)
+}
+
+impl Panel {
+    /// A panel, shown.
+    pub fn new() -> Self {
+        let ctx = egui::Context::default();
+        ctx.set_theme(egui::Theme::Dark);
+        Self {
+            ctx,
+            shown: true,
+            events: Vec::new(),
+            deferred: Vec::new(),
+            pointer: None,
+            wants_pointer: false,
+            using_pointer: false,
+            right_pt: PANEL_WIDTH_PT,
+            wants_keyboard: false,
+            pixels_per_point: 1.0,
+        }
+    }
+
+    /// A panel, hidden.
+    pub fn hidden() -> Self {
+        let mut panel = Self::new();
+        panel.set_shown(false);
+        panel
+    }
+
+    /// Whether the panel is shown.
+    pub fn shown(&self) -> bool {
+        self.shown
+    }
+
+    /// Shows or hides the panel.
+    pub fn set_shown(&mut self, shown: bool) {
+        self.shown = shown;
+        if !shown {
+            self.wants_pointer = false;
+            self.wants_keyboard = false;
+        }
+    }
+
+    /// Whether the pointer's events are the panel's (it is over the panel or dragging one of
+    /// its controls): then they do not turn the view or place the tool.
+    pub fn wants_pointer(&self) -> bool {
+        self.shown && self.wants_pointer
+    }
+
+    /// Whether a text field of the panel has the keyboard.
+    pub fn wants_keyboard(&self) -> bool {
+        self.shown && self.wants_keyboard
+    }
+
+    /// Takes a pointer event for the next frame.
+    pub fn pointer(&mut self, event: PointerEvent) {
+        let ppp = self.pixels_per_point;
+        match event {
+            PointerEvent::Moved([x, y]) => {
+                let at = Pos2::new(x / ppp, y / ppp);
+                self.pointer = Some(at);
+                self.push(egui::Event::PointerMoved(at));
+                // Over the panel (as it was last laid out) or one of its popups, or dragging
+                // one of its controls.
+                let popup = self.ctx.layer_id_at(at).is_some_and(|l| l.order != egui::Order::Background);
+                self.wants_pointer = self.shown && (self.using_pointer || at.x <= self.right_pt || popup);
+            }
+            PointerEvent::Primary(pressed) => {
+                if let Some(pos) = self.pointer {
+                    let event = egui::Event::PointerButton {
+                        pos,
+                        button: egui::PointerButton::Primary,
+                        pressed,
+                        modifiers: egui::Modifiers::NONE,
+                    };
+                    let pressed_now = self
+                        .events
+                        .iter()
+                        .any(|e| matches!(e, egui::Event::PointerButton { pressed: true, .. }));
+                    match !pressed && pressed_now {
+                        true => self.deferred.push(event),
+                        false => self.push(event),
+                    }
+                }
+            }
+            PointerEvent::Wheel(lines) => self.push(egui::Event::MouseWheel {
+                unit: egui::MouseWheelUnit::Line,
+                delta: Vec2::new(0.0, lines),
+                modifiers: egui::Modifiers::NONE,
+            }),
+            PointerEvent::Left => {
+                self.pointer = None;
+                self.push(egui::Event::PointerGone);
+            }
+        }
+    }
+
+    /// Queues `event` for the next frame, or after the events deferred to the frame after.
+    fn push(&mut self, event: egui::Event) {
+        match self.deferred.is_empty() {
+            true => self.events.push(event),
+            false => self.deferred.push(event),
+        }
+    }
+
+    /// Runs one frame of the panel over `view` in an eye image of `extent_px` at `time_s`:
+    /// returns the commands its controls gave and what to paint (`None` while hidden).
+    pub fn run(
+        &mut self,
+        view: &PanelView,
+        extent_px: (u32, u32),
+        time_s: f64,
+    ) -> (Vec<PanelCommand>, Option<PanelPaint>) {
+        let events = std::mem::replace(&mut self.events, std::mem::take(&mut self.deferred));
+        if !self.shown || extent_px.0 == 0 || extent_px.1 == 0 {
+            return (Vec::new(), None);
+        }
+        let ppp = pixels_per_point(extent_px.0);
+        self.pixels_per_point = ppp;
+        let size = Vec2::new(extent_px.0 as f32 / ppp, extent_px.1 as f32 / ppp);
+        let mut input = egui::RawInput {
+            screen_rect: Some(Rect::from_min_size(Pos2::ZERO, size)),
+            max_texture_side: Some(MAX_TEXTURE_SIDE as usize),
+            time: Some(time_s),
+            events,
+            focused: true,
+            ..Default::default()
+        };
+        input.viewports.entry(egui::ViewportId::ROOT).or_default().native_pixels_per_point = Some(ppp);
+        let mut commands = Vec::new();
+        let mut right_pt = PANEL_WIDTH_PT;
+        let output = self.ctx.run(input, |ctx| right_pt = panel_ui(ctx, view, &mut commands));
+        self.right_pt = right_pt;
+        self.using_pointer = self.ctx.is_using_pointer();
+        self.wants_pointer = self.ctx.is_pointer_over_area() || self.using_pointer;
+        self.wants_keyboard = self.ctx.wants_keyboard_input();
+        let primitives = self.ctx.tessellate(output.shapes, output.pixels_per_point);
+        let paint = paint_of(&primitives, &output.textures_delta, output.pixels_per_point, extent_px);
+        (commands, Some(paint))
+    }
+}
+
+/// The panel's contents; returns its right edge, points.
+fn panel_ui(ctx: &egui::Context, view: &PanelView, commands: &mut Vec<PanelCommand>) -> f32 {
+    let panel = egui::SidePanel::left("argile-panel").exact_width(PANEL_WIDTH_PT).resizable(false);
+    let shown = panel.show(ctx, |ui| {
+        // Scrolled by the wheel alone: a press on the panel is a press on one of its controls.
+        let sources =
+            egui::scroll_area::ScrollSource::SCROLL_BAR | egui::scroll_area::ScrollSource::MOUSE_WHEEL;
+        egui::ScrollArea::vertical().scroll_source(sources).show(ui, |ui| {
+            ui.heading("Tool");
+            ui.horizontal_wrapped(|ui| {
+                for (i, name) in view.shapes.iter().enumerate() {
+                    if ui.selectable_label(view.shape == Some(i), *name).clicked() && view.shape != Some(i) {
+                        commands.push(PanelCommand::Shape(i));
+                    }
+                }
+            });
+            ui.horizontal_wrapped(|ui| {
+                for (i, name) in view.actions.iter().enumerate() {
+                    if ui.selectable_label(view.action == i, *name).clicked() && view.action != i {
+                        commands.push(PanelCommand::Action(i));
+                    }
+                }
+            });
+            let mut size = view.size_mm;
+            let (lo, hi) = view.size_range_mm;
+            let slider = egui::Slider::new(&mut size, lo..=hi).logarithmic(true).text("size mm");
+            if ui.add(slider).changed() {
+                commands.push(PanelCommand::SizeMm(size));
+            }
+            if let Some(rate) = view.rate_per_s {
+                let mut rate = rate;
+                let slider = egui::Slider::new(&mut rate, 0.1..=50.0).logarithmic(true).text("strength /s");
+                if ui.add(slider).changed() {
+                    commands.push(PanelCommand::Rate(rate));
+                }
+            }
+            let mut spacing = view.spacing;
+            if ui.add(egui::Slider::new(&mut spacing, 0.05..=1.0).text("spacing")).changed() {
+                commands.push(PanelCommand::Spacing(spacing));
+            }
+            ui.horizontal(|ui| {
+                let mut rgb = view.colour;
+                if ui.color_edit_button_rgb(&mut rgb).changed() {
+                    commands.push(PanelCommand::Colour(rgb));
+                }
+                ui.label("colour");
+            });
+            ui.horizontal_wrapped(|ui| {
+                for (name, rgb) in SWATCHES {
+                    let colour = egui::Rgba::from_rgb(rgb[0], rgb[1], rgb[2]);
+                    let swatch =
+                        egui::Button::new("").fill(Color32::from(colour)).min_size(Vec2::splat(18.0));
+                    if ui.add(swatch).on_hover_text(name).clicked() {
+                        commands.push(PanelCommand::Colour(rgb));
+                    }
+                }
+            });
+            ui.separator();
+            ui.heading("History");
+            ui.horizontal(|ui| {
+                if ui.add_enabled(!view.undo.is_empty(), egui::Button::new("Undo")).clicked() {
+                    commands.push(PanelCommand::Undo(1));
+                }
+                if ui.add_enabled(!view.redo.is_empty(), egui::Button::new("Redo")).clicked() {
+                    commands.push(PanelCommand::Redo(1));
+                }
+            });
+            let n = view.undo.len();
+            if ui.selectable_label(n == 0, "the start").clicked() && n > 0 {
+                commands.push(PanelCommand::Undo(n));
+            }
+            for (i, step) in view.undo.iter().enumerate() {
+                if ui.selectable_label(i + 1 == n, step).clicked() && i + 1 < n {
+                    commands.push(PanelCommand::Undo(n - 1 - i));
+                }
+            }
+            for (i, step) in view.redo.iter().enumerate() {
+                let text = egui::RichText::new(step).weak();
+                if ui.selectable_label(false, text).clicked() {
+                    commands.push(PanelCommand::Redo(i + 1));
+                }
+            }
+            ui.separator();
+            ui.heading("View");
+            for (i, name) in view.display_modes.iter().enumerate() {
+                if ui.radio(view.display_mode == i, *name).clicked() && view.display_mode != i {
+                    commands.push(PanelCommand::DisplayMode(i));
+                }
+            }
+            ui.separator();
+            ui.heading("File");
+            ui.label(egui::RichText::new(&view.save_name).small()).on_hover_text(&view.save_to);
+            let label = match view.unsaved {
+                0 => "Save".to_owned(),
+                n => format!("Save ({n} unsaved)"),
+            };
+            if ui.button(label).clicked() {
+                commands.push(PanelCommand::Save);
+            }
+            if !view.status.is_empty() {
+                ui.separator();
+                for line in &view.status {
+                    ui.label(egui::RichText::new(line).small());
+                }
+            }
+        });
+    });
+    shown.response.rect.max.x
+}
+
+/// Colours one click away, linear RGB: the clay's own and a few a sculptor paints with.
+const SWATCHES: [(&str, [f32; 3]); 6] = [
+    ("clay", [0.8, 0.5, 0.35]),
+    ("bone", [0.85, 0.8, 0.7]),
+    ("brick", [0.6, 0.12, 0.06]),
+    ("moss", [0.2, 0.35, 0.08]),
+    ("slate", [0.1, 0.15, 0.25]),
+    ("ink", [0.02, 0.02, 0.03]),
+];
+
+/// egui's tessellated meshes and texture updates as the renderer's plain paint.
+fn paint_of(
+    primitives: &[egui::ClippedPrimitive],
+    textures: &egui::TexturesDelta,
+    pixels_per_point: f32,
+    extent_px: (u32, u32),
+) -> PanelPaint {
+    let mut paint = PanelPaint { extent_px, ..PanelPaint::default() };
+    for (id, delta) in &textures.set {
+        let egui::ImageData::Color(image) = &delta.image;
+        let srgba: Vec<u8> = image.pixels.iter().flat_map(|c| c.to_array()).collect();
+        paint.textures.push(PanelTexture {
+            id: texture_key(*id),
+            offset_px: delta.pos.map(|[x, y]| [x as u32, y as u32]),
+            size_px: [image.size[0] as u32, image.size[1] as u32],
+            srgba,
+        });
+    }
+    paint.freed = textures.free.iter().map(|id| texture_key(*id)).collect();
+    let (w, h) = (extent_px.0 as f32, extent_px.1 as f32);
+    for clipped in primitives {
+        let egui::epaint::Primitive::Mesh(mesh) = &clipped.primitive else { continue };
+        if mesh.indices.is_empty() {
+            continue;
+        }
+        let clip = clipped.clip_rect;
+        let px = |v: f32, max: f32| (v * pixels_per_point).round().clamp(0.0, max) as u32;
+        let clip_px = [px(clip.min.x, w), px(clip.min.y, h), px(clip.max.x, w), px(clip.max.y, h)];
+        let base = paint.vertices.len() as u32;
+        paint.vertices.extend(mesh.vertices.iter().map(|v| {
+            let c = egui::Rgba::from(v.color);
+            PanelVertex {
+                position_px: [v.pos.x * pixels_per_point, v.pos.y * pixels_per_point],
+                uv: [v.uv.x, v.uv.y],
+                colour: [c.r(), c.g(), c.b(), c.a()],
+            }
+        }));
+        let first_index = paint.indices.len() as u32;
+        paint.indices.extend(mesh.indices.iter().map(|i| i + base));
+        paint.batches.push(PanelBatch {
+            clip_px,
+            first_index,
+            index_count: mesh.indices.len() as u32,
+            texture: texture_key(mesh.texture_id),
+        });
+    }
+    paint
+}
+
+/// One number for egui's texture ids: managed ones even, user ones odd.
+fn texture_key(id: egui::TextureId) -> u64 {
+    match id {
+        egui::TextureId::Managed(n) => n << 1,
+        egui::TextureId::User(n) => (n << 1) | 1,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn view() -> PanelView {
+        PanelView {
+            shapes: vec!["sphere", "box"],
+            shape: Some(0),
+            actions: vec!["add", "remove", "paint"],
+            action: 0,
+            size_mm: 20.0,
+            size_range_mm: (1.0, 200.0),
+            rate_per_s: None,
+            spacing: 0.25,
+            colour: [0.8, 0.5, 0.35],
+            undo: vec!["add sphere 20 mm".into(), "remove sphere 20 mm".into()],
+            redo: vec!["paint box 10 mm".into()],
+            display_modes: vec!["mono", "anaglyph"],
+            display_mode: 1,
+            save_to: "sculpts/bust.argile".into(),
+            save_name: "bust.argile".into(),
+            unsaved: 2,
+            status: vec!["tool 1: sphere 20 mm, add".into()],
+        }
+    }
+
+    /// Runs frames until the panel has laid out, then clicks at `at` (points = pixels here).
+    fn click(panel: &mut Panel, view: &PanelView, at: [f32; 2]) -> Vec<PanelCommand> {
+        let mut t = 0.0;
+        let mut frame = |panel: &mut Panel| {
+            t += 1.0 / 60.0;
+            panel.run(view, (800, 600), t).0
+        };
+        frame(panel);
+        panel.pointer(PointerEvent::Moved(at));
+        frame(panel);
+        panel.pointer(PointerEvent::Primary(true));
+        let mut commands = frame(panel);
+        panel.pointer(PointerEvent::Primary(false));
+        commands.extend(frame(panel));
+        commands
+    }
+
+    /// Where the widget showing `text` was laid out, found by clicking down the panel's band.
+    fn find(view: &PanelView, wanted: &PanelCommand) -> Option<[f32; 2]> {
+        for y in (4..600).step_by(4) {
+            for x in [20.0, 60.0, 100.0, 140.0, 180.0] {
+                let mut panel = Panel::new();
+                if click(&mut panel, view, [x, y as f32]).contains(wanted) {
+                    return Some([x, y as f32]);
+                }
+            }
+        }
+        None
+    }
+
+    #[test]
+    fn clicks_on_the_panel_give_its_commands_and_the_panel_holds_the_pointer() {
+        let view = view();
+        // The history: "the start" undoes both steps; the redo entry redoes one.
+        assert!(find(&view, &PanelCommand::Undo(2)).is_some(), "the start of the history");
+        assert!(find(&view, &PanelCommand::Redo(1)).is_some(), "a redo entry");
+        assert!(find(&view, &PanelCommand::Shape(1)).is_some(), "the box shape");
+        assert!(find(&view, &PanelCommand::Action(2)).is_some(), "the paint action");
+        assert!(find(&view, &PanelCommand::DisplayMode(0)).is_some(), "mono");
+        let mut panel = Panel::new();
+        panel.run(&view, (800, 600), 0.0);
+        panel.pointer(PointerEvent::Moved([100.0, 100.0]));
+        panel.run(&view, (800, 600), 0.1);
+        assert!(panel.wants_pointer(), "over the panel");
+        panel.pointer(PointerEvent::Moved([600.0, 300.0]));
+        panel.run(&view, (800, 600), 0.2);
+        assert!(!panel.wants_pointer(), "over the scene");
+        panel.set_shown(false);
+        assert!(panel.run(&view, (800, 600), 0.3).1.is_none(), "hidden: nothing painted");
+    }
+
+    #[test]
+    fn the_paint_holds_the_font_texture_and_batches_inside_the_image() {
+        let mut panel = Panel::new();
+        let (_, paint) = panel.run(&view(), (800, 600), 0.0);
+        let paint = paint.unwrap();
+        assert!(!paint.textures.is_empty() && paint.textures[0].offset_px.is_none(), "the font atlas first");
+        let t = &paint.textures[0];
+        assert_eq!(t.srgba.len() as u32, t.size_px[0] * t.size_px[1] * 4);
+        assert!(!paint.batches.is_empty());
+        for b in &paint.batches {
+            assert!(b.clip_px[2] <= 800 && b.clip_px[3] <= 600);
+            let end = (b.first_index + b.index_count) as usize;
+            assert!(paint.indices[b.first_index as usize..end]
+                .iter()
+                .all(|&i| (i as usize) < paint.vertices.len()));
+        }
+        assert!(paint.vertices.iter().all(|v| v.colour.iter().chain(&v.position_px).all(|c| c.is_finite())));
+        // The panel lies in its band on the left.
+        let right = paint.vertices.iter().map(|v| v.position_px[0]).fold(0.0, f32::max);
+        assert!(right <= PANEL_WIDTH_PT + 20.0, "{right}");
+    }
+
+    #[test]
+    fn a_tiny_or_a_huge_image_never_panics() {
+        for extent in [(1, 1), (2, 1), (8192, 8192), (0, 0), (1, 8192)] {
+            let mut panel = Panel::new();
+            for t in 0..3 {
+                panel.pointer(PointerEvent::Moved([0.5, 0.5]));
+                panel.pointer(PointerEvent::Primary(t % 2 == 0));
+                let (_, paint) = panel.run(&view(), extent, f64::from(t));
+                if let Some(paint) = paint {
+                    assert!(paint.textures.iter().all(|t| t.size_px[0] <= MAX_TEXTURE_SIDE));
+                }
+            }
+        }
+    }
+}
