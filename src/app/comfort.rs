@@ -17,7 +17,7 @@ pub struct BudgetVerdict {
     pub limit: bool,
     /// World metres per physical metre of the head-tracked placement (1 without a head).
     pub scale: f32,
-    /// A sentence for the user.
+    /// A sentence for the user (empty where it fits, from [`measure_parallax`]).
     pub warning: String,
 }
 
@@ -113,6 +113,18 @@ fn stage_depths(
 /// when the stage is shown — against the budget of `seen`'s calibration, seen from the default
 /// eye, without changing the scene; `None` when it fits.
 pub fn judge_parallax_budget(scene: &Scene, seen: &Seen, clay: Aabb) -> Option<BudgetVerdict> {
+    over_budget(scene, seen, measure_parallax(scene, seen, clay)?)
+}
+
+/// `verdict` of [`measure_parallax`] with its warning, when it is over `seen`'s budget.
+pub fn over_budget(scene: &Scene, seen: &Seen, verdict: BudgetVerdict) -> Option<BudgetVerdict> {
+    let warning = format!("{}: {}", scene.source, verdict.check.warning(&seen.calibration.budget)?);
+    Some(BudgetVerdict { warning, ..verdict })
+}
+
+/// What [`judge_parallax_budget`] measures, whether or not it fits (the nearest and farthest
+/// disparity, the interaxial allowed), its warning empty; `None` when nothing is shown.
+pub fn measure_parallax(scene: &Scene, seen: &Seen, clay: Aabb) -> Option<BudgetVerdict> {
     let corners: Vec<Vec3> = if clay.is_empty() {
         Vec::new()
     } else {
@@ -157,8 +169,7 @@ pub fn judge_parallax_budget(scene: &Scene, seen: &Seen, clay: Aabb) -> Option<B
         .iter()
         .fold((f32::INFINITY, 0.0f32), |(lo, hi), &z| (lo.min(z.max(near_m)), hi.max(z.max(near_m))));
     let check = budget.check(&viewing, near, far);
-    let warning = format!("{}: {}", scene.source, check.warning(&budget)?);
-    Some(BudgetVerdict { check, limit: budget.mode == BudgetMode::Limit, scale, warning })
+    Some(BudgetVerdict { check, limit: budget.mode == BudgetMode::Limit, scale, warning: String::new() })
 }
 
 /// The calibration a scene is seen through when nothing else names one: its `[head]`

@@ -57,7 +57,7 @@ use crate::stereo::{HeadTrackedRig, Placement, StereoRig};
 use crate::tool::{
     edit_level_for, Action, Ellipsoid, Falloff, Solid, Stroke, Tool, ToolShape, HAND_SIZE_SAMPLES,
 };
-use crate::ui::{Panel, PanelCommand, PanelView, PointerEvent};
+use crate::ui::{Disparity, Panel, PanelCommand, PanelView, PartRow, PointerEvent, StereoRow};
 
 /// The time step of a scripted run, seconds.
 pub const SCRIPTED_STEP_S: f32 = 1.0 / 60.0;
@@ -375,6 +375,9 @@ struct Budgeted {
     over: Option<(BudgetCheck, String)>,
     /// The interaxial it allows in limit mode (of the tracked eyes while tracked).
     allowed: Option<f32>,
+    /// The check whether over or not, and the budget's bound, degrees (the panel's readout);
+    /// `None` with nothing in view.
+    readout: Option<(BudgetCheck, f32)>,
 }
 
 /// The sculpt files (`.argile`) in `dir`, newest first (by modification time, then name).
@@ -1067,14 +1070,7 @@ impl<'s> Station<'s> {
                 let count = self.doc.playback.assembly().parts().len();
                 let now = self.doc.playback.assembly().active();
                 let next = if action == StationAction::NextPart { now + 1 } else { now + count - 1 };
-                self.end_desk_strokes();
-                let part = self.doc.playback.set_active_part(next);
-                // The device driving the part starts from home over the part as it is.
-                *self.desk.poses.get_mut(Target::Part) = self.home.get(Target::Part);
-                self.part_base = self.doc.playback.assembly().parts()[part].placement;
-                self.part_moving = None;
-                self.part_shown_s = PART_SHOWN_S;
-                self.messages.push(describe_part(self.doc.playback.assembly(), part));
+                self.pick_part(next);
             }
             StationAction::ToggleSymmetry | StationAction::NextSymmetry => {
                 let symmetry = match action {
@@ -1145,8 +1141,18 @@ impl<'s> Station<'s> {
         }
     }
 
-    /// The convergence plane's range: from twice the near plane to half the far one, so that
-    /// the zero-parallax plane never lies where nothing is drawn.
+    /// The tools act on part `next` (modulo the parts' count) from now on.
+    fn pick_part(&mut self, next: usize) {
+        self.end_desk_strokes();
+        let part = self.doc.playback.set_active_part(next);
+        // The device driving the part starts from home over the part as it is.
+        *self.desk.poses.get_mut(Target::Part) = self.home.get(Target::Part);
+        self.part_base = self.doc.playback.assembly().parts()[part].placement;
+        self.part_moving = None;
+        self.part_shown_s = PART_SHOWN_S;
+        self.messages.push(describe_part(self.doc.playback.assembly(), part));
+    }
+
     /// Shows or hides the desk panel (the `toggle-panel` key does too).
     pub fn set_panel_shown(&mut self, shown: bool) {
         self.panel.set_shown(shown);
@@ -1215,7 +1221,43 @@ impl<'s> Station<'s> {
         let mut status = self.hud_lines();
         status.extend(self.messages.iter().rev().take(3).rev().cloned());
         let size_mm = size_m * 1000.0;
+        let assembly = self.doc.playback.assembly();
+        let parts = assembly
+            .parts()
+            .iter()
+            .map(|p| PartRow {
+                name: p.name.clone(),
+                op: p.op.name(),
+                voxel_mm: p.voxel_size_m * 1000.0,
+                visible: p.visible,
+                locked: p.locked,
+            })
+            .collect();
+        let symmetry = self.doc.playback.symmetry();
+        let rig = &self.view.rig;
+        let stereo = StereoRow {
+            convergence_m: rig.convergence_m,
+            convergence_range_m: self.convergence_range(),
+            auto_convergence: self.auto_convergence.is_some(),
+            interaxial_mm: self.interaxial_in_use_m() * 1000.0,
+            max_interaxial_mm: StereoRig::MAX_INTERAXIAL_M * 1000.0,
+            disparity: self.budget.as_ref().and_then(|b| b.readout).map(|(check, bound_deg)| Disparity {
+                nearest_deg: check.nearest_deg,
+                farthest_deg: check.farthest_deg,
+                bound_deg,
+                exceeded: check.exceeded,
+            }),
+            lights_follow_viewer: self.lights_follow_viewer,
+            swap_eyes: self.swap_eyes,
+            head: self.head.as_ref().map(|h| !h.lost()),
+        };
         PanelView {
+            level_samples: self.acting_tool().level_samples,
+            level: self.edit_level(),
+            parts,
+            active_part: assembly.active(),
+            symmetry: (symmetry.describe(), !symmetry.is_none()),
+            stereo,
             shapes: cycle.iter().map(|(_, n)| *n).collect(),
             shape,
             actions: action_cycle().iter().map(|a| a.name()).collect(),
@@ -1280,6 +1322,44 @@ impl<'s> Station<'s> {
                     self.desk_tool.colour = [r, g, b, self.desk_tool.colour[3]];
                 }
             }
+            PanelCommand::LevelSamples(samples) => {
+                self.hand_samples = samples.filter(|n| n.is_finite() && *n >= 1.0);
+                self.desk_tool.level_samples = self.hand_samples;
+            }
+            PanelCommand::LevelBySize => {
+                self.hand_samples = Some(HAND_SIZE_SAMPLES);
+                self.desk_tool.level_samples = self.hand_samples;
+            }
+            PanelCommand::ActivePart(i) => self.pick_part(i),
+            PanelCommand::ToggleSymmetry => self.act(StationAction::ToggleSymmetry),
+            PanelCommand::NextSymmetry => self.act(StationAction::NextSymmetry),
+            PanelCommand::ConvergenceM(m) => {
+                if m.is_finite() && self.auto_convergence.is_none() {
+                    let (lo, hi) = self.convergence_range();
+                    self.convergence_factor = m.clamp(lo, hi) / self.mouse.distance_m.max(1e-6);
+                }
+            }
+            PanelCommand::AutoConvergence(on) => {
+                if on != self.auto_convergence.is_some() {
+                    self.act(StationAction::ToggleAutoConvergence);
+                }
+            }
+            PanelCommand::InteraxialMm(mm) => {
+                if mm.is_finite() {
+                    let m = (mm * 1e-3).clamp(0.0, StereoRig::MAX_INTERAXIAL_M);
+                    match self.tracked() {
+                        true => self.tracked_interaxial_m = m,
+                        false => self.view.rig.interaxial_m = m,
+                    }
+                }
+            }
+            PanelCommand::LightsFollowViewer(on) => self.lights_follow_viewer = on,
+            PanelCommand::SwapEyes(on) => {
+                if on != self.swap_eyes {
+                    self.act(StationAction::SwapEyes);
+                }
+            }
+            PanelCommand::RecentreHead => self.act(StationAction::RecentreHead),
             PanelCommand::Undo(n) => (0..n).for_each(|_| self.act(StationAction::Undo)),
             PanelCommand::Redo(n) => (0..n).for_each(|_| self.act(StationAction::Redo)),
             PanelCommand::DisplayMode(i) => {
@@ -1314,6 +1394,8 @@ impl<'s> Station<'s> {
         )
     }
 
+    /// The convergence plane's range: from twice the near plane to half the far one, so that
+    /// the zero-parallax plane never lies where nothing is drawn.
     fn convergence_range(&self) -> (f32, f32) {
         let rig = &self.view.rig;
         (rig.near_m * 2.0, (rig.far_m * 0.5).max(rig.near_m * 2.0))
@@ -1349,6 +1431,14 @@ impl<'s> Station<'s> {
         }
     }
 
+    /// The level the desk tool edits (its size chooses it) and its voxel size, millimetres.
+    fn edit_level(&self) -> (u32, f32) {
+        let acting = self.acting_tool();
+        let field = self.doc.playback.field();
+        let level = acting.level_samples.map_or(0, |n| edit_level_for(field, acting.size_m(), n));
+        (level as u32, field.level_transform(level).voxel_size_m * 1000.0)
+    }
+
     /// What the heads-up display shows: the desk tool, the stereo settings, the frame time.
     pub fn hud_lines(&self) -> Vec<String> {
         let rig = &self.view.rig;
@@ -1356,11 +1446,7 @@ impl<'s> Station<'s> {
             MouseMode::Scene => "turns",
             MouseMode::Cursor => "places tool",
         };
-        // The voxels of the level the tool edits (its size chooses it).
-        let acting = self.acting_tool();
-        let field = self.doc.playback.field();
-        let level = acting.level_samples.map_or(0, |n| edit_level_for(field, acting.size_m(), n));
-        let voxel_mm = (field.level_transform(level).voxel_size_m * 10_000.0).round() / 10.0;
+        let voxel_mm = (self.edit_level().1 * 10.0).round() / 10.0;
         let mut lines = vec![
             format!(
                 "tool {}: {} {} mm, {}, {} mm voxels{}",
@@ -1538,7 +1624,9 @@ impl<'s> Station<'s> {
             return;
         }
         let seen = super::comfort::Seen { tracked: self.tracked_rig(), ..self.seen_window() };
-        let verdict = super::comfort::judge_parallax_budget(&self.view, &seen, self.clay_bounds);
+        let measured = super::comfort::measure_parallax(&self.view, &seen, self.clay_bounds);
+        let readout = measured.as_ref().map(|m| (m.check, seen.calibration.budget.max_disparity_deg));
+        let verdict = measured.and_then(|m| super::comfort::over_budget(&self.view, &seen, m));
         // Limit mode narrows the eyes in use: the rig's, or the tracked eyes' (physical metres).
         let allowed = verdict.as_ref().filter(|v| v.limit).map(|v| v.check.allowed_interaxial_m / v.scale);
         let warning = verdict.map(|v| (v.check, v.warning));
@@ -1547,7 +1635,7 @@ impl<'s> Station<'s> {
                 self.messages.push(w.clone());
             }
         }
-        self.budget = Some(Budgeted { key, over: warning, allowed });
+        self.budget = Some(Budgeted { key, over: warning, allowed, readout });
     }
 
     /// Where the last [`Station::step`] spent its time.
@@ -2641,6 +2729,64 @@ mod tests {
         sculpt_for(&mut station, 2);
         let view = station.panel_view();
         assert_eq!((view.undo.len(), view.redo.len()), (2, 0));
+    }
+
+    #[test]
+    fn the_panel_shows_and_sets_the_level_the_parts_the_symmetry_and_the_stereo_view() {
+        let scene = two_part_scene();
+        let mut station = Station::new(&scene, KeyBindings::shipped(), (960, 540), "unused.argile".into());
+        station.step(SCRIPTED_STEP_S, |_| {});
+        let view = station.panel_view();
+        let names: Vec<&str> = view.parts.iter().map(|p| p.name.as_str()).collect();
+        assert_eq!((names, view.active_part), (vec!["left", "right"], 0));
+        assert_eq!(view.parts[1].voxel_mm, 2.0);
+        station.panel_command(PanelCommand::ActivePart(1));
+        assert_eq!(station.doc.playback.assembly().active(), 1, "the list picks the part");
+        assert_eq!(station.panel_view().active_part, 1);
+        // The level: by size, then the finest.
+        station.panel_command(PanelCommand::LevelBySize);
+        assert_eq!(station.panel_view().level_samples, Some(HAND_SIZE_SAMPLES));
+        station.panel_command(PanelCommand::LevelSamples(None));
+        let view = station.panel_view();
+        assert_eq!(view.level_samples, None);
+        assert_eq!(view.level.0, 0, "the finest level");
+        assert_eq!(view.level.1, 2.0, "of the active part's 2 mm voxels");
+        station.panel_command(PanelCommand::LevelSamples(Some(f32::NAN)));
+        assert_eq!(station.panel_view().level_samples, None, "no NaN taken");
+        // Symmetry on and off.
+        assert!(!station.panel_view().symmetry.1);
+        station.panel_command(PanelCommand::ToggleSymmetry);
+        let (said, on) = station.panel_view().symmetry;
+        assert!(on && said.starts_with("mirror"), "{said}");
+        station.panel_command(PanelCommand::ToggleSymmetry);
+        assert!(!station.panel_view().symmetry.1);
+        // The stereo view: the sliders move the rig, within its range; the readout follows.
+        let disparity = station.panel_view().stereo.disparity.expect("the clay's disparity after a frame");
+        assert!(disparity.nearest_deg <= disparity.farthest_deg && disparity.bound_deg > 0.0);
+        station.panel_command(PanelCommand::ConvergenceM(0.9));
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert!((station.view.rig.convergence_m - 0.9).abs() < 1e-3, "{}", station.view.rig.convergence_m);
+        station.panel_command(PanelCommand::ConvergenceM(1e9));
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert_eq!(station.view.rig.convergence_m, station.convergence_range().1, "held at its far end");
+        station.panel_command(PanelCommand::InteraxialMm(40.0));
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert!((station.panel_view().stereo.interaxial_mm - 40.0).abs() < 1e-3);
+        let wider = station.panel_view().stereo.disparity.unwrap();
+        station.panel_command(PanelCommand::InteraxialMm(120.0));
+        station.step(SCRIPTED_STEP_S, |_| {});
+        let widest = station.panel_view().stereo.disparity.unwrap();
+        assert!(
+            widest.farthest_deg - widest.nearest_deg > wider.farthest_deg - wider.nearest_deg,
+            "eyes further apart, more disparity: {wider:?} then {widest:?}"
+        );
+        station.panel_command(PanelCommand::AutoConvergence(true));
+        assert!(station.panel_view().stereo.auto_convergence);
+        station.panel_command(PanelCommand::SwapEyes(true));
+        assert!(station.panel_view().stereo.swap_eyes);
+        station.panel_command(PanelCommand::LightsFollowViewer(true));
+        assert!(station.panel_view().stereo.lights_follow_viewer);
+        assert_eq!(station.panel_view().stereo.head, None, "no head tracker here");
     }
 
     /// An empty scene whose first tool adds clay with a 3 cm ball.

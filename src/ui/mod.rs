@@ -33,6 +33,19 @@ pub struct PanelView {
     pub spacing: f32,
     /// The colour the tool adds or paints, linear RGB.
     pub colour: [f32; 3],
+    /// The level the tool edits: `None`, always the finest; `Some(n)`, the finest on which
+    /// its size spans at most `n` voxels.
+    pub level_samples: Option<f32>,
+    /// The level it edits now (0: the finest) and that level's voxel size, millimetres.
+    pub level: (u32, f32),
+    /// The sculpt's parts, in composition order, and which one the tools act on.
+    pub parts: Vec<PartRow>,
+    /// Which of them the tools act on.
+    pub active_part: usize,
+    /// The symmetry the tools act through, as a phrase, and whether it is on.
+    pub symmetry: (String, bool),
+    /// The stereo view.
+    pub stereo: StereoRow,
     /// The undo history: the steps that can be undone, oldest first.
     pub undo: Vec<String>,
     /// The steps that can be redone, next first.
@@ -52,6 +65,58 @@ pub struct PanelView {
     pub status: Vec<String>,
 }
 
+/// A part as the panel lists it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PartRow {
+    /// Its name.
+    pub name: String,
+    /// How it composes with the parts before it (union, difference, intersection).
+    pub op: &'static str,
+    /// Its finest voxel size, millimetres.
+    pub voxel_mm: f32,
+    /// Whether it is drawn.
+    pub visible: bool,
+    /// Whether the tools leave it alone.
+    pub locked: bool,
+}
+
+/// The stereo view as the panel shows it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StereoRow {
+    /// The convergence plane's distance, metres, and the range it may take.
+    pub convergence_m: f32,
+    /// The range of the convergence plane, metres.
+    pub convergence_range_m: (f32, f32),
+    /// The convergence follows the clay by itself (its slider is then disabled).
+    pub auto_convergence: bool,
+    /// The distance between the eyes in use, millimetres, and the most allowed.
+    pub interaxial_mm: f32,
+    /// The most the eyes may be apart, millimetres.
+    pub max_interaxial_mm: f32,
+    /// The nearest and farthest disparity of what is shown, degrees (negative: crossed), the
+    /// comfort bound, degrees, and whether the range is over it; `None` with nothing in view.
+    pub disparity: Option<Disparity>,
+    /// The lights turn with the viewer (else they stay with the scene).
+    pub lights_follow_viewer: bool,
+    /// Each eye gets the other's image.
+    pub swap_eyes: bool,
+    /// Head tracking: `None` off; `Some(true)` tracked; `Some(false)` the tracker is lost.
+    pub head: Option<bool>,
+}
+
+/// The parallax budget's readout.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Disparity {
+    /// The nearest point's disparity, degrees (negative: crossed).
+    pub nearest_deg: f32,
+    /// The farthest point's, degrees.
+    pub farthest_deg: f32,
+    /// The comfortable bound either way, degrees.
+    pub bound_deg: f32,
+    /// The range is over the budget.
+    pub exceeded: bool,
+}
+
 /// What the panel asks of the station.
 #[derive(Clone, Debug, PartialEq)]
 pub enum PanelCommand {
@@ -67,6 +132,28 @@ pub enum PanelCommand {
     Spacing(f32),
     /// The tool's colour, linear RGB.
     Colour([f32; 3]),
+    /// The level the tool edits (see [`PanelView::level_samples`]).
+    LevelSamples(Option<f32>),
+    /// The tool edits the level its size chooses, with the station's default voxels across it.
+    LevelBySize,
+    /// The tools act on the part of this index of [`PanelView::parts`].
+    ActivePart(usize),
+    /// Symmetry on or off.
+    ToggleSymmetry,
+    /// The next symmetry (one plane, two, three, radial).
+    NextSymmetry,
+    /// The convergence plane's distance, metres.
+    ConvergenceM(f32),
+    /// The convergence follows the clay, or not.
+    AutoConvergence(bool),
+    /// The distance between the eyes, millimetres.
+    InteraxialMm(f32),
+    /// The lights turn with the viewer, or stay with the scene.
+    LightsFollowViewer(bool),
+    /// Each eye gets the other's image, or its own.
+    SwapEyes(bool),
+    /// The viewer's head as it is now is the centred head.
+    RecentreHead,
     /// Undo this many steps.
     Undo(usize),
     /// Redo this many steps.
@@ -91,7 +178,10 @@ pub enum PointerEvent {
 }
 
 /// The panel's width, points.
-const PANEL_WIDTH_PT: f32 = 240.0;
+const PANEL_WIDTH_PT: f32 = 256.0;
+
+/// How far a section's controls sit in from its heading, points.
+const SECTION_INDENT_PT: f32 = 6.0;
 
 /// The desk panel: see the module docs.
 pub struct Panel {
@@ -137,6 +227,8 @@ impl Panel {
     pub fn new() -> Self {
         let ctx = egui::Context::default();
         ctx.set_theme(egui::Theme::Dark);
+        // Sections fold under their headings; a narrow indent keeps the sliders' names whole.
+        ctx.style_mut(|style| style.spacing.indent = SECTION_INDENT_PT);
         Self {
             ctx,
             shown: true,
@@ -279,97 +371,29 @@ fn panel_ui(ctx: &egui::Context, view: &PanelView, commands: &mut Vec<PanelComma
         let sources =
             egui::scroll_area::ScrollSource::SCROLL_BAR | egui::scroll_area::ScrollSource::MOUSE_WHEEL;
         egui::ScrollArea::vertical().scroll_source(sources).show(ui, |ui| {
-            ui.heading("Tool");
-            ui.horizontal_wrapped(|ui| {
-                for (i, name) in view.shapes.iter().enumerate() {
-                    if ui.selectable_label(view.shape == Some(i), *name).clicked() && view.shape != Some(i) {
-                        commands.push(PanelCommand::Shape(i));
+            section(ui, "Tool", |ui| tool_ui(ui, view, commands));
+            section(ui, "Parts", |ui| parts_ui(ui, view, commands));
+            section(ui, "History", |ui| history_ui(ui, view, commands));
+            section(ui, "View", |ui| {
+                ui.horizontal_wrapped(|ui| {
+                    for (i, name) in view.display_modes.iter().enumerate() {
+                        if ui.radio(view.display_mode == i, *name).clicked() && view.display_mode != i {
+                            commands.push(PanelCommand::DisplayMode(i));
+                        }
                     }
+                });
+                stereo_ui(ui, &view.stereo, commands);
+            });
+            section(ui, "File", |ui| {
+                ui.label(egui::RichText::new(&view.save_name).small()).on_hover_text(&view.save_to);
+                let label = match view.unsaved {
+                    0 => "Save".to_owned(),
+                    n => format!("Save ({n} unsaved)"),
+                };
+                if ui.button(label).clicked() {
+                    commands.push(PanelCommand::Save);
                 }
             });
-            ui.horizontal_wrapped(|ui| {
-                for (i, name) in view.actions.iter().enumerate() {
-                    if ui.selectable_label(view.action == i, *name).clicked() && view.action != i {
-                        commands.push(PanelCommand::Action(i));
-                    }
-                }
-            });
-            let mut size = view.size_mm;
-            let (lo, hi) = view.size_range_mm;
-            let slider = egui::Slider::new(&mut size, lo..=hi).logarithmic(true).text("size mm");
-            if ui.add(slider).changed() {
-                commands.push(PanelCommand::SizeMm(size));
-            }
-            if let Some(rate) = view.rate_per_s {
-                let mut rate = rate;
-                let slider = egui::Slider::new(&mut rate, 0.1..=50.0).logarithmic(true).text("strength /s");
-                if ui.add(slider).changed() {
-                    commands.push(PanelCommand::Rate(rate));
-                }
-            }
-            let mut spacing = view.spacing;
-            if ui.add(egui::Slider::new(&mut spacing, 0.05..=1.0).text("spacing")).changed() {
-                commands.push(PanelCommand::Spacing(spacing));
-            }
-            ui.horizontal(|ui| {
-                let mut rgb = view.colour;
-                if ui.color_edit_button_rgb(&mut rgb).changed() {
-                    commands.push(PanelCommand::Colour(rgb));
-                }
-                ui.label("colour");
-            });
-            ui.horizontal_wrapped(|ui| {
-                for (name, rgb) in SWATCHES {
-                    let colour = egui::Rgba::from_rgb(rgb[0], rgb[1], rgb[2]);
-                    let swatch =
-                        egui::Button::new("").fill(Color32::from(colour)).min_size(Vec2::splat(18.0));
-                    if ui.add(swatch).on_hover_text(name).clicked() {
-                        commands.push(PanelCommand::Colour(rgb));
-                    }
-                }
-            });
-            ui.separator();
-            ui.heading("History");
-            ui.horizontal(|ui| {
-                if ui.add_enabled(!view.undo.is_empty(), egui::Button::new("Undo")).clicked() {
-                    commands.push(PanelCommand::Undo(1));
-                }
-                if ui.add_enabled(!view.redo.is_empty(), egui::Button::new("Redo")).clicked() {
-                    commands.push(PanelCommand::Redo(1));
-                }
-            });
-            let n = view.undo.len();
-            if ui.selectable_label(n == 0, "the start").clicked() && n > 0 {
-                commands.push(PanelCommand::Undo(n));
-            }
-            for (i, step) in view.undo.iter().enumerate() {
-                if ui.selectable_label(i + 1 == n, step).clicked() && i + 1 < n {
-                    commands.push(PanelCommand::Undo(n - 1 - i));
-                }
-            }
-            for (i, step) in view.redo.iter().enumerate() {
-                let text = egui::RichText::new(step).weak();
-                if ui.selectable_label(false, text).clicked() {
-                    commands.push(PanelCommand::Redo(i + 1));
-                }
-            }
-            ui.separator();
-            ui.heading("View");
-            for (i, name) in view.display_modes.iter().enumerate() {
-                if ui.radio(view.display_mode == i, *name).clicked() && view.display_mode != i {
-                    commands.push(PanelCommand::DisplayMode(i));
-                }
-            }
-            ui.separator();
-            ui.heading("File");
-            ui.label(egui::RichText::new(&view.save_name).small()).on_hover_text(&view.save_to);
-            let label = match view.unsaved {
-                0 => "Save".to_owned(),
-                n => format!("Save ({n} unsaved)"),
-            };
-            if ui.button(label).clicked() {
-                commands.push(PanelCommand::Save);
-            }
             if !view.status.is_empty() {
                 ui.separator();
                 for line in &view.status {
@@ -379,6 +403,204 @@ fn panel_ui(ctx: &egui::Context, view: &PanelView, commands: &mut Vec<PanelComma
         });
     });
     shown.response.rect.max.x
+}
+
+/// The level the tool edits: always the finest, or by its size.
+fn level_ui(ui: &mut egui::Ui, view: &PanelView, commands: &mut Vec<PanelCommand>) {
+    let (level, voxel_mm) = view.level;
+    let mut finest = view.level_samples.is_none();
+    let said = format!("finest level only (edits level {level}, {voxel_mm:.1} mm voxels)");
+    if ui.checkbox(&mut finest, said).changed() {
+        commands.push(if finest { PanelCommand::LevelSamples(None) } else { PanelCommand::LevelBySize });
+    }
+    if let Some(samples) = view.level_samples {
+        let mut samples = samples;
+        let slider = egui::Slider::new(&mut samples, 2.0..=256.0).logarithmic(true).text("voxels across");
+        if ui
+            .add(slider)
+            .on_hover_text("the tool edits the finest level it spans at most this many voxels of")
+            .changed()
+        {
+            commands.push(PanelCommand::LevelSamples(Some(samples)));
+        }
+    }
+}
+
+/// A section of the panel under a heading that folds it away; open at first.
+fn section(ui: &mut egui::Ui, title: &str, body: impl FnOnce(&mut egui::Ui)) {
+    egui::CollapsingHeader::new(egui::RichText::new(title).heading()).default_open(true).show(ui, body);
+}
+
+/// The tool: shape, action, size, strength, spacing, colour and the level it edits.
+fn tool_ui(ui: &mut egui::Ui, view: &PanelView, commands: &mut Vec<PanelCommand>) {
+    ui.horizontal_wrapped(|ui| {
+        for (i, name) in view.shapes.iter().enumerate() {
+            if ui.selectable_label(view.shape == Some(i), *name).clicked() && view.shape != Some(i) {
+                commands.push(PanelCommand::Shape(i));
+            }
+        }
+    });
+    ui.horizontal_wrapped(|ui| {
+        for (i, name) in view.actions.iter().enumerate() {
+            if ui.selectable_label(view.action == i, *name).clicked() && view.action != i {
+                commands.push(PanelCommand::Action(i));
+            }
+        }
+    });
+    let mut size = view.size_mm;
+    let (lo, hi) = view.size_range_mm;
+    let slider = egui::Slider::new(&mut size, lo..=hi).logarithmic(true).text("size mm");
+    if ui.add(slider).changed() {
+        commands.push(PanelCommand::SizeMm(size));
+    }
+    if let Some(rate) = view.rate_per_s {
+        let mut rate = rate;
+        let slider = egui::Slider::new(&mut rate, 0.1..=50.0).logarithmic(true).text("strength /s");
+        if ui.add(slider).changed() {
+            commands.push(PanelCommand::Rate(rate));
+        }
+    }
+    let mut spacing = view.spacing;
+    if ui.add(egui::Slider::new(&mut spacing, 0.05..=1.0).text("spacing")).changed() {
+        commands.push(PanelCommand::Spacing(spacing));
+    }
+    ui.horizontal(|ui| {
+        let mut rgb = view.colour;
+        if ui.color_edit_button_rgb(&mut rgb).changed() {
+            commands.push(PanelCommand::Colour(rgb));
+        }
+        ui.label("colour");
+    });
+    ui.horizontal_wrapped(|ui| {
+        for (name, rgb) in SWATCHES {
+            let colour = egui::Rgba::from_rgb(rgb[0], rgb[1], rgb[2]);
+            let swatch = egui::Button::new("").fill(Color32::from(colour)).min_size(Vec2::splat(18.0));
+            if ui.add(swatch).on_hover_text(name).clicked() {
+                commands.push(PanelCommand::Colour(rgb));
+            }
+        }
+    });
+    level_ui(ui, view, commands);
+}
+
+/// The history: undo and redo, and every step kept, a click going back (or on) to it.
+fn history_ui(ui: &mut egui::Ui, view: &PanelView, commands: &mut Vec<PanelCommand>) {
+    ui.horizontal(|ui| {
+        if ui.add_enabled(!view.undo.is_empty(), egui::Button::new("Undo")).clicked() {
+            commands.push(PanelCommand::Undo(1));
+        }
+        if ui.add_enabled(!view.redo.is_empty(), egui::Button::new("Redo")).clicked() {
+            commands.push(PanelCommand::Redo(1));
+        }
+    });
+    let n = view.undo.len();
+    if ui.selectable_label(n == 0, "the start").clicked() && n > 0 {
+        commands.push(PanelCommand::Undo(n));
+    }
+    for (i, step) in view.undo.iter().enumerate() {
+        if ui.selectable_label(i + 1 == n, step).clicked() && i + 1 < n {
+            commands.push(PanelCommand::Undo(n - 1 - i));
+        }
+    }
+    for (i, step) in view.redo.iter().enumerate() {
+        let text = egui::RichText::new(step).weak();
+        if ui.selectable_label(false, text).clicked() {
+            commands.push(PanelCommand::Redo(i + 1));
+        }
+    }
+}
+
+/// The parts (click one for the tools to act on) and the symmetry.
+fn parts_ui(ui: &mut egui::Ui, view: &PanelView, commands: &mut Vec<PanelCommand>) {
+    for (i, part) in view.parts.iter().enumerate() {
+        let mut text = format!("{} {} · {} · {:.1} mm", i + 1, part.name, part.op, part.voxel_mm);
+        if !part.visible {
+            text.push_str(" · hidden");
+        }
+        if part.locked {
+            text.push_str(" · locked");
+        }
+        if ui.selectable_label(view.active_part == i, text).clicked() && view.active_part != i {
+            commands.push(PanelCommand::ActivePart(i));
+        }
+    }
+    ui.horizontal(|ui| {
+        let (said, on) = &view.symmetry;
+        let mut on = *on;
+        if ui.checkbox(&mut on, "symmetry").changed() {
+            commands.push(PanelCommand::ToggleSymmetry);
+        }
+        if ui.button("next").on_hover_text("one plane, two, three, radial").clicked() {
+            commands.push(PanelCommand::NextSymmetry);
+        }
+        ui.label(egui::RichText::new(said).small());
+    });
+}
+
+/// Convergence and interaxial, the parallax budget's readout, lights, eyes, head tracking.
+fn stereo_ui(ui: &mut egui::Ui, stereo: &StereoRow, commands: &mut Vec<PanelCommand>) {
+    let (lo, hi) = stereo.convergence_range_m;
+    let mut convergence = stereo.convergence_m;
+    let slider = egui::Slider::new(&mut convergence, lo..=hi.max(lo)).logarithmic(true).text("converge m");
+    if ui.add_enabled(!stereo.auto_convergence, slider).changed() {
+        commands.push(PanelCommand::ConvergenceM(convergence));
+    }
+    let mut auto = stereo.auto_convergence;
+    if ui.checkbox(&mut auto, "convergence follows the clay").changed() {
+        commands.push(PanelCommand::AutoConvergence(auto));
+    }
+    let mut interaxial = stereo.interaxial_mm;
+    let slider = egui::Slider::new(&mut interaxial, 0.0..=stereo.max_interaxial_mm).text("eyes apart mm");
+    if ui.add(slider).changed() {
+        commands.push(PanelCommand::InteraxialMm(interaxial));
+    }
+    match stereo.disparity {
+        Some(d) => disparity_ui(ui, d),
+        None => {
+            ui.label(egui::RichText::new("disparity: nothing in view").small());
+        }
+    }
+    let mut lights = stereo.lights_follow_viewer;
+    if ui.checkbox(&mut lights, "lights turn with the viewer").changed() {
+        commands.push(PanelCommand::LightsFollowViewer(lights));
+    }
+    let mut swap = stereo.swap_eyes;
+    if ui.checkbox(&mut swap, "swap eyes").changed() {
+        commands.push(PanelCommand::SwapEyes(swap));
+    }
+    ui.horizontal(|ui| {
+        let said = match stereo.head {
+            None => "head tracking off",
+            Some(true) => "head tracked",
+            Some(false) => "head lost",
+        };
+        ui.label(said);
+        if stereo.head.is_some() && ui.button("recentre").clicked() {
+            commands.push(PanelCommand::RecentreHead);
+        }
+    });
+}
+
+/// The disparity range as numbers and as a bar against the comfort bounds (the bar spans
+/// twice the bound either way; the bounds are the two white ticks).
+fn disparity_ui(ui: &mut egui::Ui, d: Disparity) {
+    let colour = if d.exceeded { Color32::from_rgb(240, 90, 70) } else { Color32::from_rgb(120, 200, 120) };
+    let text =
+        format!("disparity {:+.2}° to {:+.2}° (comfort ±{:.2}°)", d.nearest_deg, d.farthest_deg, d.bound_deg);
+    ui.label(egui::RichText::new(text).small().color(colour));
+    let (rect, _) = ui.allocate_exact_size(Vec2::new(ui.available_width(), 10.0), egui::Sense::hover());
+    let span = 2.0 * d.bound_deg.max(1e-3);
+    let x = |deg: f32| rect.center().x + (deg / span).clamp(-1.0, 1.0) * rect.width() * 0.5;
+    let painter = ui.painter_at(rect);
+    painter.rect_filled(rect, 2.0, ui.visuals().extreme_bg_color);
+    let bar = Rect::from_x_y_ranges(
+        x(d.nearest_deg)..=x(d.farthest_deg).max(x(d.nearest_deg) + 1.0),
+        rect.y_range(),
+    );
+    painter.rect_filled(bar.shrink2(Vec2::new(0.0, 2.0)), 1.0, colour);
+    for bound in [-d.bound_deg, d.bound_deg] {
+        painter.vline(x(bound), rect.y_range(), egui::Stroke::new(1.5, Color32::WHITE));
+    }
 }
 
 /// Colours one click away, linear RGB: the clay's own and a few a sculptor paints with.
@@ -471,15 +693,42 @@ mod tests {
             save_name: "bust.argile".into(),
             unsaved: 2,
             status: vec!["tool 1: sphere 20 mm, add".into()],
+            level_samples: Some(32.0),
+            level: (1, 4.0),
+            parts: vec![
+                PartRow { name: "body".into(), op: "union", voxel_mm: 2.0, visible: true, locked: false },
+                PartRow { name: "hole".into(), op: "difference", voxel_mm: 1.0, visible: true, locked: true },
+            ],
+            active_part: 0,
+            symmetry: ("off".into(), false),
+            stereo: StereoRow {
+                convergence_m: 0.6,
+                convergence_range_m: (0.1, 5.0),
+                auto_convergence: false,
+                interaxial_mm: 63.0,
+                max_interaxial_mm: 250.0,
+                disparity: Some(Disparity {
+                    nearest_deg: -0.4,
+                    farthest_deg: 1.3,
+                    bound_deg: 1.0,
+                    exceeded: true,
+                }),
+                lights_follow_viewer: false,
+                swap_eyes: false,
+                head: Some(true),
+            },
         }
     }
+
+    /// The height of the test's eye image, pixels: the whole panel fits.
+    const TALL: u32 = 1000;
 
     /// Runs frames until the panel has laid out, then clicks at `at` (points = pixels here).
     fn click(panel: &mut Panel, view: &PanelView, at: [f32; 2]) -> Vec<PanelCommand> {
         let mut t = 0.0;
         let mut frame = |panel: &mut Panel| {
             t += 1.0 / 60.0;
-            panel.run(view, (800, 600), t).0
+            panel.run(view, (800, TALL), t).0
         };
         frame(panel);
         panel.pointer(PointerEvent::Moved(at));
@@ -493,7 +742,7 @@ mod tests {
 
     /// Where the widget showing `text` was laid out, found by clicking down the panel's band.
     fn find(view: &PanelView, wanted: &PanelCommand) -> Option<[f32; 2]> {
-        for y in (4..600).step_by(4) {
+        for y in (4..TALL).step_by(4) {
             for x in [20.0, 60.0, 100.0, 140.0, 180.0] {
                 let mut panel = Panel::new();
                 if click(&mut panel, view, [x, y as f32]).contains(wanted) {
@@ -513,6 +762,27 @@ mod tests {
         assert!(find(&view, &PanelCommand::Shape(1)).is_some(), "the box shape");
         assert!(find(&view, &PanelCommand::Action(2)).is_some(), "the paint action");
         assert!(find(&view, &PanelCommand::DisplayMode(0)).is_some(), "mono");
+        assert!(find(&view, &PanelCommand::ActivePart(1)).is_some(), "the second part");
+        assert!(find(&view, &PanelCommand::ToggleSymmetry).is_some(), "the symmetry box");
+        assert!(find(&view, &PanelCommand::LevelSamples(None)).is_some(), "the finest level box");
+        assert!(find(&view, &PanelCommand::SwapEyes(true)).is_some(), "the swap eyes box");
+        assert!(find(&view, &PanelCommand::AutoConvergence(true)).is_some(), "auto-convergence");
+        assert!(find(&view, &PanelCommand::RecentreHead).is_some(), "recentre");
+        let sliders = |view: &PanelView| {
+            let mut found = (false, false);
+            for y in (4..TALL).step_by(4) {
+                let commands = click(&mut Panel::new(), view, [20.0, y as f32]);
+                found.0 |= commands.iter().any(|c| matches!(c, PanelCommand::ConvergenceM(_)));
+                found.1 |= commands.iter().any(|c| matches!(c, PanelCommand::InteraxialMm(_)));
+            }
+            found
+        };
+        assert_eq!(sliders(&view), (true, true), "the convergence and interaxial sliders");
+        let auto =
+            PanelView { stereo: StereoRow { auto_convergence: true, ..view.stereo.clone() }, ..view.clone() };
+        assert_eq!(sliders(&auto), (false, true), "the convergence slider is off while it follows the clay");
+        let untracked = PanelView { stereo: StereoRow { head: None, ..view.stereo.clone() }, ..view.clone() };
+        assert!(find(&untracked, &PanelCommand::RecentreHead).is_none(), "nothing to recentre");
         let mut panel = Panel::new();
         panel.run(&view, (800, 600), 0.0);
         panel.pointer(PointerEvent::Moved([100.0, 100.0]));
