@@ -351,6 +351,7 @@ fn main() -> ExitCode {
                 open_dir,
                 edit_finest,
                 swap_eyes,
+                recovered: Vec::new(),
             },
         ),
         Some(Command::Render {
@@ -398,12 +399,12 @@ fn main() -> ExitCode {
             })
         }
         Some(Command::Recover) => match app::recover_and_report() {
-            app::RecoveryCount { recovered: 0, failed: 0 } => {
+            app::RecoveryCount { recovered: 0, failed: 0, .. } => {
                 println!("No session is left to recover: every earlier session closed cleanly.");
                 Ok(())
             }
             app::RecoveryCount { failed: 0, .. } => Ok(()),
-            app::RecoveryCount { recovered, failed } => Err(anyhow::anyhow!(
+            app::RecoveryCount { recovered, failed, .. } => Err(anyhow::anyhow!(
                 "{failed} session(s) could not be recovered (each is named above and left in place); \
                  {recovered} recovered"
             )),
@@ -497,7 +498,7 @@ fn station(
         .as_deref()
         .and_then(|p| p.file_stem())
         .map_or("default".to_owned(), |s| s.to_string_lossy().into_owned());
-    app::recover_and_report();
+    let recovered = app::recover_and_report().sculpts;
     if let Some(XrChoice { left_handed, wait_for_runtime_s }) = xr {
         let xr_options = app::XrRunOptions {
             wait_for_runtime_s,
@@ -600,6 +601,7 @@ fn station(
         autosave: Some(AutosaveConfig::default()),
         scene_toml: scene_text,
         open,
+        recovered: recovered.iter().map(|r| (r.path.clone(), r.described())).collect(),
         ..options
     };
     let report = app::run_station(&scene, &name, &options)?;

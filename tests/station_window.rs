@@ -13,13 +13,14 @@ use image::GenericImageView;
 mod common;
 use common::{check_against_golden, out_dir, root, Xvfb};
 
-fn run_station(x: &Xvfb, args: &[&str]) -> std::process::Output {
+/// Runs the station on `x` with `args`, its state folder (autosave, recent sculpts) `state`.
+fn run_station(x: &Xvfb, state: &Path, args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_argile"))
         .arg("run")
         .args(args)
         .env("DISPLAY", &x.display)
         .env_remove("WAYLAND_DISPLAY")
-        .env("XDG_STATE_HOME", out_dir("station").join("state"))
+        .env("XDG_STATE_HOME", state)
         .output()
         .expect("the argile binary runs")
 }
@@ -31,6 +32,8 @@ struct Run {
     dir: std::path::PathBuf,
     shot: std::path::PathBuf,
     saved: std::path::PathBuf,
+    /// Its state folder.
+    state: std::path::PathBuf,
 }
 
 fn start(name: &str) -> Run {
@@ -40,7 +43,10 @@ fn start(name: &str) -> Run {
     let (shot, saved) = (dir.join(format!("{name}-screenshot.png")), dir.join(format!("{name}.argile")));
     let _ = std::fs::remove_file(&shot);
     let _ = std::fs::remove_file(&saved);
-    Run { x, dir, shot, saved }
+    // A state folder of its own, empty: no other run's recent sculpts or sessions to recover.
+    let state = dir.join("state");
+    let _ = std::fs::remove_dir_all(&state);
+    Run { x, dir, shot, saved, state }
 }
 
 impl Run {
@@ -51,7 +57,7 @@ impl Run {
         let (shot, saved) = (self.shot.to_str().unwrap(), self.saved.to_str().unwrap());
         let fixed =
             [scene, "--validation", "--input-script", script, "--screenshot", shot, "--save-to", saved];
-        run_station(&self.x, &[&fixed[..], args].concat())
+        run_station(&self.x, &self.state, &[&fixed[..], args].concat())
     }
 }
 
@@ -89,7 +95,8 @@ fn a_bad_input_script_is_refused_by_name_before_any_window_opens() {
     std::fs::create_dir_all(&dir).unwrap();
     let script = dir.join("bad-input.toml");
     std::fs::write(&script, "[[event]]\nframe = 1\npress = \"Ctrl+Banana\"\n").unwrap();
-    let out = run_station(&x, &["--frames", "1", "--input-script", script.to_str().unwrap()]);
+    let out =
+        run_station(&x, &dir.join("state"), &["--frames", "1", "--input-script", script.to_str().unwrap()]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
     assert!(
@@ -106,6 +113,7 @@ fn quad_buffer_stereo_falls_back_with_a_notice_where_the_surface_has_one_layer()
     let scene = root().join("scenes/tests/station.toml");
     let out = run_station(
         &x,
+        &out_dir("station").join("state"),
         &[
             scene.to_str().unwrap(),
             "--frames",
@@ -315,13 +323,16 @@ fn sample(field: &argile::field::Field, p: [f32; 3]) -> (f32, [f32; 4]) {
 }
 
 #[test]
-fn the_desk_panel_picks_the_tool_its_size_and_colour_undoes_from_its_history_and_matches_its_goldens() {
+fn the_desk_panel_picks_the_tool_its_size_and_colour_undoes_from_its_history_saves_through_its_browser_and_matches_its_goldens(
+) {
     let run = start("panel");
     let (x, dir, shot, saved) = (&run.x, &run.dir, &run.shot, &run.saved);
+    let browsed = dir.join("bust-panel.argile");
+    let _ = std::fs::remove_file(&browsed);
     let scene = root().join("scenes/tests/station.toml");
     let script = root().join("tests/fixtures/panel-input.toml");
     let out =
-        run.scripted(&scene, &script, &["--frames", "24", "--size", "960x540", "--display-mode", "mono"]);
+        run.scripted(&scene, &script, &["--frames", "38", "--size", "960x540", "--display-mode", "mono"]);
     let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     assert!(out.status.success(), "the station failed:\n{stdout}\n{stderr}");
     let image = image::open(shot).expect("the screenshot was written").to_rgba8();
@@ -330,7 +341,11 @@ fn the_desk_panel_picks_the_tool_its_size_and_colour_undoes_from_its_history_and
     // The first stroke painted a 50 mm box's band moss green across the slab's upper half
     // (a 20 mm box would not reach its middle); the second, lower one was taken back from
     // the history, so the slab's lower edge keeps its colour.
-    let sculpt = argile::app::load_sculpt(saved).expect("the saved sculpt loads");
+    // The file browser saved it under the name typed, where saving wrote from then on (the
+    // station's save at its end too): the file named on the command line was never written.
+    assert!(!saved.exists(), "saving moved to the name the browser gave");
+    assert!(stdout.contains(&format!("saved the sculpt to {}", browsed.display())), "{stdout}");
+    let sculpt = argile::app::load_sculpt(&browsed).expect("the sculpt saved through the browser loads");
     let field = &sculpt.field;
     let front = 0.018;
     for p in [[0.06, 0.045, front], [0.06, 0.0, front]] {
@@ -348,6 +363,7 @@ fn the_desk_panel_picks_the_tool_its_size_and_colour_undoes_from_its_history_and
     let shot = dir.join("panel-side-by-side.png");
     let out = run_station(
         x,
+        &run.state,
         &[
             scene.to_str().unwrap(),
             "--frames",

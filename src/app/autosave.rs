@@ -122,12 +122,22 @@ pub fn recover_sessions() -> Vec<Result<RecoveredSculpt>> {
 }
 
 /// What [`recover_and_report`] did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default)]
 pub struct RecoveryCount {
     /// Sessions recovered (each saved in the recovered folder).
     pub recovered: usize,
     /// Sessions that could not be recovered or saved (left in place).
     pub failed: usize,
+    /// The sculpts recovered, oldest first.
+    pub sculpts: Vec<RecoveredSculpt>,
+}
+
+impl RecoveredSculpt {
+    /// What the recovered sculpt holds, in a few words (for the panel's prompt).
+    pub fn described(&self) -> String {
+        let lattice = if self.lattice { ", a lattice open" } else { "" };
+        format!("{} stroke(s) of {}{lattice}", self.strokes, self.source)
+    }
 }
 
 /// Removes the undo spill folders (`undo/history-PID-…` in the state folder) of processes
@@ -182,9 +192,10 @@ pub fn recover_and_report() -> RecoveryCount {
                         r.path.display()
                     );
                 }
-                if let Some(why) = r.discarded {
+                if let Some(why) = &r.discarded {
                     tracing::info!("recovery discarded the stroke cut short by the crash: {why}");
                 }
+                count.sculpts.push(r);
             }
             Err(e) => {
                 count.failed += 1;

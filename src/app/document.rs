@@ -166,10 +166,27 @@ impl<'s> Document<'s> {
                 Saved { path: other, moved: Some(moved) }
             }
         };
-        self.saved = Some(saved.path.clone());
+        self.written(&saved.path);
+        Ok(saved)
+    }
+
+    /// Writes the sculpt (as [`Document::save`]) to `path`, where saving writes from then on.
+    /// Where `path` cannot be written nothing changes: the error names it, and saving still
+    /// writes where it did.
+    pub fn save_as(&mut self, path: &Path, view: Option<&StoredView>) -> Result<Saved> {
+        let bytes = super::sculpt::encode_playback(&mut self.playback, self.scene_toml.as_deref(), view);
+        super::sculpt::write_sculpt(&bytes, path)
+            .with_context(|| format!("cannot save the sculpt to {}", path.display()))?;
+        self.save_to = path.to_path_buf();
+        self.written(path);
+        Ok(Saved { path: path.to_path_buf(), moved: None })
+    }
+
+    /// The sculpt as it is now is in the file at `path`.
+    fn written(&mut self, path: &Path) {
+        self.saved = Some(path.to_path_buf());
         self.unsaved_strokes = 0;
         self.saved_lattice = self.playback.held_lattice().map(HeldLattice::stored);
-        Ok(saved)
     }
 
     /// Opens the sculpt file at `path`: its clay and parts replace the document's, saving

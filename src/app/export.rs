@@ -104,7 +104,36 @@ pub fn export_as(
             input.display()
         );
     }
-    let bytes = write_with_progress(out, overwrite, progress, |w, p| write_mesh(format, &mesh, w, p))?;
+    write_welded(&mesh, format, out, overwrite, progress)
+}
+
+/// Exports the surface `field` as `format` to `out` (replacing it when `overwrite`): what the
+/// station exports of the sculpt as it stands.
+pub fn export_surface(
+    field: &Field,
+    format: ExportFormat,
+    out: &Path,
+    overwrite: bool,
+) -> Result<ExportSummary> {
+    if !overwrite && out.exists() {
+        bail!("{} already exists", out.display());
+    }
+    let mesh = welded_surface(field);
+    if mesh.indices.is_empty() {
+        bail!("the clay has no surface: nothing to export to {}", out.display());
+    }
+    write_welded(&mesh, format, out, overwrite, false)
+}
+
+/// Writes `mesh` as `format` to `out`.
+fn write_welded(
+    mesh: &WeldedMesh,
+    format: ExportFormat,
+    out: &Path,
+    overwrite: bool,
+    progress: bool,
+) -> Result<ExportSummary> {
+    let bytes = write_with_progress(out, overwrite, progress, |w, p| write_mesh(format, mesh, w, p))?;
     Ok(ExportSummary {
         path: out.to_path_buf(),
         vertices: mesh.positions.len(),

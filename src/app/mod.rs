@@ -15,6 +15,7 @@ mod frame;
 mod glyphs;
 mod held_lattice;
 mod playback;
+mod recent;
 mod sculpt;
 pub mod signals;
 mod station;
@@ -33,9 +34,12 @@ pub use capture::{
 };
 pub use comfort::{apply_parallax_budget, judge_parallax_budget, BudgetVerdict};
 pub use environment::{load_environment, EnvironmentError};
-pub use export::{export, export_as, final_field, final_mesh, welded_surface, ExportSummary, PartsExport};
+pub use export::{
+    export, export_as, export_surface, final_field, final_mesh, welded_surface, ExportSummary, PartsExport,
+};
 pub use frame::{build_frame, world_lights};
 pub use playback::Playback;
+pub use recent::{RecentSculpts, MOST_RECENT};
 pub use sculpt::{
     convert_sculpt, describe_sculpt, is_sculpt, load_sculpt, load_sculpt_with_progress, open_sculpt,
     save_scene_sculpt, with_lattice_applied, SavedSculpt, SCULPT_EXTENSION,

@@ -33,6 +33,7 @@ use super::environment::load_environment;
 use super::frame::build_frame;
 use super::glyphs::tool_glyph;
 use super::playback::Playback;
+use super::recent::RecentSculpts;
 use crate::config::{Chord, KeyBindings, Modifiers, StationAction};
 use crate::input::clutch::{Clutch, ClutchGains};
 use crate::input::desk::{DeskInput, FrameInput};
@@ -57,7 +58,7 @@ use crate::stereo::{HeadTrackedRig, Placement, StereoRig};
 use crate::tool::{
     edit_level_for, Action, Ellipsoid, Falloff, Solid, Stroke, Tool, ToolShape, HAND_SIZE_SAMPLES,
 };
-use crate::ui::{Disparity, Panel, PanelCommand, PanelView, PartRow, PointerEvent, StereoRow};
+use crate::ui::{Disparity, Panel, PanelCommand, PanelKey, PanelView, PartRow, PointerEvent, StereoRow};
 
 /// The time step of a scripted run, seconds.
 pub const SCRIPTED_STEP_S: f32 = 1.0 / 60.0;
@@ -138,6 +139,8 @@ pub struct StationOptions {
     pub edit_finest: bool,
     /// Each eye gets the other's image (as the scene's `[display] swap_eyes`).
     pub swap_eyes: bool,
+    /// The sculpts recovered at start, with what each holds: the panel offers to open them.
+    pub recovered: Vec<(PathBuf, String)>,
 }
 
 /// How a station run ended.
@@ -160,6 +163,24 @@ pub fn no_display_reason() -> Option<String> {
     } else {
         Some("no display (neither DISPLAY nor WAYLAND_DISPLAY is set)".into())
     }
+}
+
+/// The most characters a scripted `type` event holds.
+const MOST_TYPED: usize = 1000;
+
+/// The panel's name for `key`, where a text field reads it.
+fn panel_key(key: KeyCode) -> Option<PanelKey> {
+    Some(match key {
+        KeyCode::Backspace => PanelKey::Backspace,
+        KeyCode::Delete => PanelKey::Delete,
+        KeyCode::Enter | KeyCode::NumpadEnter => PanelKey::Enter,
+        KeyCode::Escape => PanelKey::Escape,
+        KeyCode::ArrowLeft => PanelKey::Left,
+        KeyCode::ArrowRight => PanelKey::Right,
+        KeyCode::Home => PanelKey::Home,
+        KeyCode::End => PanelKey::End,
+        _ => return None,
+    })
 }
 
 /// One scripted input event.
@@ -189,6 +210,8 @@ pub enum ScriptEvent {
     /// The left button pressed and released at a pixel of the window (the pointer moves there
     /// first).
     Click(Vec2),
+    /// Text typed (into the panel's text field that has the keyboard).
+    Text(String),
 }
 
 /// Input events at given frames, from a TOML file:
@@ -198,7 +221,8 @@ pub enum ScriptEvent {
 /// frame = 3
 /// press = "Ctrl+KeyZ"          # or hold = "Space", release = "Space", wheel = 2.0,
 ///                              # or drag = { button = "left", from_px = [10, 10], to_px = [60, 10] },
-///                              # or click = [40, 30], move = [40, 30] (window pixels)
+///                              # or click = [40, 30], move = [40, 30] (window pixels),
+///                              # or type = "bust" (text, into the panel's text field)
 /// ```
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct InputScript {
@@ -225,6 +249,8 @@ struct EventSpec {
     click: Option<[f32; 2]>,
     #[serde(rename = "move")]
     move_to: Option<[f32; 2]>,
+    #[serde(rename = "type")]
+    typed: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -304,10 +330,17 @@ impl InputScript {
             if let Some(p) = e.move_to {
                 parsed.push(ScriptEvent::Move(pixel(p, "move")?));
             }
+            if let Some(text) = &e.typed {
+                if text.chars().count() > MOST_TYPED {
+                    return Err(at(span, format!("`type` holds at most {MOST_TYPED} characters")));
+                }
+                parsed.push(ScriptEvent::Text(text.clone()));
+            }
             if parsed.len() != 1 {
                 return Err(at(
                     span,
-                    "an event gives exactly one of press, hold, release, wheel, drag, click or move".into(),
+                    "an event gives exactly one of press, hold, release, wheel, drag, click, move or type"
+                        .into(),
                 ));
             }
             events.push((e.frame, parsed.remove(0)));
@@ -571,6 +604,10 @@ pub struct Station<'s> {
     /// despite unsaved work (the user was warned).
     open_dir: PathBuf,
     confirm_open: Option<PathBuf>,
+    /// The sculpts saved or opened last (the panel lists them).
+    recent: RecentSculpts,
+    /// The sculpts recovered at start, with what each holds, until the panel dismisses them.
+    recovered: Vec<(PathBuf, String)>,
     quit: bool,
     frame_ms: f32,
     times: StepTimes,
@@ -688,6 +725,8 @@ impl<'s> Station<'s> {
             window_px,
             open_dir,
             confirm_open: None,
+            recent: RecentSculpts::default(),
+            recovered: Vec::new(),
             quit: false,
             frame_ms: 0.0,
             times: StepTimes::default(),
@@ -814,6 +853,15 @@ impl<'s> Station<'s> {
     pub fn key(&mut self, key: KeyCode, pressed: bool) {
         if !pressed {
             self.held.remove(&key);
+        }
+        if self.panel.wants_keyboard() {
+            // A text field of the panel has the keyboard: keys edit it, none is a binding.
+            if let Some(key) = panel_key(key) {
+                self.panel.key(key, pressed);
+            }
+            return;
+        }
+        if !pressed {
             return;
         }
         if !self.held.insert(key) {
@@ -821,6 +869,13 @@ impl<'s> Station<'s> {
         }
         if let Some(action) = self.bindings.action(key, self.modifiers) {
             self.act(action);
+        }
+    }
+
+    /// Text typed: it goes to the panel's text field that has the keyboard, if one has.
+    pub fn text(&mut self, text: &str) {
+        if self.panel.wants_keyboard() {
+            self.panel.text(text);
         }
     }
 
@@ -926,6 +981,7 @@ impl<'s> Station<'s> {
     /// A scripted event.
     pub fn script(&mut self, event: &ScriptEvent) {
         match *event {
+            ScriptEvent::Text(ref text) => self.text(text),
             ScriptEvent::Press(chord) => {
                 let saved = self.modifiers;
                 self.modifiers = chord.modifiers;
@@ -1281,6 +1337,11 @@ impl<'s> Station<'s> {
                 .file_name()
                 .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
             unsaved: self.unsaved_work(),
+            unsaved_fate: self.unsaved_fate(),
+            sculpt_extension: super::SCULPT_EXTENSION,
+            export_formats: crate::mesh::export::ExportFormat::ALL.map(|f| f.extension()).to_vec(),
+            recent: self.recent.list().to_vec(),
+            recovered: self.recovered.clone(),
             status,
         }
     }
@@ -1371,6 +1432,10 @@ impl<'s> Station<'s> {
                 }
             }
             PanelCommand::Save => self.act(StationAction::Save),
+            PanelCommand::SaveAs(path) => self.save_as(&path),
+            PanelCommand::Open(path) => self.open_from_panel(&path),
+            PanelCommand::Export(path) => self.export_to(&path),
+            PanelCommand::DismissRecovered => self.recovered.clear(),
         }
     }
 
@@ -1671,6 +1736,7 @@ impl<'s> Station<'s> {
         let view = self.stored_view();
         let saved = self.doc.save(Some(&view), kept)?;
         self.messages.extend(saved.moved);
+        self.recent.remember(&saved.path);
         Ok(saved.path)
     }
 
@@ -1784,7 +1850,83 @@ impl<'s> Station<'s> {
         self.part_moving = None;
         *self.desk.poses.get_mut(Target::Part) = self.home.get(Target::Part);
         self.clay_bounds = crate::math::Aabb::EMPTY;
+        self.recent.remember(path);
+        self.recovered.retain(|(p, _)| p != path);
         Ok(())
+    }
+
+    /// The sculpts saved and opened last, kept by `recent` (the window's station keeps them in
+    /// the state folder).
+    pub fn set_recent(&mut self, recent: RecentSculpts) {
+        self.recent = recent;
+    }
+
+    /// The sculpts recovered at start, with what each holds: the panel offers to open them.
+    pub fn set_recovered(&mut self, recovered: Vec<(PathBuf, String)>) {
+        self.recovered = recovered;
+    }
+
+    /// What becomes of unsaved work when another sculpt is opened.
+    fn unsaved_fate(&self) -> &'static str {
+        if self.doc.playback.autosave().is_some() {
+            "they are kept for recovery at the next start"
+        } else {
+            "they will be lost"
+        }
+    }
+
+    /// The panel's open: the sculpt at `path`, whatever the unsaved work (the panel said what
+    /// becomes of it).
+    fn open_from_panel(&mut self, path: &Path) {
+        let left = self.unsaved_work();
+        let fate = self.unsaved_fate();
+        match self.open(path) {
+            Ok(()) => {
+                let left = match left {
+                    0 => String::new(),
+                    n => format!(" ({n} unsaved change(s) left behind: {fate})"),
+                };
+                self.messages.push(format!("opened {}{left}", path.display()));
+            }
+            Err(e) => self.messages.push(format!("{e:#}")),
+        }
+    }
+
+    /// The panel's save as: the sculpt to `path`, where saving writes from then on.
+    fn save_as(&mut self, path: &Path) {
+        let view = self.stored_view();
+        let before = self.doc.save_to().to_path_buf();
+        match self.doc.save_as(path, Some(&view)) {
+            Ok(saved) => {
+                self.recent.remember(&saved.path);
+                self.messages.push(format!(
+                    "saved the sculpt to {}, where saving writes from now on",
+                    saved.path.display()
+                ));
+            }
+            Err(e) => {
+                self.messages.push(format!("{e:#}; saving still writes to {}", before.display()));
+            }
+        }
+    }
+
+    /// The panel's export: the surface as it stands to `path`, in the format its extension
+    /// names.
+    fn export_to(&mut self, path: &Path) {
+        let Some(format) = crate::mesh::export::ExportFormat::of_path(path) else {
+            self.messages
+                .push(format!("{}: not an extension the export knows (obj, ply, stl, glb)", path.display()));
+            return;
+        };
+        match super::export::export_surface(self.doc.playback.surface(), format, path, true) {
+            Ok(done) => self.messages.push(format!(
+                "exported {} triangles ({} vertices) to {}",
+                done.triangles,
+                done.vertices,
+                path.display()
+            )),
+            Err(e) => self.messages.push(format!("{e:#}")),
+        }
     }
 
     /// The open key: the sculpt after the one opened last in the open folder, newest first.
@@ -1806,11 +1948,7 @@ impl<'s> Station<'s> {
             return;
         };
         if self.unsaved_work() > 0 && self.confirm_open.as_ref() != Some(&path) {
-            let fate = if self.doc.playback.autosave().is_some() {
-                "they are kept for recovery at the next start"
-            } else {
-                "they will be lost"
-            };
+            let fate = self.unsaved_fate();
             self.messages.push(format!(
                 "{} unsaved stroke(s){}: the save key writes them to {}; the open key again opens {} \
                  anyway ({fate})",
@@ -2242,6 +2380,8 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
             station.set_scene_toml(options.scene_toml.clone());
             station.set_hand_samples((!options.edit_finest).then_some(HAND_SIZE_SAMPLES));
             station.set_fallback_dir(super::state_dir().map(|d| d.join("saved")));
+            station.set_recent(RecentSculpts::in_state_folder());
+            station.set_recovered(options.recovered.clone());
             if let Some(dir) = &options.open_dir {
                 station.set_open_dir(dir.clone());
             }
@@ -2545,6 +2685,9 @@ impl ApplicationHandler for WindowApp<'_, '_> {
                 if let PhysicalKey::Code(code) = event.physical_key {
                     self.station.key(code, event.state == ElementState::Pressed);
                 }
+                if let (ElementState::Pressed, Some(text)) = (event.state, &event.text) {
+                    self.station.text(text);
+                }
             }
             WindowEvent::CursorMoved { position, .. } => {
                 self.station.mouse(MouseEvent::Move(Vec2::new(position.x as f32, position.y as f32)));
@@ -2636,6 +2779,11 @@ mod tests {
         let e =
             InputScript::parse("[[event]]\nframe = 1\nclick = [1e9, 0]\n", "s.toml").unwrap_err().to_string();
         assert!(e.contains("window pixel"), "{e}");
+        let s = InputScript::parse("[[event]]\nframe = 1\ntype = \"bust\"\n", "s.toml").unwrap();
+        assert_eq!(s.events[0].1, ScriptEvent::Text("bust".into()));
+        let long = format!("[[event]]\nframe = 1\ntype = \"{}\"\n", "a".repeat(MOST_TYPED + 1));
+        let e = InputScript::parse(&long, "s.toml").unwrap_err().to_string();
+        assert!(e.contains("at most 1000 characters"), "{e}");
     }
 
     /// Clicks the panel widget whose command is `wanted`, found by clicking down the panel's
@@ -3902,6 +4050,108 @@ mod tests {
         assert_eq!(saved.field.mass(), mass);
         assert_eq!(station.save().unwrap(), path, "the save key writes there from now on");
         assert!(std::fs::read_to_string(dir.join("not-a-folder")).unwrap() == "x", "nothing damaged");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_panel_saves_as_opens_and_exports_and_remembers_the_recent_sculpts() {
+        let dir = std::env::temp_dir().join(format!("argile-station-files-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let scene = ball_scene();
+        let mut station = Station::new(&scene, KeyBindings::shipped(), (64, 64), dir.join("a.argile"));
+        station.set_recent(RecentSculpts::load(dir.join("recent")));
+        sculpt_for(&mut station, 3);
+        let mass = station.field().mass();
+        let b = dir.join("b.argile");
+        station.panel_command(PanelCommand::SaveAs(b.clone()));
+        assert_eq!(station.doc.save_to(), b, "saving writes there from now on");
+        assert_eq!(station.unsaved_work(), 0);
+        assert_eq!(crate::io::read_file(&b, &mut |_| {}).unwrap().field.mass(), mass);
+        assert_eq!(station.panel_view().recent, [b.canonicalize().unwrap()]);
+        // A folder that is a file: nothing changes, and the message says where saving writes.
+        std::fs::write(dir.join("file"), "x").unwrap();
+        station.panel_command(PanelCommand::SaveAs(dir.join("file/c.argile")));
+        let said = station.messages.last().unwrap().clone();
+        assert!(said.contains("file/c.argile") && said.contains("saving still writes to"), "{said}");
+        assert_eq!(station.doc.save_to(), b);
+        // Export: the surface as it stands, in the format of the extension.
+        station.panel_command(PanelCommand::Export(dir.join("b.obj")));
+        assert!(station.messages.last().unwrap().starts_with("exported"), "{:?}", station.messages);
+        let obj = std::fs::read_to_string(dir.join("b.obj")).unwrap();
+        assert!(obj.lines().filter(|l| l.starts_with("f ")).count() > 100);
+        station.panel_command(PanelCommand::Export(dir.join("b.xyz")));
+        assert!(station.messages.last().unwrap().contains("not an extension"));
+        assert!(!dir.join("b.xyz").exists());
+        // More clay, then open the saved sculpt: the panel said what becomes of the stroke.
+        station.mouse.tool_position_m += Vec3::new(0.05, 0.0, 0.0);
+        sculpt_for(&mut station, 3);
+        assert!(station.field().mass() > mass);
+        station.set_recovered(vec![(b.clone(), "3 stroke(s) of ball".into())]);
+        assert_eq!(station.panel_view().recovered.len(), 1);
+        station.panel_command(PanelCommand::Open(b.clone()));
+        let said = station.messages.last().unwrap();
+        assert!(said.starts_with("opened") && said.contains("1 unsaved change(s) left behind"), "{said}");
+        assert_eq!(station.field().mass(), mass);
+        assert!(station.panel_view().recovered.is_empty(), "a recovered sculpt opened is no more offered");
+        station.set_recovered(vec![(dir.join("gone.argile"), "1 stroke(s) of ball".into())]);
+        station.panel_command(PanelCommand::DismissRecovered);
+        assert!(station.panel_view().recovered.is_empty());
+        // The list is kept in its file.
+        assert_eq!(RecentSculpts::load(dir.join("recent")).list(), [b.canonicalize().unwrap()]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn while_the_panels_name_field_has_the_keyboard_keys_type_and_are_no_bindings() {
+        let dir = std::env::temp_dir().join(format!("argile-station-typing-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let scene = ball_scene();
+        let save_to = dir.join("a.argile");
+        let fresh = || {
+            let mut station = Station::new(&scene, KeyBindings::shipped(), (960, 1200), save_to.clone());
+            station.set_panel_shown(true);
+            station
+        };
+        // "Save as…", found down the panel's band.
+        let save_as = (6..1200)
+            .step_by(6)
+            .flat_map(|y| (10..250).step_by(20).map(move |x| Vec2::new(x as f32, y as f32)))
+            .find(|&at| {
+                let mut station = fresh();
+                station.step(SCRIPTED_STEP_S, |_| {});
+                station.script(&ScriptEvent::Click(at));
+                station.step(SCRIPTED_STEP_S, |_| {});
+                station.step(SCRIPTED_STEP_S, |_| {});
+                station.panel.file_task() == Some(crate::ui::FileTask::SaveAs)
+            })
+            .expect("the save as button");
+        let mut station = fresh();
+        station.step(SCRIPTED_STEP_S, |_| {});
+        station.script(&ScriptEvent::Click(save_as));
+        station.step(SCRIPTED_STEP_S, |_| {});
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert!(station.panel.wants_keyboard());
+        // Space sculpts no clay while typing, and Backspace deletes a character, not the lattice.
+        station.script(&ScriptEvent::Hold(KeyCode::Space));
+        station.step(SCRIPTED_STEP_S, |_| {});
+        station.script(&ScriptEvent::Release(KeyCode::Space));
+        assert_eq!(station.field().mass(), 0.0, "no stroke");
+        for _ in 0.."a.argile".len() {
+            station.script(&ScriptEvent::Press(Chord::parse("Backspace").unwrap()));
+        }
+        station.script(&ScriptEvent::Text("figure".into()));
+        station.step(SCRIPTED_STEP_S, |_| {});
+        station.script(&ScriptEvent::Press(Chord::parse("Enter").unwrap()));
+        station.step(SCRIPTED_STEP_S, |_| {});
+        let figure = dir.canonicalize().unwrap().join("figure.argile");
+        assert!(figure.is_file(), "saved through the browser: {:?}", station.messages);
+        assert_eq!(station.doc.save_to(), figure);
+        assert!(!station.panel.wants_keyboard(), "the browser closed");
+        // The keys are bindings again.
+        sculpt_for(&mut station, 2);
+        assert!(station.field().mass() > 0.0);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -8,7 +8,13 @@
 //! events built here, from real and scripted pointer events alike, so a scripted session
 //! drives the panel exactly as a hand does.
 
+mod files;
+
+use std::path::PathBuf;
+
 use egui::{Color32, Pos2, Rect, Vec2};
+
+pub use files::{FileTask, MOST_ENTRIES};
 
 use crate::render::{PanelBatch, PanelPaint, PanelTexture, PanelVertex, MAX_TEXTURE_SIDE};
 
@@ -60,6 +66,17 @@ pub struct PanelView {
     pub save_name: String,
     /// The changes the file lacks.
     pub unsaved: u64,
+    /// What becomes of them if another sculpt is opened (kept for recovery, or lost).
+    pub unsaved_fate: &'static str,
+    /// The sculpt file's extension.
+    pub sculpt_extension: &'static str,
+    /// The mesh formats the surface exports to, by extension.
+    pub export_formats: Vec<&'static str>,
+    /// The sculpts saved or opened last, newest first.
+    pub recent: Vec<PathBuf>,
+    /// The sculpts recovered at start from sessions that did not close, with what each holds;
+    /// shown at the top of the panel until dismissed.
+    pub recovered: Vec<(PathBuf, String)>,
     /// Status lines (what the heads-up display shows while the panel is hidden) and the
     /// latest messages.
     pub status: Vec<String>,
@@ -162,6 +179,36 @@ pub enum PanelCommand {
     DisplayMode(usize),
     /// Save the sculpt.
     Save,
+    /// Save the sculpt to this file, where saving writes from then on.
+    SaveAs(PathBuf),
+    /// Open this sculpt.
+    Open(PathBuf),
+    /// Export the surface to this file (its extension names the format), replacing it.
+    Export(PathBuf),
+    /// The recovered sculpts need no more showing.
+    DismissRecovered,
+}
+
+/// A key a text field of the panel reads (typed characters come as text, see
+/// [`Panel::text`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PanelKey {
+    /// Deletes before the cursor.
+    Backspace,
+    /// Deletes after the cursor.
+    Delete,
+    /// Confirms the field.
+    Enter,
+    /// Leaves the field.
+    Escape,
+    /// The cursor one character left.
+    Left,
+    /// One right.
+    Right,
+    /// To the start.
+    Home,
+    /// To the end.
+    End,
 }
 
 /// A pointer event on the panel, in the eye image's pixels.
@@ -200,8 +247,12 @@ pub struct Panel {
     /// The right edge of the panel as last laid out, points.
     right_pt: f32,
     wants_keyboard: bool,
+    /// The file browser's folder, listing and name field.
+    browser: files::Browser,
     /// The pixels per point the textures were made for.
     pixels_per_point: f32,
+    /// The time of the last frame run, seconds.
+    time_s: f64,
 }
 
 impl std::fmt::Debug for Panel {
@@ -239,7 +290,9 @@ impl Panel {
             using_pointer: false,
             right_pt: PANEL_WIDTH_PT,
             wants_keyboard: false,
+            browser: files::Browser::default(),
             pixels_per_point: 1.0,
+            time_s: 0.0,
         }
     }
 
@@ -273,6 +326,41 @@ impl Panel {
     /// Whether a text field of the panel has the keyboard.
     pub fn wants_keyboard(&self) -> bool {
         self.shown && self.wants_keyboard
+    }
+
+    /// What the file browser is open for, if it is.
+    pub fn file_task(&self) -> Option<FileTask> {
+        self.browser.task()
+    }
+
+    /// Takes typed text for the next frame: it goes to the text field with the keyboard.
+    /// Control characters are left out (their keys come through [`Panel::key`]).
+    pub fn text(&mut self, text: &str) {
+        let text: String = text.chars().filter(|c| !c.is_control()).collect();
+        if !text.is_empty() {
+            self.push(egui::Event::Text(text));
+        }
+    }
+
+    /// Takes a key for the next frame, for the text field with the keyboard.
+    pub fn key(&mut self, key: PanelKey, pressed: bool) {
+        let key = match key {
+            PanelKey::Backspace => egui::Key::Backspace,
+            PanelKey::Delete => egui::Key::Delete,
+            PanelKey::Enter => egui::Key::Enter,
+            PanelKey::Escape => egui::Key::Escape,
+            PanelKey::Left => egui::Key::ArrowLeft,
+            PanelKey::Right => egui::Key::ArrowRight,
+            PanelKey::Home => egui::Key::Home,
+            PanelKey::End => egui::Key::End,
+        };
+        self.push(egui::Event::Key {
+            key,
+            physical_key: None,
+            pressed,
+            repeat: false,
+            modifiers: egui::Modifiers::NONE,
+        });
     }
 
     /// Takes a pointer event for the next frame.
@@ -340,6 +428,9 @@ impl Panel {
         }
         let ppp = pixels_per_point(extent_px.0);
         self.pixels_per_point = ppp;
+        // egui's time never goes back (a clock that does, or NaN, holds it where it was).
+        let time_s = if time_s >= self.time_s { time_s } else { self.time_s };
+        self.time_s = time_s;
         let size = Vec2::new(extent_px.0 as f32 / ppp, extent_px.1 as f32 / ppp);
         let mut input = egui::RawInput {
             screen_rect: Some(Rect::from_min_size(Pos2::ZERO, size)),
@@ -352,7 +443,8 @@ impl Panel {
         input.viewports.entry(egui::ViewportId::ROOT).or_default().native_pixels_per_point = Some(ppp);
         let mut commands = Vec::new();
         let mut right_pt = PANEL_WIDTH_PT;
-        let output = self.ctx.run(input, |ctx| right_pt = panel_ui(ctx, view, &mut commands));
+        let browser = &mut self.browser;
+        let output = self.ctx.run(input, |ctx| right_pt = panel_ui(ctx, view, browser, &mut commands));
         self.right_pt = right_pt;
         self.using_pointer = self.ctx.is_using_pointer();
         self.wants_pointer = self.ctx.is_pointer_over_area() || self.using_pointer;
@@ -364,13 +456,21 @@ impl Panel {
 }
 
 /// The panel's contents; returns its right edge, points.
-fn panel_ui(ctx: &egui::Context, view: &PanelView, commands: &mut Vec<PanelCommand>) -> f32 {
+fn panel_ui(
+    ctx: &egui::Context,
+    view: &PanelView,
+    browser: &mut files::Browser,
+    commands: &mut Vec<PanelCommand>,
+) -> f32 {
     let panel = egui::SidePanel::left("argile-panel").exact_width(PANEL_WIDTH_PT).resizable(false);
     let shown = panel.show(ctx, |ui| {
         // Scrolled by the wheel alone: a press on the panel is a press on one of its controls.
         let sources =
             egui::scroll_area::ScrollSource::SCROLL_BAR | egui::scroll_area::ScrollSource::MOUSE_WHEEL;
         egui::ScrollArea::vertical().scroll_source(sources).show(ui, |ui| {
+            if !view.recovered.is_empty() {
+                recovered_ui(ui, view, commands);
+            }
             section(ui, "Tool", |ui| tool_ui(ui, view, commands));
             section(ui, "Parts", |ui| parts_ui(ui, view, commands));
             section(ui, "History", |ui| history_ui(ui, view, commands));
@@ -384,16 +484,7 @@ fn panel_ui(ctx: &egui::Context, view: &PanelView, commands: &mut Vec<PanelComma
                 });
                 stereo_ui(ui, &view.stereo, commands);
             });
-            section(ui, "File", |ui| {
-                ui.label(egui::RichText::new(&view.save_name).small()).on_hover_text(&view.save_to);
-                let label = match view.unsaved {
-                    0 => "Save".to_owned(),
-                    n => format!("Save ({n} unsaved)"),
-                };
-                if ui.button(label).clicked() {
-                    commands.push(PanelCommand::Save);
-                }
-            });
+            section(ui, "File", |ui| browser.ui(ui, view, commands));
             if !view.status.is_empty() {
                 ui.separator();
                 for line in &view.status {
@@ -424,6 +515,27 @@ fn level_ui(ui: &mut egui::Ui, view: &PanelView, commands: &mut Vec<PanelCommand
             commands.push(PanelCommand::LevelSamples(Some(samples)));
         }
     }
+}
+
+/// The sculpts recovered at start, each opened by a click, until dismissed.
+fn recovered_ui(ui: &mut egui::Ui, view: &PanelView, commands: &mut Vec<PanelCommand>) {
+    ui.group(|ui| {
+        let said = "Recovered at start, from sessions that did not close:";
+        ui.label(egui::RichText::new(said).color(Color32::from_rgb(240, 190, 90)));
+        for (path, what) in &view.recovered {
+            let name =
+                path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into());
+            ui.horizontal_wrapped(|ui| {
+                if ui.button("open").on_hover_text(path.display().to_string()).clicked() {
+                    commands.push(PanelCommand::Open(path.clone()));
+                }
+                ui.label(egui::RichText::new(format!("{name}: {what}")).small());
+            });
+        }
+        if ui.button("dismiss").clicked() {
+            commands.push(PanelCommand::DismissRecovered);
+        }
+    });
 }
 
 /// A section of the panel under a heading that folds it away; open at first.
@@ -692,6 +804,11 @@ mod tests {
             save_to: "sculpts/bust.argile".into(),
             save_name: "bust.argile".into(),
             unsaved: 2,
+            unsaved_fate: "they are kept for recovery at the next start",
+            sculpt_extension: "argile",
+            export_formats: vec!["obj", "ply", "stl", "glb"],
+            recent: Vec::new(),
+            recovered: Vec::new(),
             status: vec!["tool 1: sphere 20 mm, add".into()],
             level_samples: Some(32.0),
             level: (1, 4.0),
@@ -815,6 +932,137 @@ mod tests {
         // The panel lies in its band on the left.
         let right = paint.vertices.iter().map(|v| v.position_px[0]).fold(0.0, f32::max);
         assert!(right <= PANEL_WIDTH_PT + 20.0, "{right}");
+    }
+
+    /// Where a click leaves `wanted` true, on a fresh panel that was first clicked at each of
+    /// `before`; searched down the panel's band.
+    fn find_after(
+        view: &PanelView,
+        before: &[[f32; 2]],
+        wanted: impl Fn(&Panel, &[PanelCommand]) -> bool,
+    ) -> Option<[f32; 2]> {
+        for y in (4..TALL).step_by(6) {
+            for x in [20.0, 60.0, 100.0, 140.0, 180.0, 220.0] {
+                let mut panel = Panel::new();
+                before.iter().for_each(|&at| drop(click(&mut panel, view, at)));
+                let commands = click(&mut panel, view, [x, y as f32]);
+                if wanted(&panel, &commands) {
+                    return Some([x, y as f32]);
+                }
+            }
+        }
+        None
+    }
+
+    /// A folder of its own for a test, empty.
+    fn test_folder(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("argile-panel-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    /// A short view (one shape, one action, no history, one display mode) saving in `dir`.
+    fn files_view(dir: &std::path::Path) -> PanelView {
+        PanelView {
+            shapes: vec!["sphere"],
+            actions: vec!["add"],
+            undo: Vec::new(),
+            redo: Vec::new(),
+            display_modes: vec!["mono"],
+            save_to: dir.join("bust.argile").display().to_string(),
+            ..view()
+        }
+    }
+
+    #[test]
+    fn the_file_browser_saves_as_a_typed_name_and_opens_a_sculpt_of_its_folder() {
+        let dir = test_folder("browser");
+        std::fs::write(dir.join("older.argile"), b"x").unwrap();
+        std::fs::write(dir.join("notes.txt"), b"x").unwrap();
+        std::fs::create_dir(dir.join("studies")).unwrap();
+        let view = files_view(&dir);
+        // Save as: the name field has the keyboard at once; typed, Enter saves.
+        let save_as =
+            find_after(&view, &[], |p, _| p.file_task() == Some(FileTask::SaveAs)).expect("save as");
+        let mut panel = Panel::new();
+        click(&mut panel, &view, save_as);
+        panel.run(&view, (800, TALL), 1.0);
+        assert!(panel.wants_keyboard(), "the name field has the keyboard");
+        for _ in 0.."bust.argile".len() {
+            panel.key(PanelKey::Backspace, true);
+            panel.key(PanelKey::Backspace, false);
+        }
+        panel.run(&view, (800, TALL), 1.1);
+        panel.text("head\u{8}");
+        panel.run(&view, (800, TALL), 1.2);
+        panel.key(PanelKey::Enter, true);
+        panel.key(PanelKey::Enter, false);
+        let (commands, _) = panel.run(&view, (800, TALL), 1.3);
+        // The name cleared, "head" typed (the control character left out) gains the extension.
+        assert_eq!(commands, [PanelCommand::SaveAs(dir.canonicalize().unwrap().join("head.argile"))]);
+        assert_eq!(panel.file_task(), None, "the browser closes");
+        // Open: the folder lists the sculpt and the subfolder, not the text file; a click on
+        // the sculpt opens it.
+        let open = find_after(&view, &[], |p, _| p.file_task() == Some(FileTask::Open)).expect("open");
+        let older = dir.canonicalize().unwrap().join("older.argile");
+        let wanted = PanelCommand::Open(older.clone());
+        let at = find_after(&view, &[open], |_, c| c.contains(&wanted)).expect("the sculpt listed");
+        // Into the subfolder, then up again: the sculpt is where it was.
+        let into = find_after(&view, &[open], |p, _| {
+            p.browser.folder.ends_with("studies") && p.file_task() == Some(FileTask::Open)
+        })
+        .expect("the subfolder listed");
+        let up = find_after(&view, &[open, into], |p, _| p.browser.folder == dir.canonicalize().unwrap())
+            .expect("up");
+        assert!(up[1] < at[1], "the browser's buttons above its entries");
+        // The recent sculpts and the recovered ones open by a click; the recovered are dismissed.
+        let recent = PanelView { recent: vec![older.clone()], ..view.clone() };
+        assert!(find_after(&recent, &[], |_, c| c.contains(&wanted)).is_some(), "a recent sculpt");
+        let recovered =
+            PanelView { recovered: vec![(older.clone(), "3 stroke(s) of bust".into())], ..view.clone() };
+        assert!(find_after(&recovered, &[], |_, c| c.contains(&wanted)).is_some(), "a recovered sculpt");
+        let dismissed = find_after(&recovered, &[], |_, c| c.contains(&PanelCommand::DismissRecovered));
+        assert!(dismissed.is_some(), "dismiss");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_file_browser_exports_in_the_format_picked_and_an_unreadable_folder_only_says_so() {
+        let dir = test_folder("export");
+        let view = files_view(&dir);
+        let export = find_after(&view, &[], |p, _| p.file_task() == Some(FileTask::Export)).expect("export");
+        let mut panel = Panel::new();
+        click(&mut panel, &view, export);
+        panel.key(PanelKey::Enter, true);
+        panel.key(PanelKey::Enter, false);
+        let (commands, _) = panel.run(&view, (800, TALL), 1.0);
+        assert_eq!(commands, [PanelCommand::Export(dir.canonicalize().unwrap().join("bust.obj"))]);
+        // The STL button renames the file.
+        let stl = find_after(&view, &[export], |p, _| p.browser.name == "bust.stl").expect("the stl button");
+        let mut panel = Panel::new();
+        click(&mut panel, &view, export);
+        click(&mut panel, &view, stl);
+        let wanted = PanelCommand::Export(dir.canonicalize().unwrap().join("bust.stl"));
+        assert!(find_after(&view, &[export, stl], |_, c| c.contains(&wanted)).is_some(), "export as stl");
+        // A folder that is not there, and one that is a file: the browser says so, every click
+        // on it gives nothing but its own buttons' work, and nothing panics.
+        std::fs::write(dir.join("file"), b"x").unwrap();
+        for folder in [dir.join("gone"), dir.join("file")] {
+            let view =
+                PanelView { save_to: folder.join("bust.argile").display().to_string(), ..view.clone() };
+            let open = find_after(&view, &[], |p, _| p.file_task() == Some(FileTask::Open)).expect("open");
+            let mut panel = Panel::new();
+            click(&mut panel, &view, open);
+            match &panel.browser.listing {
+                Some(Err(why)) => assert!(why.contains("cannot read the folder"), "{why}"),
+                other => panic!("{folder:?} listed: {other:?}"),
+            }
+            let opened =
+                find_after(&view, &[open], |_, c| c.iter().any(|c| matches!(c, PanelCommand::Open(_))));
+            assert_eq!(opened, None, "nothing to open in {folder:?}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

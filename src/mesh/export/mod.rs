@@ -34,6 +34,16 @@ pub enum ExportFormat {
 }
 
 impl ExportFormat {
+    /// Every format, in the order offered.
+    pub const ALL: [ExportFormat; 4] =
+        [ExportFormat::Obj, ExportFormat::Ply, ExportFormat::Stl, ExportFormat::Glb];
+
+    /// The format whose extension `path` has (any case), if one has.
+    pub fn of_path(path: &std::path::Path) -> Option<ExportFormat> {
+        let ext = path.extension()?.to_str()?;
+        Self::ALL.into_iter().find(|f| f.extension().eq_ignore_ascii_case(ext))
+    }
+
     /// The usual file extension.
     pub fn extension(self) -> &'static str {
         match self {
