@@ -11,10 +11,11 @@ layout(constant_id = 0) const uint MODE = 8u;
 layout(set = 0, binding = 0) uniform sampler2DArray stereo;
 
 layout(push_constant) uniform Compose {
-    // Anaglyph matrices, one column per vec4 (w unused): output = left * l + right * r.
+    // Anaglyph matrices (red–cyan, green–magenta or amber–blue), one column per vec4 (w
+    // unused): output = left * l + right * r.
     vec4 left[3];
     vec4 right[3];
-    // x: interlace parity offset (0 or 1), y: encode sRGB in the shader (a UNORM destination),
+    // x: interlace parity offset (0 or 1; frame-sequential: the eye this frame shows), y: encode sRGB in the shader (a UNORM destination),
     // z: the destination layer (quad-buffer), w: unused.
     uvec4 params;
 } pc;
@@ -30,6 +31,7 @@ const uint ROW_INTERLACED = 5u;
 const uint COLUMN_INTERLACED = 6u;
 const uint ANAGLYPH = 7u;
 const uint MONO = 8u;
+const uint FRAME_SEQUENTIAL = 9u;
 
 vec4 eye(uint layer, ivec2 p) {
     return texelFetch(stereo, ivec3(p, int(layer)), 0);
@@ -74,6 +76,8 @@ void main() {
         mat3 ml = mat3(pc.left[0].xyz, pc.left[1].xyz, pc.left[2].xyz);
         mat3 mr = mat3(pc.right[0].xyz, pc.right[1].xyz, pc.right[2].xyz);
         c = vec4(clamp(ml * l + mr * r, 0.0, 1.0), 1.0);
+    } else if (mode == FRAME_SEQUENTIAL) {
+        c = eye(parity, p);
     } else {
         c = eye(0u, p);
     }

@@ -76,6 +76,14 @@ enum Command {
         /// E key swaps them back and forth.
         #[arg(long)]
         swap_eyes: bool,
+        /// The window fills its monitor (as `[display] fullscreen`); F11 switches at run time.
+        #[arg(long)]
+        fullscreen: bool,
+        /// The monitor the window opens on: its index (from 0) or (a part of) its name, such as
+        /// DP-1 (as `[display] monitor` in a scene or the calibration); a name that fits none is
+        /// refused with the list.
+        #[arg(long)]
+        monitor: Option<argile::scene::MonitorName>,
         /// Sculpt in an OpenXR headset; without a loader, runtime or headset, says which is
         /// missing and opens the desktop stereo station instead.
         #[arg(long)]
@@ -324,6 +332,8 @@ fn main() -> ExitCode {
             calibration,
             validation,
             swap_eyes,
+            fullscreen,
+            monitor,
             xr,
             left_handed,
             xr_wait_s,
@@ -351,6 +361,8 @@ fn main() -> ExitCode {
                 open_dir,
                 edit_finest,
                 swap_eyes,
+                fullscreen,
+                monitor,
                 recovered: Vec::new(),
             },
         ),

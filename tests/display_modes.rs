@@ -8,7 +8,10 @@ use argile::app::{build_frame, renderer_for, Playback};
 use argile::mesh::mesh_all;
 use argile::render::Renderer;
 use argile::scene::Scene;
-use argile::stereo::display::{DisplayMode, Parity, DUBOIS_RED_CYAN_LEFT, DUBOIS_RED_CYAN_RIGHT};
+use argile::stereo::display::{
+    DisplayMode, Parity, DUBOIS_AMBER_BLUE_LEFT, DUBOIS_AMBER_BLUE_RIGHT, DUBOIS_GREEN_MAGENTA_LEFT,
+    DUBOIS_GREEN_MAGENTA_RIGHT, DUBOIS_RED_CYAN_LEFT, DUBOIS_RED_CYAN_RIGHT,
+};
 use image::{Rgba, RgbaImage};
 
 /// The sRGB transfer functions (IEC 61966-2-1), the reference the GPU's sRGB views follow.
@@ -61,16 +64,19 @@ fn expected(mode: DisplayMode, parity: Parity, eyes: [&RgbaImage; 2], x: u32, y:
         }
         DisplayMode::RowInterlaced => Expected::Exact(*eyes[eye_of(y)].get_pixel(x, y)),
         DisplayMode::ColumnInterlaced => Expected::Exact(*eyes[eye_of(x)].get_pixel(x, y)),
-        DisplayMode::Anaglyph => {
+        DisplayMode::FrameSequential => Expected::Exact(*eyes[parity.offset() as usize].get_pixel(x, y)),
+        DisplayMode::Anaglyph | DisplayMode::AnaglyphGreenMagenta | DisplayMode::AnaglyphAmberBlue => {
+            // Dubois' matrices for each pair of glasses, named here rather than asked of the mode.
+            let (ml, mr) = match mode {
+                DisplayMode::Anaglyph => (DUBOIS_RED_CYAN_LEFT, DUBOIS_RED_CYAN_RIGHT),
+                DisplayMode::AnaglyphGreenMagenta => (DUBOIS_GREEN_MAGENTA_LEFT, DUBOIS_GREEN_MAGENTA_RIGHT),
+                _ => (DUBOIS_AMBER_BLUE_LEFT, DUBOIS_AMBER_BLUE_RIGHT),
+            };
             let l = eyes[0].get_pixel(x, y).0.map(to_linear);
             let r = eyes[1].get_pixel(x, y).0.map(to_linear);
-            Expected::Near([0, 1, 2].map(|row| {
-                to_srgb(
-                    (0..3)
-                        .map(|k| DUBOIS_RED_CYAN_LEFT[row][k] * l[k] + DUBOIS_RED_CYAN_RIGHT[row][k] * r[k])
-                        .sum(),
-                )
-            }))
+            Expected::Near(
+                [0, 1, 2].map(|row| to_srgb((0..3).map(|k| ml[row][k] * l[k] + mr[row][k] * r[k]).sum())),
+            )
         }
     }
 }
@@ -139,7 +145,9 @@ fn every_output_pixel_comes_from_the_expected_eye_pixels() {
         let (w, h) = mode.output_size((67, 49));
         assert_eq!(checked, (w * h * mode.layers()) as usize, "{mode}: every pixel checked");
     }
-    for mode in [DisplayMode::RowInterlaced, DisplayMode::ColumnInterlaced] {
+    // The odd parity: the other rows or columns, and the frames of the other phase (the right
+    // eye in frame 0).
+    for mode in [DisplayMode::RowInterlaced, DisplayMode::ColumnInterlaced, DisplayMode::FrameSequential] {
         check_mode(&mut renderer, eyes, mode, Parity::LeftOdd);
     }
     // The stereo pair is left as it was: composing does not disturb the next read-back.

@@ -286,10 +286,15 @@ fn every_display_mode_matches_its_golden() {
         }
     }
     assert!(images.next().is_none());
-    // Quad-buffer output is the pair itself, and mono the left eye.
+    // Quad-buffer output is the pair itself, mono the left eye, and so is a frame-sequential
+    // display's first frame (phase left-even).
     assert_eq!(composed[0], left);
     assert_eq!(composed[1], right);
     assert_eq!(composed.last(), Some(&left));
+    let first = |m: DisplayMode| -> usize {
+        DisplayMode::ALL.iter().take_while(|&&x| x != m).map(|x| x.layers() as usize).sum()
+    };
+    assert_eq!(composed[first(DisplayMode::FrameSequential)], left);
 }
 
 /// In the anaglyph, the near red ball and the far blue ball of the parallax scene show red
@@ -532,6 +537,23 @@ fn parts_figure_matches_golden() {
 #[test]
 fn parts_hole_matches_golden() {
     golden_case("parts-hole", "scenes/parts-hole.toml", Some((256, 256)));
+}
+
+/// The judgement itself: a level of rounding everywhere passes (another CPU's shader code), a
+/// picture moved by a pixel fails.
+#[test]
+fn the_golden_check_forgives_a_level_of_rounding_but_not_a_moved_edge() {
+    let golden = image::open(common::root().join("tests/golden/parts-hole-left.png")).unwrap().to_rgba8();
+    let rounded = image::RgbaImage::from_fn(golden.width(), golden.height(), |x, y| {
+        let p = golden.get_pixel(x, y);
+        image::Rgba([p[0].saturating_add(1), p[1].saturating_sub(1), p[2], p[3]])
+    });
+    assert_eq!(common::mean_error(&rounded, &golden), 0.0);
+    let moved = image::RgbaImage::from_fn(golden.width(), golden.height(), |x, y| {
+        *golden.get_pixel(x.saturating_sub(1), y)
+    });
+    let mean = common::mean_error(&moved, &golden);
+    assert!(mean > 0.1, "a picture moved by a pixel passes: mean error {mean}");
 }
 
 #[test]

@@ -25,6 +25,15 @@ fn run_station(x: &Xvfb, state: &Path, args: &[&str]) -> std::process::Output {
         .expect("the argile binary runs")
 }
 
+/// Runs the station like `run_station` and returns what it printed, failing the test with its
+/// output when it does not exit cleanly.
+fn run_station_ok(x: &Xvfb, state: &Path, args: &[&str]) -> String {
+    let out = run_station(x, state, args);
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(out.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+    stdout
+}
+
 /// A fresh X server and the test's output folder, with the paths of its screenshot and saved
 /// sculpt cleared of any earlier run's files.
 struct Run {
@@ -111,7 +120,7 @@ fn quad_buffer_stereo_falls_back_with_a_notice_where_the_surface_has_one_layer()
     // Xvfb's surfaces offer a single image layer: quad-buffer cannot be shown there.
     let x = Xvfb::start();
     let scene = root().join("scenes/tests/station.toml");
-    let out = run_station(
+    let stdout = run_station_ok(
         &x,
         &out_dir("station").join("state"),
         &[
@@ -125,8 +134,6 @@ fn quad_buffer_stereo_falls_back_with_a_notice_where_the_surface_has_one_layer()
             "--validation",
         ],
     );
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
     assert!(
         stdout.contains("offers no stereo swapchain (maxImageArrayLayers is 1)")
             && stdout.contains("showing anaglyph (the display fallback)"),
@@ -148,12 +155,17 @@ fn a_station_that_cannot_start_says_why_exits_1_and_closes_its_session() {
     // A UDP port already taken.
     let taken = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
     let port = taken.local_addr().unwrap().to_string();
-    let cases: [(Vec<&str>, &str); 2] = [
+    let cases: [(Vec<&str>, &str); 3] = [
         (
             vec![scene.to_str().unwrap(), "--display-mode", "quad-buffer"],
             "quad-buffer stereo cannot be shown",
         ),
         (vec![plain.to_str().unwrap(), "--opentrack", &port], "cannot listen for opentrack datagrams"),
+        // A monitor Xvfb has not.
+        (
+            vec![plain.to_str().unwrap(), "--monitor", "5"],
+            "cannot open the station window on monitor `5`: there is no monitor 5; the monitors are 0: `",
+        ),
     ];
     for (i, (args, says)) in cases.iter().enumerate() {
         let state = dir.join(format!("state-{i}"));
@@ -175,6 +187,106 @@ fn a_station_that_cannot_start_says_why_exits_1_and_closes_its_session() {
         assert!(told.contains("No session is left to recover"), "{args:?}: the session was closed: {told}");
     }
     drop(taken);
+}
+
+#[test]
+fn the_window_fills_its_monitor_when_asked_and_f11_switches_at_run_time() {
+    let x = Xvfb::start();
+    let dir = out_dir("station-fullscreen");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = root().join("scenes/tests/station.toml");
+    let size = |png: &Path| image::image_dimensions(png).expect("the screenshot is written");
+    // Asked at start, on the monitor named by its index: Xvfb's one screen is 800x600.
+    let filled = dir.join("filled.png");
+    let stdout = run_station_ok(
+        &x,
+        &dir.join("state-0"),
+        &[
+            scene.to_str().unwrap(),
+            "--frames",
+            "4",
+            "--size",
+            "64x48",
+            "--fullscreen",
+            "--monitor",
+            "0",
+            "--screenshot",
+            filled.to_str().unwrap(),
+            "--validation",
+        ],
+    );
+    assert!(stdout.contains("window on monitor 0: `") && stdout.contains("800x600 at (0, 0)"), "{stdout}");
+    assert!(stdout.contains(", filling it"), "{stdout}");
+    assert_eq!(size(&filled), (800, 600));
+    // F11 at run time fills it; the window opened small.
+    let script = dir.join("f11.toml");
+    std::fs::write(&script, "[[event]]\nframe = 1\npress = \"F11\"\n").unwrap();
+    let switched = dir.join("switched.png");
+    let stdout = run_station_ok(
+        &x,
+        &dir.join("state-1"),
+        &[
+            scene.to_str().unwrap(),
+            "--frames",
+            "12",
+            "--size",
+            "64x48",
+            "--input-script",
+            script.to_str().unwrap(),
+            "--screenshot",
+            switched.to_str().unwrap(),
+        ],
+    );
+    assert!(stdout.contains("fullscreen: the window fills its monitor"), "{stdout}");
+    assert_eq!(size(&switched), (800, 600));
+}
+
+#[test]
+fn a_frame_sequential_window_shows_the_left_eye_then_the_right() {
+    let x = Xvfb::start();
+    let dir = out_dir("station-frame-sequential");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = root().join("scenes/tests/station.toml");
+    // The panel hidden, so that the clay fills the picture.
+    let script = dir.join("no-panel.toml");
+    std::fs::write(&script, "[[event]]\nframe = 0\npress = \"F1\"\n").unwrap();
+    // The last frame's picture of a run of 2, 3 and 4 frames: the eyes in turn (the HUD's frame
+    // time is the same from the second frame on).
+    let shots: Vec<image::RgbaImage> = (2..=4)
+        .map(|frames| {
+            let shot = dir.join(format!("frame-{frames}.png"));
+            let stdout = run_station_ok(
+                &x,
+                &dir.join(format!("state-{frames}")),
+                &[
+                    scene.to_str().unwrap(),
+                    "--frames",
+                    &frames.to_string(),
+                    "--size",
+                    "160x120",
+                    "--display-mode",
+                    "frame-sequential",
+                    "--input-script",
+                    script.to_str().unwrap(),
+                    "--screenshot",
+                    shot.to_str().unwrap(),
+                ],
+            );
+            assert!(stdout.contains("frame-sequential"), "the refresh is said: {stdout}");
+            image::open(&shot).expect("the screenshot").to_rgba8()
+        })
+        .collect();
+    let differing = |a: &image::RgbaImage, b: &image::RgbaImage| {
+        a.pixels().zip(b.pixels()).filter(|(p, q)| p != q).count()
+    };
+    let (next, after) = (differing(&shots[0], &shots[1]), differing(&shots[0], &shots[2]));
+    assert!(next > 500, "the third frame shows the other eye than the second: {next} pixels differ");
+    assert!(
+        after * 10 < next,
+        "the fourth shows the second's eye again: {after} pixels differ, against {next}"
+    );
 }
 
 /// The journal files of the autosave sessions under `state`.

@@ -14,6 +14,7 @@ mod export;
 mod frame;
 mod glyphs;
 mod held_lattice;
+mod monitor;
 mod playback;
 mod recent;
 mod sculpt;

@@ -20,11 +20,15 @@ use anyhow::{bail, Context, Result};
 use serde::Deserialize;
 use toml::Spanned;
 use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalPosition;
 use winit::dpi::PhysicalSize;
 use winit::event::{ElementState, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
-use winit::window::{Window, WindowId};
+use winit::monitor::MonitorHandle;
+use winit::window::{Fullscreen, Window, WindowId};
+
+use super::monitor::{frame_sequential_notice, pick_monitor, Monitor};
 
 mod lattice;
 
@@ -139,6 +143,10 @@ pub struct StationOptions {
     pub edit_finest: bool,
     /// Each eye gets the other's image (as the scene's `[display] swap_eyes`).
     pub swap_eyes: bool,
+    /// The window fills its monitor (as `[display] fullscreen`).
+    pub fullscreen: bool,
+    /// The monitor the window opens on (over the scene's and the calibration's).
+    pub monitor: Option<crate::scene::MonitorName>,
     /// The sculpts recovered at start, with what each holds: the panel offers to open them.
     pub recovered: Vec<(PathBuf, String)>,
 }
@@ -587,8 +595,13 @@ pub struct Station<'s> {
     part_moving: Option<crate::parts::Placement>,
     /// Seconds the active part's box is still drawn (after it was picked or moved).
     part_shown_s: f32,
-    /// The interlace parity is the calibration's flipped.
+    /// The interlace parity (a frame-sequential display's phase) is the calibration's flipped.
     parity_flipped: bool,
+    /// Frames the window has shown (a frame-sequential display alternates eyes by it).
+    frames_shown: u64,
+    /// Whether the window fills its monitor, and a change the window has yet to make.
+    fullscreen: bool,
+    fullscreen_asked: Option<bool>,
     /// The monitor's resolution as the window system gives it (when the calibration does not).
     monitor_px: Option<(u32, u32)>,
     /// How the window shows the stereo pair.
@@ -713,6 +726,9 @@ impl<'s> Station<'s> {
             part_moving: None,
             part_shown_s: 0.0,
             parity_flipped: false,
+            frames_shown: 0,
+            fullscreen: false,
+            fullscreen_asked: None,
             head: None,
             auto_convergence: None,
             clay_bounds: crate::math::Aabb::EMPTY,
@@ -826,6 +842,16 @@ impl<'s> Station<'s> {
     /// Whether the user asked to close.
     pub fn wants_quit(&self) -> bool {
         self.quit
+    }
+
+    /// The window fills its monitor (as it opened), or not.
+    pub fn set_fullscreen(&mut self, on: bool) {
+        self.fullscreen = on;
+    }
+
+    /// Whether the window is to fill its monitor, once, after the user asked for a change.
+    pub fn take_fullscreen_request(&mut self) -> Option<bool> {
+        self.fullscreen_asked.take()
     }
 
     /// The window changed size.
@@ -1138,11 +1164,16 @@ impl<'s> Station<'s> {
             }
             StationAction::FlipParity => {
                 self.parity_flipped = !self.parity_flipped;
-                let parity = self.display().1;
-                self.messages.push(format!(
-                    "interlace parity {}: the other rows (columns) carry the left eye",
-                    parity.name()
-                ));
+                self.messages.push(match self.display_mode {
+                    DisplayMode::FrameSequential => format!(
+                        "frame-sequential phase {}: the frames that showed the right eye show the left",
+                        self.display_phase().name()
+                    ),
+                    _ => format!(
+                        "interlace parity {}: the other rows (columns) carry the left eye",
+                        self.display().1.name()
+                    ),
+                });
             }
             StationAction::RecentreHead => {
                 let said = match self.head.as_mut().map(OpentrackHead::recentre) {
@@ -1173,6 +1204,17 @@ impl<'s> Station<'s> {
                 }
             }
             StationAction::TogglePanel => self.set_panel_shown(!self.panel.shown()),
+            StationAction::ToggleFullscreen => {
+                self.fullscreen = !self.fullscreen;
+                self.fullscreen_asked = Some(self.fullscreen);
+                self.messages.push(
+                    match self.fullscreen {
+                        true => "fullscreen: the window fills its monitor",
+                        false => "fullscreen off: back to a window",
+                    }
+                    .to_owned(),
+                );
+            }
             StationAction::Apply
             | StationAction::Clutch
             | StationAction::GrabRegion
@@ -1562,15 +1604,28 @@ impl<'s> Station<'s> {
     /// The display mode and, for interlaced modes, the parity in window pixels (the
     /// calibration's parity is the screen's; a window on an odd row or column flips it).
     pub fn display(&self) -> (DisplayMode, Parity) {
-        let screen = match self.parity_flipped {
-            true => self.calibration.display.parity.flipped(),
-            false => self.calibration.display.parity,
-        };
+        let screen = self.display_phase();
         let parity = match self.display_mode {
             DisplayMode::ColumnInterlaced => screen.for_origin(self.window_origin.0),
+            DisplayMode::FrameSequential => screen.for_frame(self.frames_shown),
             _ => screen.for_origin(self.window_origin.1),
         };
         (self.display_mode, parity)
+    }
+
+    /// The display's parity in screen rows (columns), or a frame-sequential display's phase:
+    /// the calibration's, flipped by P.
+    fn display_phase(&self) -> Parity {
+        match self.parity_flipped {
+            true => self.calibration.display.parity.flipped(),
+            false => self.calibration.display.parity,
+        }
+    }
+
+    /// Counts a frame the window has shown: a frame-sequential display shows the other eye in
+    /// the next.
+    pub fn frame_shown(&mut self) {
+        self.frames_shown += 1;
     }
 
     /// Chooses the display mode for a surface of `max_layers` image layers on `device`:
@@ -2396,6 +2451,7 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
         scene_name,
         window_px,
         window: None,
+        monitor: None,
         renderer: None,
         spacemice: None,
         gamepads: None,
@@ -2470,8 +2526,26 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
     Ok(StationReport { frames: app.frames, screenshot: app.screenshot, saved })
 }
 
+/// Where the station's window opens.
+struct WindowPlacement {
+    monitor: Option<MonitorHandle>,
+    fullscreen: bool,
+}
+
+/// A window system's monitor as [`Monitor`] describes it.
+fn monitor_of(m: &MonitorHandle) -> Monitor {
+    Monitor {
+        name: m.name().unwrap_or_else(|| "(unnamed)".to_owned()),
+        position_px: (m.position().x, m.position().y),
+        size_px: (m.size().width, m.size().height),
+        refresh_mhz: m.refresh_rate_millihertz(),
+    }
+}
+
 struct WindowApp<'s, 'o> {
     station: Station<'s>,
+    /// The monitor the window was opened on, when one was chosen or it fills one.
+    monitor: Option<MonitorHandle>,
     options: &'o StationOptions,
     script: InputScript,
     scene_name: &'o str,
@@ -2495,11 +2569,29 @@ struct WindowApp<'s, 'o> {
 
 impl WindowApp<'_, '_> {
     fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
-        let attributes = Window::default_attributes()
+        let mut attributes = Window::default_attributes()
             .with_title(format!("Argile — {}", self.scene_name))
             .with_inner_size(PhysicalSize::new(self.window_px.0, self.window_px.1));
+        let placement = self.placement(event_loop)?;
+        if let Some(monitor) = &placement.monitor {
+            let (p, size) = (monitor.position(), monitor.size());
+            attributes = match placement.fullscreen {
+                // The size too, so that a display without a window manager (which would honour
+                // the fullscreen hint) is filled as well.
+                true => attributes
+                    .with_fullscreen(Some(Fullscreen::Borderless(Some(monitor.clone()))))
+                    .with_position(p)
+                    .with_inner_size(size),
+                false => attributes.with_position(PhysicalPosition::new(
+                    p.x + (size.width.saturating_sub(self.window_px.0) / 2) as i32,
+                    p.y + (size.height.saturating_sub(self.window_px.1) / 2) as i32,
+                )),
+            };
+        }
+        self.station.set_fullscreen(placement.fullscreen);
         let window =
             Arc::new(event_loop.create_window(attributes).context("cannot open the station window")?);
+        self.monitor = placement.monitor;
         let size = window.inner_size();
         self.window_px = (size.width, size.height);
         self.station.resize(self.window_px);
@@ -2529,7 +2621,14 @@ impl WindowApp<'_, '_> {
         if let Ok(p) = window.inner_position() {
             self.station.set_window_origin((p.x, p.y));
         }
-        self.station.set_monitor_px(window.current_monitor().map(|m| (m.size().width, m.size().height)));
+        let monitor = window.current_monitor();
+        self.station.set_monitor_px(monitor.as_ref().map(|m| (m.size().width, m.size().height)));
+        if self.station.display().0 == DisplayMode::FrameSequential {
+            println!(
+                "{}",
+                frame_sequential_notice(monitor.as_ref().and_then(|m| m.refresh_rate_millihertz()))
+            );
+        }
         println!("{}", self.station.describe_picture());
         self.validation = Some(renderer.validation_log());
         if let Some(addr) = self.options.opentrack {
@@ -2592,6 +2691,7 @@ impl WindowApp<'_, '_> {
             motions.extend(g.motions().map(|(_, m)| m));
         }
         self.station.devices(dt, &motions, device_actions);
+        self.follow_fullscreen();
         // Events may still arrive for a window whose opening failed: nothing is drawn then.
         let Some(renderer) = self.renderer.as_mut() else { return Ok(false) };
         let mut failed = None;
@@ -2626,6 +2726,7 @@ impl WindowApp<'_, '_> {
         match presented {
             Presented::Shown(shot) => {
                 self.frames += 1;
+                self.station.frame_shown();
                 if let (Some(image), Some(path)) = (shot, &self.options.screenshot) {
                     super::capture::save_png_atomically(&image, path)?;
                     self.screenshot = Some(path.clone());
@@ -2639,6 +2740,58 @@ impl WindowApp<'_, '_> {
         Ok(self.station.wants_quit()
             || super::signals::received().is_some()
             || self.options.frames.is_some_and(|n| self.frames >= n))
+    }
+
+    /// The monitor the window opens on (the command line's, else the scene's, else the
+    /// calibration's choice; none chosen: where the window system puts it) and whether it fills
+    /// it. A choice that names no monitor is refused with the list.
+    fn placement(&self, event_loop: &ActiveEventLoop) -> Result<WindowPlacement> {
+        let scene = &self.station.scene.display;
+        let calibration = self.station.screen_calibration().display;
+        let fullscreen = self.options.fullscreen || scene.fullscreen || calibration.fullscreen;
+        let handles: Vec<MonitorHandle> = event_loop.available_monitors().collect();
+        let monitor = match self.options.monitor.or(scene.monitor).or(calibration.monitor) {
+            Some(choice) => {
+                let listed: Vec<Monitor> = handles.iter().map(monitor_of).collect();
+                let i = pick_monitor(choice.as_str(), &listed).map_err(|e| {
+                    anyhow::anyhow!("cannot open the station window on monitor `{choice}`: {e}")
+                })?;
+                println!(
+                    "window on monitor {i}: {}{}",
+                    listed[i],
+                    if fullscreen { ", filling it" } else { "" }
+                );
+                Some(handles[i].clone())
+            }
+            None if fullscreen => {
+                let m = event_loop.primary_monitor().or_else(|| handles.first().cloned());
+                if let Some(m) = &m {
+                    println!("window filling monitor {}", monitor_of(m));
+                }
+                m
+            }
+            None => None,
+        };
+        Ok(WindowPlacement { monitor, fullscreen })
+    }
+
+    /// Makes the fullscreen change the user asked for (F11), on the window's monitor.
+    fn follow_fullscreen(&mut self) {
+        let (Some(on), Some(window)) = (self.station.take_fullscreen_request(), &self.window) else { return };
+        if on {
+            let monitor = self.monitor.clone().or_else(|| window.current_monitor());
+            if let Some(m) = &monitor {
+                window.set_outer_position(m.position());
+                let _ = window.request_inner_size(m.size());
+            }
+            window.set_fullscreen(Some(Fullscreen::Borderless(monitor)));
+        } else {
+            window.set_fullscreen(None);
+            let _ = window.request_inner_size(PhysicalSize::new(
+                self.station.scene.output.width_px,
+                self.station.scene.output.height_px,
+            ));
+        }
     }
 
     fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
@@ -3005,6 +3158,36 @@ mod tests {
         assert_eq!(station.display().1, parity.flipped());
         station.act(StationAction::FlipParity);
         assert_eq!(station.display().1, parity);
+    }
+
+    #[test]
+    fn a_frame_sequential_window_shows_the_eyes_in_turn_and_the_parity_key_swaps_their_phase() {
+        let scene = ball_scene();
+        let mut station = small_station(&scene);
+        station.set_surface(DisplayMode::FrameSequential, "llvmpipe", 1).unwrap();
+        let eye = |s: &Station<'_>| {
+            let (mode, parity) = s.display();
+            assert_eq!(mode, DisplayMode::FrameSequential);
+            parity.offset()
+        };
+        let mut shown = Vec::new();
+        for _ in 0..4 {
+            shown.push(eye(&station));
+            station.frame_shown();
+        }
+        assert_eq!(shown, [0, 1, 0, 1], "left, right, left, right");
+        // The window moving does not change the phase (rows are not what alternates).
+        station.set_window_origin((1, 1));
+        assert_eq!(eye(&station), 0);
+        station.act(StationAction::FlipParity);
+        assert_eq!(eye(&station), 1, "the frame that would have shown the left eye shows the right");
+        assert!(
+            station.messages.iter().any(|m| m.starts_with("frame-sequential phase left-odd")),
+            "{:?}",
+            station.messages
+        );
+        station.frame_shown();
+        assert_eq!(eye(&station), 0);
     }
 
     #[test]

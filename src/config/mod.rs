@@ -63,8 +63,11 @@ pub enum StationAction {
     RecentreHead,
     /// Give each eye the other's image (glasses worn backwards), or back.
     SwapEyes,
-    /// Flip the interlace parity: the other rows (columns) carry the left eye.
+    /// Flip the interlace parity: the other rows (columns) carry the left eye (a
+    /// frame-sequential display: the other frames).
     FlipParity,
+    /// Fill the window's monitor, or go back to a window.
+    ToggleFullscreen,
     /// Put the view and the tool back where the scene starts them.
     ResetView,
     /// Held: move the desk tool left (in the view).
@@ -154,6 +157,7 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("recentre-head", StationAction::RecentreHead),
     ("swap-eyes", StationAction::SwapEyes),
     ("flip-parity", StationAction::FlipParity),
+    ("toggle-fullscreen", StationAction::ToggleFullscreen),
     ("reset-view", StationAction::ResetView),
     ("pointer-left", StationAction::PointerLeft),
     ("pointer-right", StationAction::PointerRight),

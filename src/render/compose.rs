@@ -25,7 +25,7 @@ use super::gpu::device::Device;
 use super::gpu::image::{read_layers, Image, ImageDesc, Sampler};
 use super::gpu::pipeline::{Pipeline, PipelineDesc};
 use super::RenderError;
-use crate::stereo::display::{DisplayMode, Parity, DUBOIS_RED_CYAN_LEFT, DUBOIS_RED_CYAN_RIGHT};
+use crate::stereo::display::{DisplayMode, Matrix3, Parity, DUBOIS_RED_CYAN_LEFT, DUBOIS_RED_CYAN_RIGHT};
 
 /// Mirrors the push constant block of `shaders/compose.frag`.
 #[repr(C)]
@@ -41,6 +41,9 @@ struct ComposePush {
 
 const _: () = assert!(std::mem::size_of::<ComposePush>() == 112);
 
+/// How many modes `shaders/compose.frag` has (the anaglyphs share one).
+const SHADER_MODES: usize = 10;
+
 /// The mode numbers of `shaders/compose.frag` (its specialization constant `MODE`).
 fn shader_mode(mode: DisplayMode) -> u32 {
     match mode {
@@ -51,13 +54,14 @@ fn shader_mode(mode: DisplayMode) -> u32 {
         DisplayMode::TopBottomHalf => 4,
         DisplayMode::RowInterlaced => 5,
         DisplayMode::ColumnInterlaced => 6,
-        DisplayMode::Anaglyph => 7,
+        DisplayMode::Anaglyph | DisplayMode::AnaglyphGreenMagenta | DisplayMode::AnaglyphAmberBlue => 7,
         DisplayMode::Mono => 8,
+        DisplayMode::FrameSequential => 9,
     }
 }
 
 /// A row-major 3×3 matrix as three GLSL columns.
-fn columns(m: &[[f32; 3]; 3]) -> [[f32; 4]; 3] {
+fn columns(m: &Matrix3) -> [[f32; 4]; 3] {
     [0, 1, 2].map(|k| [m[0][k], m[1][k], m[2][k], 0.0])
 }
 
@@ -101,7 +105,7 @@ impl Drop for ComposerHandles {
 /// image. Field order is drop order: the pipelines before the layouts and render pass.
 pub(crate) struct Composer {
     /// One pipeline per display mode (indexed by [`shader_mode`]), made when first needed.
-    pipelines: [Option<Pipeline>; 9],
+    pipelines: [Option<Pipeline>; SHADER_MODES],
     handles: ComposerHandles,
     set: vk::DescriptorSet,
     _sampler: Sampler,
@@ -270,9 +274,12 @@ impl Composer {
                 .framebuffer(framebuffer)
                 .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent: target.extent })
                 .clear_values(&clear);
+            // Modes other than the anaglyphs ignore the matrices.
+            let (left, right) =
+                mode.anaglyph_matrices().unwrap_or((&DUBOIS_RED_CYAN_LEFT, &DUBOIS_RED_CYAN_RIGHT));
             let push = ComposePush {
-                left: columns(&DUBOIS_RED_CYAN_LEFT),
-                right: columns(&DUBOIS_RED_CYAN_RIGHT),
+                left: columns(left),
+                right: columns(right),
                 params: [parity.offset(), u32::from(self.encode_srgb), layer as u32, 0],
             };
             let viewport = vk::Viewport {
@@ -491,7 +498,8 @@ mod tests {
         assert!(std::mem::size_of::<ComposePush>() <= 128, "128 bytes are guaranteed");
         let mut numbers: Vec<u32> = DisplayMode::ALL.map(shader_mode).to_vec();
         numbers.sort_unstable();
-        assert_eq!(numbers, (0..9).collect::<Vec<_>>());
+        numbers.dedup();
+        assert_eq!(numbers, (0..SHADER_MODES as u32).collect::<Vec<_>>(), "the anaglyphs share one");
         // The matrices reach the shader as columns.
         let c = columns(&DUBOIS_RED_CYAN_LEFT);
         assert_eq!(c[1][0], DUBOIS_RED_CYAN_LEFT[0][1]);

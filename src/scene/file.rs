@@ -525,4 +525,7 @@ pub(super) struct DisplaySpec {
     #[serde(default)]
     pub swap_eyes: bool,
     pub fallback: Option<Spanned<String>>,
+    #[serde(default)]
+    pub fullscreen: bool,
+    pub monitor: Option<crate::scene::screen::MonitorName>,
 }

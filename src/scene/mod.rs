@@ -26,7 +26,7 @@ pub use lattice::{SceneLattice, MAX_WEIGHT};
 pub use part::{ScenePart, MAX_PARTS, MAX_PART_NAME};
 pub use region::{RegionAction, SceneRegion, MAX_COPIES, MAX_INFLATION_M};
 pub use screen::{
-    DisplayCalibration, ScreenCalibration, TrackerCalibration, TrackerZero, SHIPPED_SCREEN_TOML,
+    DisplayCalibration, MonitorName, ScreenCalibration, TrackerCalibration, TrackerZero, SHIPPED_SCREEN_TOML,
 };
 pub use timeline::{Hand, HandState, Key, Timeline};
 pub use tool::SceneToolShape;
@@ -188,11 +188,22 @@ pub struct DisplaySettings {
     pub fallback: Option<DisplayMode>,
     /// Each eye gets the other's image (glasses worn backwards, emitters that invert).
     pub swap_eyes: bool,
+    /// The station's window fills its monitor.
+    pub fullscreen: bool,
+    /// The monitor the station's window opens on: its index or (a part of) its name.
+    pub monitor: Option<screen::MonitorName>,
 }
 
 impl Default for DisplaySettings {
     fn default() -> Self {
-        Self { mode: None, parity: Parity::LeftEven, fallback: Some(DisplayMode::Anaglyph), swap_eyes: false }
+        Self {
+            mode: None,
+            parity: Parity::LeftEven,
+            fallback: Some(DisplayMode::Anaglyph),
+            swap_eyes: false,
+            fullscreen: false,
+            monitor: None,
+        }
     }
 }
 
@@ -976,6 +987,8 @@ fn resolve(
         parity: file.display.parity,
         fallback,
         swap_eyes: file.display.swap_eyes,
+        fullscreen: file.display.fullscreen,
+        monitor: file.display.monitor,
     };
 
     let vc = &file.virtual_clay;

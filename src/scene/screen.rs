@@ -5,6 +5,7 @@
 //! A file is layered over the shipped calibration (embedded in the binary): it names only the
 //! keys it changes. Unknown keys are refused; every error names the file, line and column.
 
+use std::fmt;
 use std::ops::Range;
 use std::path::Path;
 
@@ -87,6 +88,68 @@ pub struct DisplayCalibration {
     pub mode: Option<DisplayMode>,
     /// The screen rows (columns) of the left eye, counted from the screen's top left.
     pub parity: Parity,
+    /// The monitor this display is (its index or a part of its name), for the station's window.
+    pub monitor: Option<MonitorName>,
+    /// The station's window fills the monitor.
+    pub fullscreen: bool,
+}
+
+/// How a monitor is named for the station's window: its index in the window system's list or
+/// (a part of) its name, such as `DP-1`; at most [`MonitorName::MOST_BYTES`] bytes, kept inline
+/// so that a calibration stays a plain value.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, serde::Deserialize)]
+#[serde(try_from = "String")]
+pub struct MonitorName {
+    bytes: [u8; MonitorName::MOST_BYTES],
+    len: u8,
+}
+
+impl MonitorName {
+    /// The longest name kept (window systems' output names are a few characters).
+    pub const MOST_BYTES: usize = 48;
+
+    /// The name as written.
+    pub fn as_str(&self) -> &str {
+        std::str::from_utf8(&self.bytes[..usize::from(self.len)]).expect("made from a str (checked)")
+    }
+}
+
+impl std::str::FromStr for MonitorName {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let s = s.trim();
+        if s.is_empty() || s.len() > Self::MOST_BYTES {
+            return Err(format!(
+                "a monitor is named by its index or (a part of) its name, of 1 to {} bytes, not {:?}",
+                Self::MOST_BYTES,
+                s.chars().take(60).collect::<String>()
+            ));
+        }
+        let mut bytes = [0; Self::MOST_BYTES];
+        bytes[..s.len()].copy_from_slice(s.as_bytes());
+        Ok(Self { bytes, len: s.len() as u8 })
+    }
+}
+
+impl TryFrom<String> for MonitorName {
+    type Error = String;
+
+    fn try_from(s: String) -> Result<Self, String> {
+        s.parse()
+    }
+}
+
+impl fmt::Debug for MonitorName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Debug::fmt(self.as_str(), f)
+    }
+}
+
+impl fmt::Display for MonitorName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
 }
 
 impl ScreenCalibration {
@@ -296,6 +359,8 @@ impl ScreenCalibration {
         let display = DisplayCalibration {
             mode: file.display.mode.or(bd.mode),
             parity: file.display.parity.unwrap_or(bd.parity),
+            monitor: file.display.monitor.or(bd.monitor),
+            fullscreen: file.display.fullscreen.unwrap_or(bd.fullscreen),
         };
         Ok(Self { screen, default_eye_m, ipd_m, near_m, far_m, tracker, budget, display, resolution_px })
     }
@@ -321,6 +386,8 @@ struct File {
 struct DisplayFile {
     mode: Option<DisplayMode>,
     parity: Option<Parity>,
+    monitor: Option<MonitorName>,
+    fullscreen: Option<bool>,
 }
 
 #[derive(Deserialize, Default)]
@@ -430,7 +497,10 @@ mod tests {
     #[test]
     fn the_display_table_names_the_mode_and_the_screen_parity() {
         let shipped = ScreenCalibration::shipped();
-        assert_eq!(shipped.display, DisplayCalibration { mode: None, parity: Parity::LeftEven });
+        assert_eq!(
+            shipped.display,
+            DisplayCalibration { mode: None, parity: Parity::LeftEven, monitor: None, fullscreen: false }
+        );
         let passive = ScreenCalibration::parse_layer(
             "[display]\nmode = \"row-interlaced\"\nparity = \"left-odd\"\n",
             "passive.toml",
@@ -440,6 +510,22 @@ mod tests {
         assert_eq!(passive.display.mode, Some(DisplayMode::RowInterlaced));
         assert_eq!(passive.display.parity, Parity::LeftOdd);
         assert_eq!(passive.screen, shipped.screen, "the rest comes from the base");
+        let projector = ScreenCalibration::parse_layer(
+            "[display]\nmode = \"frame-sequential\"\nmonitor = \"HDMI\"\nfullscreen = true\n",
+            "projector.toml",
+            Some(&passive),
+        )
+        .unwrap();
+        assert_eq!(
+            projector.display,
+            DisplayCalibration {
+                mode: Some(DisplayMode::FrameSequential),
+                parity: Parity::LeftOdd,
+                monitor: Some("HDMI".parse().unwrap()),
+                fullscreen: true
+            },
+            "the phase from the base layer"
+        );
         let e =
             ScreenCalibration::parse_layer("[display]\nmode = \"holographic\"\n", "bad.toml", Some(&shipped))
                 .unwrap_err()

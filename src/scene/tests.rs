@@ -216,9 +216,16 @@ fn the_display_table_names_a_mode_parity_and_fallback() {
     let (line, _, message) = err("[display]\n\nmode = \"3d\"\n");
     assert_eq!(line, 3);
     assert!(
-        message.contains("`3d` is not a display mode") && message.contains("anaglyph, mono"),
+        message.contains("`3d` is not a display mode")
+            && message.contains("anaglyph-amber-blue, frame-sequential, mono"),
         "{message}"
     );
+    let s = Scene::parse("[display]\nfullscreen = true\nmonitor = \"DP-2\"\n", "t.toml", None).unwrap();
+    assert!(s.display.fullscreen);
+    assert_eq!(s.display.monitor.map(|m| m.to_string()), Some("DP-2".to_owned()));
+    let (line, _, message) = err(&format!("[display]\nmonitor = \"{}\"\n", "x".repeat(49)));
+    assert_eq!(line, 2);
+    assert!(message.contains("1 to 48 bytes"), "{message}");
     let (line, _, message) = err("[display]\nparity = \"even\"\n");
     assert_eq!(line, 2);
     assert!(message.contains("left-even"), "{message}");

@@ -18,6 +18,10 @@
 //!  row 1  R R R R R          L R L R L R                  of both eyes at
 //!  row 2  L L L L L          (parity `left-even`)         the same pixel        quad-buffer: both
 //!  (parity `left-even`)                                                         layers, unchanged
+//!
+//!  anaglyph-green-magenta, anaglyph-amber-blue: the same mix with Dubois' matrices for those
+//!  glasses. frame-sequential (w × h): one eye per presented frame, the left on even frames
+//!  (parity `left-even`) or odd ones; the station counts the frames (see `Parity::for_frame`).
 //! ```
 //!
 //! Squeezed modes average each pair of source pixels (a 2-tap box filter) in linear light;
@@ -66,13 +70,23 @@ pub enum DisplayMode {
     ColumnInterlaced,
     /// Red–cyan anaglyph (red filter on the left eye) with Dubois' least-squares matrices.
     Anaglyph,
+    /// Green–magenta anaglyph (green filter on the left eye, as TriOviz glasses), Dubois'
+    /// matrices.
+    AnaglyphGreenMagenta,
+    /// Amber–blue anaglyph (amber filter on the left eye, as ColorCode 3-D glasses), Dubois'
+    /// matrices.
+    AnaglyphAmberBlue,
+    /// One eye per presented frame, alternately (DLP-Link projectors and 3D-ready displays whose
+    /// glasses take their sync from the picture): the interlace parity names the phase, the
+    /// left eye on even frames (`left-even`) or odd ones.
+    FrameSequential,
     /// The left eye only.
     Mono,
 }
 
 impl DisplayMode {
     /// Every mode, in the order they are listed to users.
-    pub const ALL: [DisplayMode; 9] = [
+    pub const ALL: [DisplayMode; 12] = [
         DisplayMode::QuadBuffer,
         DisplayMode::SideBySide,
         DisplayMode::SideBySideHalf,
@@ -81,6 +95,9 @@ impl DisplayMode {
         DisplayMode::RowInterlaced,
         DisplayMode::ColumnInterlaced,
         DisplayMode::Anaglyph,
+        DisplayMode::AnaglyphGreenMagenta,
+        DisplayMode::AnaglyphAmberBlue,
+        DisplayMode::FrameSequential,
         DisplayMode::Mono,
     ];
 
@@ -95,7 +112,22 @@ impl DisplayMode {
             DisplayMode::RowInterlaced => "row-interlaced",
             DisplayMode::ColumnInterlaced => "column-interlaced",
             DisplayMode::Anaglyph => "anaglyph",
+            DisplayMode::AnaglyphGreenMagenta => "anaglyph-green-magenta",
+            DisplayMode::AnaglyphAmberBlue => "anaglyph-amber-blue",
+            DisplayMode::FrameSequential => "frame-sequential",
             DisplayMode::Mono => "mono",
+        }
+    }
+
+    /// Dubois' (left, right) matrices of an anaglyph mode, `None` for the others.
+    pub fn anaglyph_matrices(self) -> Option<(&'static Matrix3, &'static Matrix3)> {
+        match self {
+            DisplayMode::Anaglyph => Some((&DUBOIS_RED_CYAN_LEFT, &DUBOIS_RED_CYAN_RIGHT)),
+            DisplayMode::AnaglyphGreenMagenta => {
+                Some((&DUBOIS_GREEN_MAGENTA_LEFT, &DUBOIS_GREEN_MAGENTA_RIGHT))
+            }
+            DisplayMode::AnaglyphAmberBlue => Some((&DUBOIS_AMBER_BLUE_LEFT, &DUBOIS_AMBER_BLUE_RIGHT)),
+            _ => None,
         }
     }
 
@@ -126,6 +158,9 @@ impl DisplayMode {
             | DisplayMode::RowInterlaced
             | DisplayMode::ColumnInterlaced
             | DisplayMode::Anaglyph
+            | DisplayMode::AnaglyphGreenMagenta
+            | DisplayMode::AnaglyphAmberBlue
+            | DisplayMode::FrameSequential
             | DisplayMode::Mono => (w, h),
         }
     }
@@ -239,6 +274,17 @@ impl Parity {
         }
     }
 
+    /// The parity to compose presented frame `frame` of a frame-sequential display with,
+    /// `self` being its phase (which frames show the left eye): flipped on odd frames, so that
+    /// the composed parity's [`offset`](Self::offset) is the eye the frame shows (0 left).
+    pub fn for_frame(self, frame: u64) -> Parity {
+        if frame % 2 == 1 {
+            self.flipped()
+        } else {
+            self
+        }
+    }
+
     /// 0 for [`Parity::LeftEven`], 1 for [`Parity::LeftOdd`]: output row (column) `i` shows
     /// eye `(i + offset) mod 2` (0 left, 1 right).
     pub fn offset(self) -> u32 {
@@ -279,13 +325,35 @@ impl TryFrom<String> for Parity {
 /// spectra and the filters' transmissions, so they act on *linear* intensities: he linearises
 /// the inputs (gamma 2.2) before the product and clips to [0, 1] and re-applies the gamma
 /// after. The composition pass does the same with the exact sRGB transfer functions.
-pub const DUBOIS_RED_CYAN_LEFT: [[f32; 3]; 3] =
+pub const DUBOIS_RED_CYAN_LEFT: Matrix3 =
     [[0.437, 0.449, 0.164], [-0.062, -0.062, -0.024], [-0.048, -0.050, -0.017]];
 
 /// Dubois' least-squares matrix for the **right** eye of a red–cyan anaglyph (see
 /// [`DUBOIS_RED_CYAN_LEFT`]); the output is `clamp(left_matrix · left + right_matrix · right)`.
-pub const DUBOIS_RED_CYAN_RIGHT: [[f32; 3]; 3] =
+pub const DUBOIS_RED_CYAN_RIGHT: Matrix3 =
     [[-0.011, -0.032, -0.007], [0.377, 0.761, 0.009], [-0.026, -0.093, 1.234]];
+
+/// Dubois' least-squares matrix for the **left** (green) eye of a green–magenta anaglyph, as
+/// he published it for LCD primaries and green–magenta glasses on the same page (see
+/// [`DUBOIS_RED_CYAN_LEFT`] for how the matrices are applied).
+pub const DUBOIS_GREEN_MAGENTA_LEFT: Matrix3 =
+    [[-0.062, -0.158, -0.039], [0.284, 0.668, 0.143], [-0.015, -0.027, 0.021]];
+
+/// Dubois' matrix for the **right** (magenta) eye of a green–magenta anaglyph.
+pub const DUBOIS_GREEN_MAGENTA_RIGHT: Matrix3 =
+    [[0.529, 0.705, 0.024], [-0.016, -0.015, -0.065], [0.009, 0.075, 0.937]];
+
+/// Dubois' least-squares matrix for the **left** (amber) eye of an amber–blue anaglyph
+/// (ColorCode 3-D glasses), from the same page.
+pub const DUBOIS_AMBER_BLUE_LEFT: Matrix3 =
+    [[1.062, -0.205, 0.299], [-0.026, 0.908, 0.068], [-0.038, -0.173, 0.022]];
+
+/// Dubois' matrix for the **right** (blue) eye of an amber–blue anaglyph.
+pub const DUBOIS_AMBER_BLUE_RIGHT: Matrix3 =
+    [[-0.016, -0.123, -0.017], [0.006, 0.062, -0.017], [0.094, 0.185, 0.911]];
+
+/// A row-major 3×3 matrix: rows are the output's linear R, G, B, columns an eye's.
+pub type Matrix3 = [[f32; 3]; 3];
 
 /// What a window shows after the quad-buffer capability check.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -349,9 +417,14 @@ mod tests {
         );
         assert_eq!(at(DisplayMode::TopBottom, 10.0, 150.0), (Vec2::new(10.0, 50.0), Vec2::new(480.0, 100.0)));
         assert_eq!(at(DisplayMode::TopBottomHalf, 10.0, 150.0).0, Vec2::new(10.0, 100.0));
-        for m in
-            [DisplayMode::Anaglyph, DisplayMode::RowInterlaced, DisplayMode::Mono, DisplayMode::QuadBuffer]
-        {
+        for m in [
+            DisplayMode::Anaglyph,
+            DisplayMode::AnaglyphAmberBlue,
+            DisplayMode::RowInterlaced,
+            DisplayMode::FrameSequential,
+            DisplayMode::Mono,
+            DisplayMode::QuadBuffer,
+        ] {
             assert_eq!(at(m, 300.0, 70.0), (Vec2::new(300.0, 70.0), Vec2::new(480.0, 200.0)));
         }
     }
@@ -388,6 +461,9 @@ mod tests {
             (DisplayMode::RowInterlaced, (160, 120), 1),
             (DisplayMode::ColumnInterlaced, (160, 120), 1),
             (DisplayMode::Anaglyph, (160, 120), 1),
+            (DisplayMode::AnaglyphGreenMagenta, (160, 120), 1),
+            (DisplayMode::AnaglyphAmberBlue, (160, 120), 1),
+            (DisplayMode::FrameSequential, (160, 120), 1),
             (DisplayMode::Mono, (160, 120), 1),
         ];
         for (mode, size, layers) in expected {
@@ -425,6 +501,12 @@ mod tests {
             assert_eq!(p.for_origin(201), p.flipped());
             assert_eq!(p.for_origin(-1), p.flipped(), "a window partly off the left screen edge");
             assert_eq!(p.for_origin(-2), p);
+            // A frame-sequential phase: the eye a frame shows alternates, starting from the
+            // phase's own.
+            let eyes: Vec<u32> = (0..4).map(|f| p.for_frame(f).offset()).collect();
+            let first = p.offset();
+            assert_eq!(eyes, [first, 1 - first, first, 1 - first], "{p:?}");
+            assert_eq!(p.for_frame(1 << 40), p);
             // The screen row of the left eye stays the same wherever the window goes: output
             // row i sits on screen row origin + i and shows eye (i + offset) mod 2.
             for origin in -3..4 {
@@ -440,17 +522,34 @@ mod tests {
     }
 
     #[test]
-    fn dubois_matrices_keep_white_near_white() {
-        // Dubois normalised the rows so that a white pair gives white (each row of left +
-        // right sums to about 1).
-        for row in 0..3 {
-            let sum: f32 = (0..3).map(|k| DUBOIS_RED_CYAN_LEFT[row][k] + DUBOIS_RED_CYAN_RIGHT[row][k]).sum();
-            assert!((sum - 1.0).abs() < 0.01, "row {row} sums to {sum}");
+    fn dubois_matrices_keep_white_near_white_and_send_each_eye_through_its_filter() {
+        let anaglyphs: Vec<DisplayMode> =
+            DisplayMode::ALL.into_iter().filter(|m| m.anaglyph_matrices().is_some()).collect();
+        assert_eq!(
+            anaglyphs,
+            [DisplayMode::Anaglyph, DisplayMode::AnaglyphGreenMagenta, DisplayMode::AnaglyphAmberBlue]
+        );
+        for mode in anaglyphs {
+            let (left, right) = mode.anaglyph_matrices().unwrap();
+            // Dubois normalised the rows so that a white pair gives white (each row of left +
+            // right sums to about 1).
+            for row in 0..3 {
+                let sum: f32 = (0..3).map(|k| left[row][k] + right[row][k]).sum();
+                assert!((sum - 1.0).abs() < 0.01, "{mode}: row {row} sums to {sum}");
+            }
         }
-        // The left eye drives red, the right eye green and blue.
-        assert!(DUBOIS_RED_CYAN_LEFT[0].iter().sum::<f32>() > 0.9);
-        assert!(DUBOIS_RED_CYAN_RIGHT[1].iter().sum::<f32>() > 0.9);
-        assert!(DUBOIS_RED_CYAN_RIGHT[2].iter().sum::<f32>() > 0.9);
+        let gain = |m: &Matrix3, row: usize| m[row].iter().sum::<f32>();
+        // Red–cyan: the left eye drives red, the right eye green and blue.
+        assert!(gain(&DUBOIS_RED_CYAN_LEFT, 0) > 0.9);
+        assert!(gain(&DUBOIS_RED_CYAN_RIGHT, 1) > 0.9 && gain(&DUBOIS_RED_CYAN_RIGHT, 2) > 0.9);
+        // Green–magenta: the left eye green, the right red and blue.
+        assert!(gain(&DUBOIS_GREEN_MAGENTA_LEFT, 1) > 0.9);
+        assert!(gain(&DUBOIS_GREEN_MAGENTA_LEFT, 0) < 0.0 && gain(&DUBOIS_GREEN_MAGENTA_LEFT, 2) < 0.0);
+        assert!(gain(&DUBOIS_GREEN_MAGENTA_RIGHT, 0) > 0.9 && gain(&DUBOIS_GREEN_MAGENTA_RIGHT, 2) > 0.9);
+        // Amber–blue: the left eye red and green (amber), the right eye blue.
+        assert!(gain(&DUBOIS_AMBER_BLUE_LEFT, 0) > 0.9 && gain(&DUBOIS_AMBER_BLUE_LEFT, 1) > 0.9);
+        assert!(gain(&DUBOIS_AMBER_BLUE_RIGHT, 2) > 0.9);
+        assert!(gain(&DUBOIS_AMBER_BLUE_RIGHT, 0) < 0.0 && gain(&DUBOIS_AMBER_BLUE_LEFT, 2) < 0.0);
     }
 
     #[test]
