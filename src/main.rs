@@ -76,6 +76,10 @@ enum Command {
         /// E key swaps them back and forth.
         #[arg(long)]
         swap_eyes: bool,
+        /// Mask the side edges where clay in front of the screen touches them (a floating
+        /// stereoscopic window, as `[display] floating_window`); Shift+M switches it.
+        #[arg(long)]
+        floating_window: bool,
         /// The window fills its monitor (as `[display] fullscreen`); F11 switches at run time.
         #[arg(long)]
         fullscreen: bool,
@@ -135,6 +139,10 @@ enum Command {
         /// invert); as the scene's `[display] swap_eyes`.
         #[arg(long)]
         swap_eyes: bool,
+        /// Mask the side edges where clay in front of the screen touches them (a floating
+        /// stereoscopic window), as the scene's `[display] floating_window`.
+        #[arg(long)]
+        floating_window: bool,
         /// Turn the Vulkan validation layer on (fails on any validation message).
         #[arg(long)]
         validation: bool,
@@ -332,6 +340,7 @@ fn main() -> ExitCode {
             calibration,
             validation,
             swap_eyes,
+            floating_window,
             fullscreen,
             monitor,
             xr,
@@ -361,6 +370,7 @@ fn main() -> ExitCode {
                 open_dir,
                 edit_finest,
                 swap_eyes,
+                floating_window,
                 fullscreen,
                 monitor,
                 recovered: Vec::new(),
@@ -373,10 +383,11 @@ fn main() -> ExitCode {
             size,
             calibration,
             swap_eyes,
+            floating_window,
             validation,
             autosave,
         }) => {
-            let view = RenderView { size, calibration: calibration.as_deref(), swap_eyes };
+            let view = RenderView { size, calibration: calibration.as_deref(), swap_eyes, floating_window };
             render(&scene, out, display_mode, view, validation, &autosave)
         }
         Some(Command::Export { input, format, out, force, parts }) => {
@@ -506,6 +517,7 @@ fn station(
     };
     let mut scene = scene;
     scene.display.swap_eyes |= options.swap_eyes;
+    scene.display.floating_window |= options.floating_window;
     let name = scene_path
         .as_deref()
         .and_then(|p| p.file_stem())
@@ -627,11 +639,13 @@ fn station(
     Ok(())
 }
 
-/// How `argile render` shows the scene: the eyes' size, the screen judged on, swapped eyes.
+/// How `argile render` shows the scene: the eyes' size, the screen judged on, swapped eyes,
+/// the floating window.
 struct RenderView<'a> {
     size: Option<(u32, u32)>,
     calibration: Option<&'a std::path::Path>,
     swap_eyes: bool,
+    floating_window: bool,
 }
 
 fn render(
@@ -642,7 +656,7 @@ fn render(
     validation: bool,
     autosave: &AutosaveArgs,
 ) -> Result<()> {
-    let RenderView { size, calibration, swap_eyes } = view;
+    let RenderView { size, calibration, swap_eyes, floating_window } = view;
     let calibration = calibration.map(argile::scene::ScreenCalibration::load).transpose()?;
     let options =
         RenderOptions { out_dir: out, display_modes, progress: true, validation, size_px: size, calibration };
@@ -652,6 +666,7 @@ fn render(
         let (mut scene, sculpt) = app::open_sculpt(path)?;
         let sculpt = app::with_lattice_applied(sculpt, path)?;
         scene.display.swap_eyes |= swap_eyes;
+        scene.display.floating_window |= floating_window;
         print_written(&app::render_sculpt(&scene, sculpt.field, sculpt.others, &options)?);
         return Ok(());
     }
@@ -659,6 +674,7 @@ fn render(
         .with_context(|| format!("cannot read scene file {}", scene.display()))?;
     let mut scene = Scene::parse(&text, &scene.display().to_string(), scene.parent())?;
     scene.display.swap_eyes |= swap_eyes;
+    scene.display.floating_window |= floating_window;
     let written = app::render_scene_autosaved(&scene, &options, autosave.start(), Some(&text))?;
     print_written(&written);
     Ok(())

@@ -70,7 +70,12 @@ fn bench_compose_times_every_display_mode() {
     let text = String::from_utf8(out.stdout).unwrap();
     let lines: Vec<serde_json::Value> = text.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
     let modes: Vec<&str> = lines.iter().map(|l| l["mode"].as_str().unwrap()).collect();
-    assert_eq!(modes.len(), 9, "one line per display mode: {modes:?}");
+    assert_eq!(
+        modes.len(),
+        argile::stereo::display::DisplayMode::ALL.len(),
+        "one line per display mode: {modes:?}"
+    );
+    assert!(modes.contains(&"frame-sequential") && modes.contains(&"anaglyph-amber-blue"));
     assert!(modes.contains(&"anaglyph") && modes.contains(&"quad-buffer"));
     let side_by_side = lines.iter().find(|l| l["mode"] == "side-by-side").unwrap();
     assert_eq!(side_by_side["output_width_px"], 2 * side_by_side["eye_width_px"].as_u64().unwrap());

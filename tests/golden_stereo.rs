@@ -539,6 +539,40 @@ fn parts_hole_matches_golden() {
     golden_case("parts-hole", "scenes/parts-hole.toml", Some((256, 256)));
 }
 
+/// The floating window: near clay cut by the left edge (a bar) and by the right edge (a ball)
+/// masks the left eye's left strip and the right eye's right strip, each as wide as the clay's
+/// crossed parallax at that edge; the other edges keep their pixels.
+#[test]
+fn the_floating_window_masks_the_edges_near_clay_touches_and_matches_golden() {
+    let (left, right, scene) = render("floating-window", "scenes/floating-window.toml", None);
+    let (w, h) = left.dimensions();
+    let black_columns = |image: &image::RgbaImage, columns: &mut dyn Iterator<Item = u32>| {
+        columns.take_while(|&x| (0..h).all(|y| image.get_pixel(x, y).0[..3] == [0, 0, 0])).count() as u32
+    };
+    // The bar's nearest point, 0.332 m from the eyes: p = e (C − Z) / Z over the plane's width.
+    let (e, c, z) = (scene.rig.interaxial_m, scene.rig.convergence_m, 0.5 - 0.15 - 0.018);
+    let plane_width = 2.0 * c * (scene.rig.fov_y_deg.to_radians() * 0.5).tan() * w as f32 / h as f32;
+    let bar_px = e * (c - z) / z / plane_width * w as f32;
+    let masked = black_columns(&left, &mut (0..w));
+    assert!(
+        (masked as f32 - bar_px).abs() <= 1.0,
+        "the left eye's strip: {masked} px, the bar's parallax {bar_px:.2} px"
+    );
+    let right_masked = black_columns(&right, &mut (0..w).rev());
+    assert!((3..=7).contains(&right_masked), "the right eye's strip: {right_masked} px");
+    assert_eq!(black_columns(&right, &mut (0..w)), 0, "the right eye's left edge is whole");
+    assert_eq!(black_columns(&left, &mut (0..w).rev()), 0, "the left eye's right edge is whole");
+    check_against_golden("floating-window", "left", &left);
+    check_against_golden("floating-window", "right", &right);
+    // Without the window, the same views keep every pixel.
+    let text = std::fs::read_to_string(common::root().join("scenes/floating-window.toml")).unwrap();
+    let plain = common::out_dir("floating-window").join("whole.toml");
+    std::fs::create_dir_all(plain.parent().unwrap()).unwrap();
+    std::fs::write(&plain, text.replace("floating_window = true", "floating_window = false")).unwrap();
+    let (whole, _, _) = render("floating-window-whole", plain.to_str().unwrap(), None);
+    assert_eq!(black_columns(&whole, &mut (0..w)), 0);
+}
+
 /// The judgement itself: a level of rounding everywhere passes (another CPU's shader code), a
 /// picture moved by a pixel fails.
 #[test]
@@ -613,6 +647,7 @@ fn the_glyph_shapes_match_golden() {
         background: Vec3::ZERO,
         hud: Vec::new(),
         panel: None,
+        floating_window: argile::stereo::floating::FloatingWindow::NONE,
     };
     renderer.draw(&frame).unwrap();
     let image = renderer.read_back().unwrap();

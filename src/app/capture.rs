@@ -12,10 +12,11 @@ use super::playback::Playback;
 use crate::field::Field;
 use crate::io::autosave::AutosaveConfig;
 use crate::io::write_atomically;
-use crate::mesh::{mesh_all, Mesher};
+use crate::mesh::{mesh_all, Mesher, SurfaceSketch};
 use crate::render::{Renderer, RendererDesc, StereoImage, ViewPasses};
 use crate::scene::Scene;
 use crate::stereo::display::DisplayMode;
+use crate::stereo::floating::FloatingWindow;
 
 /// Options of a headless render.
 #[derive(Clone, Debug)]
@@ -144,6 +145,11 @@ fn render_over(
     let initial = mesh_all(playback.surface());
     playback.surface().take_dirty();
     let clay = initial.upserted_bounds();
+    // What the floating window judges of the surface, when the scene asks for it.
+    let mut sketch = SurfaceSketch::default();
+    if scene.display.floating_window {
+        sketch.apply(&initial);
+    }
     // The views' copy of the scene, whose interaxial the parallax budget may lower.
     let mut viewed = scene.clone();
     let calibration = options.calibration.unwrap_or_else(|| super::comfort::scene_calibration(&scene));
@@ -171,6 +177,9 @@ fn render_over(
         }
         playback.sync_lattices();
         let diff = mesher.remesh_dirty(playback.surface());
+        if scene.display.floating_window {
+            sketch.apply(diff);
+        }
         renderer.apply(diff)?;
         let mut frame = build_frame(&viewed, &playback.hands(), capture.show_tools);
         if capture.show_tools {
@@ -181,8 +190,12 @@ fn render_over(
         if let (Some(head), Some(rig)) = (&viewed.head, viewed.head_tracked_rig()) {
             frame.views = rig.views(&head.pose_at(capture.time_s));
         }
+        if viewed.display.floating_window {
+            frame.floating_window = FloatingWindow::measure(&frame.views, sketch.points());
+        }
         if viewed.display.swap_eyes {
             frame.views.eyes.swap(0, 1);
+            frame.floating_window = frame.floating_window.swapped();
         }
         renderer.draw(&frame)?;
         let StereoImage { left, right } = renderer.read_back()?;

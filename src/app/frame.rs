@@ -181,6 +181,7 @@ pub fn build_frame(scene: &Scene, hands: &[(usize, crate::math::Pose)], show_too
         background: scene.environment.background,
         hud: Vec::new(),
         panel: None,
+        floating_window: crate::stereo::floating::FloatingWindow::NONE,
     }
 }
 

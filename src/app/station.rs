@@ -58,6 +58,7 @@ use crate::scene::ScreenCalibration;
 use crate::scene::{line_column, FileError, Scene};
 use crate::stereo::comfort::{AutoConvergence, BudgetCheck};
 use crate::stereo::display::{choose_mode, DisplayMode, Parity};
+use crate::stereo::floating::FloatingWindow;
 use crate::stereo::{HeadTrackedRig, Placement, StereoRig};
 use crate::tool::{
     edit_level_for, Action, Ellipsoid, Falloff, Solid, Stroke, Tool, ToolShape, HAND_SIZE_SAMPLES,
@@ -143,6 +144,8 @@ pub struct StationOptions {
     pub edit_finest: bool,
     /// Each eye gets the other's image (as the scene's `[display] swap_eyes`).
     pub swap_eyes: bool,
+    /// The floating window masks the side edges (as the scene's `[display] floating_window`).
+    pub floating_window: bool,
     /// The window fills its monitor (as `[display] fullscreen`).
     pub fullscreen: bool,
     /// The monitor the window opens on (over the scene's and the calibration's).
@@ -571,8 +574,8 @@ pub struct Station<'s> {
     auto_convergence: Option<AutoConvergence>,
     /// The clay's bounds: those of the surface the renderer draws, updated as it changes.
     clay_bounds: crate::math::Aabb,
-    /// The bounds of each chunk of that surface.
-    chunk_bounds: std::collections::HashMap<crate::mesh::ChunkKey, crate::math::Aabb>,
+    /// That surface's chunks' bounds and a few of their vertices.
+    surface: crate::mesh::SurfaceSketch,
     /// The parallax budget's verdict for what is shown now: what it was judged on, the check
     /// and warning when over budget, and the interaxial it allows in limit mode (of the
     /// head-tracked eyes when the views are head-tracked).
@@ -584,6 +587,9 @@ pub struct Station<'s> {
     tracked_for_s: Option<f32>,
     /// Each eye gets the other's image.
     swap_eyes: bool,
+    /// Whether the floating window masks the pictures' edges, and the strips it masks now
+    /// (eased towards the measured ones).
+    floating_window: (bool, FloatingWindow),
     /// The symmetry the desk tool and the scene's hands act through.
     symmetry: SymmetrySwitch,
     /// The region the desk tool carries, copies or bends, and the tool's pose when it grabbed
@@ -720,6 +726,7 @@ impl<'s> Station<'s> {
             monitor_px: None,
             tracked_for_s: None,
             swap_eyes: scene.display.swap_eyes,
+            floating_window: (scene.display.floating_window, FloatingWindow::NONE),
             symmetry: SymmetrySwitch::new(scene.symmetry),
             region_drag: None,
             part_base: scene.parts[0].placement,
@@ -732,7 +739,7 @@ impl<'s> Station<'s> {
             head: None,
             auto_convergence: None,
             clay_bounds: crate::math::Aabb::EMPTY,
-            chunk_bounds: std::collections::HashMap::new(),
+            surface: crate::mesh::SurfaceSketch::default(),
             budget: None,
             display_mode: DisplayMode::Anaglyph,
             quad_buffer: false,
@@ -1120,6 +1127,14 @@ impl<'s> Station<'s> {
                     false => "eyes as rendered: the left eye's image goes to the left eye".to_owned(),
                 });
             }
+            StationAction::ToggleFloatingWindow => {
+                self.floating_window.0 = !self.floating_window.0;
+                self.messages.push(match self.floating_window.0 {
+                    true => "floating window: the side edges are masked where clay in front of the screen touches them"
+                        .to_owned(),
+                    false => "floating window off: the pictures are shown whole".to_owned(),
+                });
+            }
             StationAction::InflateRegion | StationAction::DeflateRegion => {
                 const STEP_M: f32 = 0.001;
                 let distance = if action == StationAction::InflateRegion { STEP_M } else { -STEP_M };
@@ -1347,6 +1362,7 @@ impl<'s> Station<'s> {
             }),
             lights_follow_viewer: self.lights_follow_viewer,
             swap_eyes: self.swap_eyes,
+            floating_window: self.floating_window.0,
             head: self.head.as_ref().map(|h| !h.lost()),
         };
         PanelView {
@@ -1462,6 +1478,11 @@ impl<'s> Station<'s> {
                     self.act(StationAction::SwapEyes);
                 }
             }
+            PanelCommand::FloatingWindow(on) => {
+                if on != self.floating_window.0 {
+                    self.act(StationAction::ToggleFloatingWindow);
+                }
+            }
             PanelCommand::RecentreHead => self.act(StationAction::RecentreHead),
             PanelCommand::Undo(n) => (0..n).for_each(|_| self.act(StationAction::Undo)),
             PanelCommand::Redo(n) => (0..n).for_each(|_| self.act(StationAction::Redo)),
@@ -1568,10 +1589,11 @@ impl<'s> Station<'s> {
                 }
             ),
             format!(
-                "{}: convergence {:.2} m, eyes {:.0} mm",
+                "{}: convergence {:.2} m, eyes {:.0} mm{}",
                 self.display_mode,
                 rig.convergence_m,
-                self.interaxial_in_use_m() * 1000.0
+                self.interaxial_in_use_m() * 1000.0,
+                if self.floating_window.0 { ", floating window" } else { "" },
             ),
             format!(
                 "{:.1} ms/frame, mouse {mouse}{}{}",
@@ -2237,12 +2259,9 @@ impl<'s> Station<'s> {
         self.doc.playback.keep_lattice();
         let diff = self.mesher.remesh_dirty(self.doc.playback.surface());
         if !diff.is_empty() {
-            for key in &diff.removed {
-                self.chunk_bounds.remove(key);
-            }
-            self.chunk_bounds.extend(diff.upserted.iter().map(|(key, chunk)| (*key, chunk.bounds())));
+            self.surface.apply(diff);
             apply(diff);
-            self.clay_bounds = self.chunk_bounds.values().fold(crate::math::Aabb::EMPTY, |b, c| b.union(c));
+            self.clay_bounds = self.surface.bounds();
         }
         self.times.mesh_ms = ms_since(mesh_started);
 
@@ -2305,8 +2324,19 @@ impl<'s> Station<'s> {
         } else {
             self.tracked_for_s = None;
         }
+        // The floating window, measured on the views as the eyes see them and carried with
+        // the pictures when they are swapped.
+        let measured = match self.floating_window.0 && self.display_mode != DisplayMode::Mono {
+            true => FloatingWindow::measure(&frame.views, self.surface.points()),
+            false => FloatingWindow::NONE,
+        };
+        let window = self.floating_window.1.eased(measured, dt_s);
+        // Strips under a hundredth of a pixel are none (the easing never quite reaches 0).
+        self.floating_window.1 = if window.widest() < 1e-5 { FloatingWindow::NONE } else { window };
+        frame.floating_window = self.floating_window.1;
         if self.swap_eyes {
             frame.views.eyes.swap(0, 1);
+            frame.floating_window = frame.floating_window.swapped();
         }
         self.place_key_light(&mut frame.lights);
         // The panel shows what the heads-up display would.
@@ -3134,6 +3164,53 @@ mod tests {
             let tool = place(mode, window_px);
             assert!(tool.distance(mono) < 1e-4, "{mode} at {window_px}: {tool}, where mono puts {mono}");
         }
+    }
+
+    #[test]
+    fn the_floating_window_masks_the_edge_the_near_clay_touches_and_follows_the_swap() {
+        // A ball 0.35 m from the eyes (the zero-parallax plane at 0.5 m) on the left edge.
+        let text = "[camera]\neye_m = [0.0, 0.0, 0.5]\ntarget_m = [0.0, 0.0, 0.0]\nfov_y_deg = 40.0\n\
+                    convergence_m = 0.5\ninteraxial_m = 0.063\n[stage]\nshow = false\n\
+                    [[clay]]\nshape = \"sphere\"\nradius_m = 0.03\nposition_m = [-0.127, 0.0, 0.15]\n\
+                    [[tool]]\nname = \"b\"\nradius_m = 0.01\naction = \"add\"\n";
+        let scene = Scene::parse(text, "edge", None).unwrap();
+        let mut station = small_station(&scene);
+        let frames = |station: &mut Station<'_>, n: usize| {
+            (0..n).map(|_| station.step(SCRIPTED_STEP_S, |_| {}).floating_window).last().unwrap()
+        };
+        assert_eq!(frames(&mut station, 3), FloatingWindow::NONE, "off unless asked");
+        station.act(StationAction::ToggleFloatingWindow);
+        assert!(station.messages.iter().any(|m| m.starts_with("floating window:")), "{:?}", station.messages);
+        let first = frames(&mut station, 1);
+        let settled = frames(&mut station, 60);
+        // The crossed parallax of the ball's front at the edge: p = e (C − Z) / Z over the
+        // plane's width, 2 C tan 20°; its nearest point (Z = 0.32 m) bounds it.
+        let bound = 0.063 * (0.5 - 0.32) / 0.32 / (2.0 * 0.5 * 20f32.to_radians().tan());
+        let strip = settled.strips[0].left;
+        assert!(strip > 0.5 * bound && strip <= bound * 1.01, "{settled:?}, at most {bound}");
+        assert!(first.strips[0].left > 0.0 && first.strips[0].left < strip, "it eases in: {first:?}");
+        assert_eq!((settled.strips[0].right, settled.strips[1]), (0.0, Default::default()));
+        assert!(station.hud_lines().iter().any(|l| l.contains("floating window")));
+        // Swapped pictures carry their strips.
+        station.act(StationAction::SwapEyes);
+        let swapped = frames(&mut station, 1);
+        assert!(
+            (swapped.strips[1].left - strip).abs() < 1e-3 && swapped.strips[0].left == 0.0,
+            "{swapped:?}"
+        );
+        station.act(StationAction::SwapEyes);
+        // Mono shows one picture whole; turned off, the strips slide away.
+        station.display_mode = DisplayMode::Mono;
+        assert_eq!(frames(&mut station, 120), FloatingWindow::NONE);
+        station.display_mode = DisplayMode::Anaglyph;
+        frames(&mut station, 60);
+        station.panel_command(PanelCommand::FloatingWindow(false));
+        assert!(!station.panel_view().stereo.floating_window);
+        assert_eq!(frames(&mut station, 120), FloatingWindow::NONE);
+        // A scene may ask for it.
+        let asked =
+            Scene::parse(&format!("[display]\nfloating_window = true\n{text}"), "asked", None).unwrap();
+        assert!(frames(&mut small_station(&asked), 60).strips[0].left > 0.0);
     }
 
     #[test]

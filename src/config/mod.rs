@@ -63,6 +63,9 @@ pub enum StationAction {
     RecentreHead,
     /// Give each eye the other's image (glasses worn backwards), or back.
     SwapEyes,
+    /// Mask the pictures' side edges where clay in front of the screen touches them (a
+    /// floating stereoscopic window), or stop.
+    ToggleFloatingWindow,
     /// Flip the interlace parity: the other rows (columns) carry the left eye (a
     /// frame-sequential display: the other frames).
     FlipParity,
@@ -156,6 +159,7 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("toggle-auto-convergence", StationAction::ToggleAutoConvergence),
     ("recentre-head", StationAction::RecentreHead),
     ("swap-eyes", StationAction::SwapEyes),
+    ("toggle-floating-window", StationAction::ToggleFloatingWindow),
     ("flip-parity", StationAction::FlipParity),
     ("toggle-fullscreen", StationAction::ToggleFullscreen),
     ("reset-view", StationAction::ResetView),

@@ -142,6 +142,9 @@ pub struct Frame {
     pub hud: Vec<String>,
     /// The panels, drawn over everything at zero parallax; none draws nothing.
     pub panel: Option<super::PanelPaint>,
+    /// The strips masked on each eye's picture (over the scene, under the HUD and panels);
+    /// [`FloatingWindow::NONE`] masks nothing.
+    pub floating_window: crate::stereo::floating::FloatingWindow,
 }
 
 /// The number of lights the clay shader evaluates.

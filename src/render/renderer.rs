@@ -31,6 +31,7 @@ use super::{Environment, Frame, GlyphShape, Light, PanelPaint, RenderError, Vali
 use crate::math::Vec3;
 use crate::mesh::{MeshDiff, Vertex};
 use crate::stereo::display::{DisplayMode, Parity};
+use crate::stereo::floating::FloatingWindow;
 
 macro_rules! spirv {
     ($name:literal) => {
@@ -105,6 +106,13 @@ struct GlyphPush {
     colour: [f32; 4],
     /// x: the torus's tube radius (each vertex moves that far along its normal); 0 otherwise.
     shape: [f32; 4],
+}
+
+/// The floating window's strips per view: x from the left edge, y from the right edge.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct WindowMaskPush {
+    strips: [[f32; 4]; 2],
 }
 
 const _: () = assert!(std::mem::size_of::<FrameUniforms>() == 640);
@@ -192,6 +200,8 @@ struct Pipelines {
     hud: Pipeline,
     /// Viewport and scissor set when recording (each batch is clipped).
     panel: Pipeline,
+    /// The floating window's strips, over the scene and under the HUD.
+    window_mask: Pipeline,
 }
 
 /// The heads-up display's quads (host-visible, rewritten when the text or the size changes).
@@ -827,8 +837,8 @@ impl Renderer {
         Ok(())
     }
 
-    /// Records one view pass's draws: stage, clay, background (where nothing else is), then
-    /// the translucent tool glyphs.
+    /// Records one view pass's draws: stage, clay, background (where nothing else is), the
+    /// translucent tool glyphs, the floating window's strips, then the HUD and the panels.
     fn record_pass(&self, cb: vk::CommandBuffer, pipelines: &Pipelines, frame: &Frame) {
         let d = &self.device.raw;
         // SAFETY: `cb` is recording inside a render pass these pipelines were made for; every
@@ -877,6 +887,12 @@ impl Renderer {
                     self.push(cb, &push);
                     self.draw_shape(cb, mesh);
                 }
+            }
+            if frame.floating_window != FloatingWindow::NONE {
+                let strips = frame.floating_window.strips.map(|s| [s.left, s.right, 0.0, 0.0]);
+                d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, pipelines.window_mask.raw);
+                self.push(cb, &WindowMaskPush { strips });
+                self.draw_shape(cb, &self.shapes.quad);
             }
             if self.hud.index_count > 0 {
                 d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, pipelines.hud.raw);
@@ -1183,6 +1199,16 @@ fn make_pipelines(
                 blend: true,
                 ..base
             })?,
+            window_mask: make(PipelineDesc {
+                name: "floating window",
+                vertex: spirv!("window_mask.vert"),
+                fragment: spirv!("window_mask.frag"),
+                attributes: 1,
+                cull: vk::CullModeFlags::NONE,
+                depth_test: false,
+                depth_write: false,
+                ..base
+            })?,
             hud: make(PipelineDesc {
                 name: "heads-up display",
                 vertex: spirv!("hud.vert"),
@@ -1393,6 +1419,7 @@ mod tests {
             background: Vec3::ZERO,
             hud: Vec::new(),
             panel: None,
+            floating_window: FloatingWindow::NONE,
         };
         renderer.draw(&frame).unwrap();
         let format = vk::Format::R8G8B8A8_UNORM;

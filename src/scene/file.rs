@@ -524,6 +524,8 @@ pub(super) struct DisplaySpec {
     pub parity: crate::stereo::display::Parity,
     #[serde(default)]
     pub swap_eyes: bool,
+    #[serde(default)]
+    pub floating_window: bool,
     pub fallback: Option<Spanned<String>>,
     #[serde(default)]
     pub fullscreen: bool,

@@ -188,6 +188,9 @@ pub struct DisplaySettings {
     pub fallback: Option<DisplayMode>,
     /// Each eye gets the other's image (glasses worn backwards, emitters that invert).
     pub swap_eyes: bool,
+    /// The pictures' side edges are masked where clay in front of the screen touches them (a
+    /// floating stereoscopic window, [`crate::stereo::floating`]).
+    pub floating_window: bool,
     /// The station's window fills its monitor.
     pub fullscreen: bool,
     /// The monitor the station's window opens on: its index or (a part of) its name.
@@ -201,6 +204,7 @@ impl Default for DisplaySettings {
             parity: Parity::LeftEven,
             fallback: Some(DisplayMode::Anaglyph),
             swap_eyes: false,
+            floating_window: false,
             fullscreen: false,
             monitor: None,
         }
@@ -987,6 +991,7 @@ fn resolve(
         parity: file.display.parity,
         fallback,
         swap_eyes: file.display.swap_eyes,
+        floating_window: file.display.floating_window,
         fullscreen: file.display.fullscreen,
         monitor: file.display.monitor,
     };

@@ -24,6 +24,7 @@
 //! parallax budget and auto-convergence are in [`comfort`].
 
 pub mod comfort;
+pub mod floating;
 pub mod screen;
 
 pub use comfort::{screen_parallax_m, AutoConvergence, BudgetMode, ParallaxBudget, Viewing};

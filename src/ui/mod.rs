@@ -117,6 +117,8 @@ pub struct StereoRow {
     pub lights_follow_viewer: bool,
     /// Each eye gets the other's image.
     pub swap_eyes: bool,
+    /// The pictures' side edges are masked where clay in front of the screen touches them.
+    pub floating_window: bool,
     /// Head tracking: `None` off; `Some(true)` tracked; `Some(false)` the tracker is lost.
     pub head: Option<bool>,
 }
@@ -169,6 +171,8 @@ pub enum PanelCommand {
     LightsFollowViewer(bool),
     /// Each eye gets the other's image, or its own.
     SwapEyes(bool),
+    /// The floating window masks the pictures' edges, or not.
+    FloatingWindow(bool),
     /// The viewer's head as it is now is the centred head.
     RecentreHead,
     /// Undo this many steps.
@@ -680,6 +684,14 @@ fn stereo_ui(ui: &mut egui::Ui, stereo: &StereoRow, commands: &mut Vec<PanelComm
     if ui.checkbox(&mut swap, "swap eyes").changed() {
         commands.push(PanelCommand::SwapEyes(swap));
     }
+    let mut floating = stereo.floating_window;
+    if ui
+        .checkbox(&mut floating, "floating window")
+        .on_hover_text("mask the side edges where clay in front of the screen touches them")
+        .changed()
+    {
+        commands.push(PanelCommand::FloatingWindow(floating));
+    }
     ui.horizontal(|ui| {
         let said = match stereo.head {
             None => "head tracking off",
@@ -832,6 +844,7 @@ mod tests {
                 }),
                 lights_follow_viewer: false,
                 swap_eyes: false,
+                floating_window: false,
                 head: Some(true),
             },
         }
@@ -883,6 +896,7 @@ mod tests {
         assert!(find(&view, &PanelCommand::ToggleSymmetry).is_some(), "the symmetry box");
         assert!(find(&view, &PanelCommand::LevelSamples(None)).is_some(), "the finest level box");
         assert!(find(&view, &PanelCommand::SwapEyes(true)).is_some(), "the swap eyes box");
+        assert!(find(&view, &PanelCommand::FloatingWindow(true)).is_some(), "the floating window box");
         assert!(find(&view, &PanelCommand::AutoConvergence(true)).is_some(), "auto-convergence");
         assert!(find(&view, &PanelCommand::RecentreHead).is_some(), "recentre");
         let sliders = |view: &PanelView| {
