@@ -242,7 +242,8 @@ enum Command {
         #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(64..=8192))]
         width: u32,
         /// Also write the pattern as this display mode shows it, as calibration-MODE.png: the
-        /// mode of the display being checked (repeat for several).
+        /// mode of the display being checked (repeat for several; the calibration's
+        /// `[display] mode` when none is given).
         #[arg(long, value_enum)]
         display_mode: Vec<DisplayMode>,
     },
@@ -602,6 +603,7 @@ fn station(
                 .as_deref()
                 .map(argile::scene::ScreenCalibration::load)
                 .transpose()?,
+            eye_marks: Vec::new(),
         };
         let written = match sculpt {
             Some(s) => {
@@ -658,8 +660,15 @@ fn render(
 ) -> Result<()> {
     let RenderView { size, calibration, swap_eyes, floating_window } = view;
     let calibration = calibration.map(argile::scene::ScreenCalibration::load).transpose()?;
-    let options =
-        RenderOptions { out_dir: out, display_modes, progress: true, validation, size_px: size, calibration };
+    let options = RenderOptions {
+        out_dir: out,
+        display_modes,
+        progress: true,
+        validation,
+        size_px: size,
+        calibration,
+        eye_marks: Vec::new(),
+    };
     if app::is_sculpt(scene) {
         // Nothing is sculpted while rendering a sculpt: there is nothing to autosave.
         let path = scene;

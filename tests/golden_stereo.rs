@@ -46,6 +46,7 @@ fn render_composed(
         validation: true,
         size_px: size,
         calibration: None,
+        eye_marks: Vec::new(),
     };
     // A missing Vulkan device or any validation message fails here, loudly.
     let written = render_scene(&scene, &options).unwrap_or_else(|e| panic!("rendering {case} failed: {e:#}"));
@@ -427,7 +428,20 @@ fn the_calibration_test_pattern_shows_zero_parallax_on_the_screen_and_the_predic
         );
     }
 
-    // The grid, on the rows no ball reaches in either eye: the two images agree on it.
+    // The grid, on the rows no ball reaches in either eye: the two images agree on it, away
+    // from the marks one eye alone is shown (the L, the R and the crosstalk squares, white;
+    // with a margin wider than the shifts tried).
+    let white = |p: &Pixel| p.0[..3].iter().all(|&c| c > 200);
+    let marked = |x: i64, y: u32| {
+        let (w, h) = (i64::from(left.width()), i64::from(left.height()));
+        (x - 4..=x + 4).any(|x| {
+            (i64::from(y) - 2..=i64::from(y) + 2).any(|y| {
+                (0..w).contains(&x)
+                    && (0..h).contains(&y)
+                    && white(left.get_pixel(x as u32, y as u32)) != white(right.get_pixel(x as u32, y as u32))
+            })
+        })
+    };
     let ball_rows: Vec<bool> = (0..left.height())
         .map(|y| {
             (0..left.width()).any(|x| {
@@ -452,14 +466,16 @@ fn the_calibration_test_pattern_shows_zero_parallax_on_the_screen_and_the_predic
         }
         f64::from(img.get_pixel(x as u32, y)[1])
     };
+    let unmarked: Vec<(i64, u32)> = rows
+        .iter()
+        .flat_map(|&y| (0..i64::from(left.width())).map(move |x| (x, y)))
+        .filter(|&(x, y)| !marked(x, y))
+        .collect();
+    assert!(unmarked.len() > rows.len() * left.width() as usize / 2, "the marks cover little of the grid");
     let mismatch = |shift: i64| -> f64 {
-        let mut sum = 0.0;
-        for &y in &rows {
-            for x in 0..i64::from(left.width()) {
-                sum += (green(&left, x, y) - green(&right, x + shift, y)).abs();
-            }
-        }
-        sum / (rows.len() as f64 * f64::from(left.width()))
+        let sum: f64 =
+            unmarked.iter().map(|&(x, y)| (green(&left, x, y) - green(&right, x + shift, y)).abs()).sum();
+        sum / unmarked.len() as f64
     };
     let at_zero = mismatch(0);
     for shift in [-3i64, -2, -1, 1, 2, 3] {
@@ -488,6 +504,7 @@ fn golden_timeline_case(scene_path: &str) {
         validation: true,
         size_px: Some((256, 256)),
         calibration: None,
+        eye_marks: Vec::new(),
     };
     let written = render_scene(&scene, &options).unwrap_or_else(|e| panic!("rendering {case} failed: {e:#}"));
     assert!(written.len() >= 2, "{case}: several times of the timeline");
@@ -573,6 +590,60 @@ fn the_floating_window_masks_the_edges_near_clay_touches_and_matches_golden() {
     assert_eq!(black_columns(&whole, &mut (0..w)), 0);
 }
 
+/// `argile calibrate`'s pattern: the L in the left eye's picture only, the R in the right's,
+/// each eye's crosstalk square in its own picture only, the row-interlaced image carrying the
+/// left eye's L on its even rows (the shipped parity), and the pair matching its golden.
+#[test]
+fn the_calibration_pattern_shows_each_eye_its_letter_and_square_and_matches_golden() {
+    let dir = out_dir("calibration-marks");
+    let calibrated = argile::app::calibrate(&argile::app::CalibrateOptions {
+        calibration: None,
+        out_dir: dir.clone(),
+        width_px: 384,
+        validation: true,
+        display_modes: vec![DisplayMode::RowInterlaced],
+    })
+    .expect("the test pattern renders");
+    let load = |p: &Path| image::open(p).expect("the pattern reads back").to_rgba8();
+    let (left, right) = (load(&calibrated.written.left), load(&calibrated.written.right));
+    let (w, h) = left.dimensions();
+    // White pixels in a region given in device coordinates (y down).
+    let white_in = |image: &image::RgbaImage, (x0, y0): (f32, f32), (x1, y1): (f32, f32)| {
+        let px = |v: f32, n: u32| (((v + 1.0) * 0.5 * n as f32) as u32).min(n - 1);
+        let mut rows = Vec::new();
+        for y in px(y0, h)..=px(y1, h) {
+            for x in px(x0, w)..=px(x1, w) {
+                if image.get_pixel(x, y).0[..3].iter().all(|&c| c > 240) {
+                    rows.push(y);
+                }
+            }
+        }
+        rows
+    };
+    let l_region = ((-0.95, -0.92), (-0.6, -0.55));
+    let r_region = ((0.6, -0.92), (0.95, -0.55));
+    let (square_l, square_r) = (((-0.94, 0.6), (-0.66, 0.9)), ((0.66, 0.6), (0.94, 0.9)));
+    for (what, eye, region, seen) in [
+        ("L", "left", l_region, true),
+        ("L", "right", l_region, false),
+        ("R", "right", r_region, true),
+        ("R", "left", r_region, false),
+        ("the left eye's square", "left", square_l, true),
+        ("the left eye's square", "right", square_l, false),
+        ("the right eye's square", "right", square_r, true),
+        ("the right eye's square", "left", square_r, false),
+    ] {
+        let image = if eye == "left" { &left } else { &right };
+        let found = white_in(image, region.0, region.1).len();
+        assert_eq!(found > 20, seen, "{what} in the {eye} eye's picture: {found} white pixels");
+    }
+    let interlaced = load(calibrated.written.composed.first().expect("the row-interlaced image"));
+    let rows = white_in(&interlaced, l_region.0, l_region.1);
+    assert!(rows.len() > 20 && rows.iter().all(|y| y % 2 == 0), "the L on even rows only: {rows:?}");
+    check_against_golden("calibration-marks", "left", &left);
+    check_against_golden("calibration-marks", "right", &right);
+}
+
 /// The judgement itself: a level of rounding everywhere passes (another CPU's shader code), a
 /// picture moved by a pixel fails.
 #[test]
@@ -648,6 +719,7 @@ fn the_glyph_shapes_match_golden() {
         hud: Vec::new(),
         panel: None,
         floating_window: argile::stereo::floating::FloatingWindow::NONE,
+        eye_marks: Vec::new(),
     };
     renderer.draw(&frame).unwrap();
     let image = renderer.read_back().unwrap();
@@ -693,6 +765,7 @@ fn swapped_eyes_write_each_eye_the_others_image() {
             validation: true,
             size_px: Some((64, 64)),
             calibration: None,
+            eye_marks: Vec::new(),
         };
         let written =
             render_scene(&scene, &options).unwrap_or_else(|e| panic!("rendering {case} failed: {e:#}"));

@@ -9,7 +9,11 @@
 //! screen (uncrossed), both wholly within the default 1° budget, each expected at
 //! `IPD · (Z − D) / Z` on the screen. Seen on the calibrated display from the default eye, with
 //! the right eye's image to the right eye, the grid sits on the glass and the balls float at
-//! the printed distances.
+//! the printed distances. Over it, at zero parallax ([`eye_marks`]): a millimetre ruler along
+//! the bottom edge, an L that only the left eye's picture holds and an R only the right's
+//! (which eye sees which picture: swapped eyes, interlace parity, frame-sequential phase), and
+//! a white square in each eye's picture alone with grey references beside it (crosstalk). The
+//! pattern is also written as the display's own mode composes it, with its parity.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -18,6 +22,7 @@ use anyhow::Result;
 
 use super::capture::{render_scene, RenderOptions, WrittenCapture};
 use crate::math::{Pose, Quat, Vec3};
+use crate::render::{EyeMark, BOTH_VIEWS, LEFT_VIEW, RIGHT_VIEW};
 use crate::scene::{ClayPrimitive, HeadPath, Scene, ScreenCalibration};
 use crate::stereo::comfort::disparity_deg;
 use crate::stereo::screen::Frustum;
@@ -52,6 +57,79 @@ pub struct TestPattern {
     pub markers: [Marker; 2],
     /// The grid's colour (linear RGB).
     pub grid_colour: Vec3,
+    /// What each eye alone is shown, and the crosstalk references both are: see [`eye_marks`].
+    pub eye_marks: Vec<EyeMark>,
+}
+
+/// The crosstalk references' levels: fractions of the squares' white, linear.
+pub const CROSSTALK_LEVELS: [f32; 3] = [0.02, 0.05, 0.10];
+
+/// Where the left eye's crosstalk square lies (device coordinates, y down): the bottom row of
+/// the grid's cells, at the left; the right eye's mirrors it.
+pub const CROSSTALK_SQUARE: ([f32; 2], [f32; 2]) = ([-0.95, 0.55], [-0.65, 0.95]);
+
+/// Where the left eye's letter L starts (device coordinates, y down): the top left cell; the
+/// right eye's R ends as far from the right edge.
+pub const LABEL_AT: [f32; 2] = [-0.93, -0.9];
+
+/// Millimetres between the ruler's ticks; every fifth is longer, every tenth longer still.
+pub const RULER_TICK_MM: f32 = 10.0;
+
+/// The marks over the pattern, at zero parallax, for pictures `width_px` wide of a screen
+/// `width_mm` wide and `aspect` (width over height):
+///
+/// - **A ruler** along the bottom edge, in both pictures: a tick every [`RULER_TICK_MM`] from
+///   the left edge of the picture, longer each 50 mm and 100 mm. Shown full screen, a real
+///   ruler held against the glass must match it; ticks closer or farther apart mean
+///   `[screen] width_m` is wrong by that ratio.
+/// - **L and R**: an L in the left eye's top left corner, an R in the right eye's top right.
+///   Closing one eye shows which picture reaches the other: the right eye must see R only. An
+///   L seen by the right eye means the eyes are swapped (`E`, `--swap-eyes`) or, on an
+///   interlaced or frame-sequential display, the parity is (`P`, `[display] parity`).
+/// - **Crosstalk**: a white square in the left eye's picture only, lower left, and one in the
+///   right eye's only, lower right; beside each, grey patches at [`CROSSTALK_LEVELS`] of its
+///   white, in both pictures. Seen with one eye, the other eye's square should be black: a
+///   ghost of it as bright as a patch is that much crosstalk (the display leaks that fraction
+///   of the other eye's picture).
+pub fn eye_marks(aspect: f32, width_mm: f32, width_px: u32) -> Vec<EyeMark> {
+    const WHITE: [f32; 3] = [1.0, 1.0, 1.0];
+    let mut marks = Vec::new();
+    // The ruler: ticks a pixel and a half wide, so that each shows at any position.
+    let tick = 3.0 / width_px.max(1) as f32;
+    let ticks = (width_mm / RULER_TICK_MM).floor() as u32;
+    for k in 0..=ticks.min(2000) {
+        let x = -1.0 + 2.0 * k as f32 * RULER_TICK_MM / width_mm;
+        let length = match k {
+            _ if k % 10 == 0 => 0.09,
+            _ if k % 5 == 0 => 0.06,
+            _ => 0.03,
+        };
+        let x0 = x.clamp(-1.0, 1.0 - tick);
+        marks.push(EyeMark {
+            views: BOTH_VIEWS,
+            min: [x0, 1.0 - length],
+            max: [x0 + tick, 1.0],
+            colour: WHITE,
+        });
+    }
+    // Font pixels a fiftieth of the height, square on the screen.
+    let pixel = [0.04 / aspect.max(0.1), 0.04];
+    marks.extend(EyeMark::text("L", LEFT_VIEW, LABEL_AT, pixel, WHITE));
+    let r_at = [-LABEL_AT[0] - 8.0 * pixel[0], LABEL_AT[1]];
+    marks.extend(EyeMark::text("R", RIGHT_VIEW, r_at, pixel, WHITE));
+    let (min, max) = CROSSTALK_SQUARE;
+    for (views, side) in [(LEFT_VIEW, 1.0f32), (RIGHT_VIEW, -1.0)] {
+        let x = |v: f32| v * side;
+        let (x0, x1) = (x(min[0]).min(x(max[0])), x(min[0]).max(x(max[0])));
+        marks.push(EyeMark { views, min: [x0, min[1]], max: [x1, max[1]], colour: WHITE });
+        // The references, inwards of the square, each a third of its height.
+        for (i, level) in CROSSTALK_LEVELS.iter().enumerate() {
+            let start = max[0] + 0.05 + i as f32 * 0.15;
+            let (p0, p1) = (x(start).min(x(start + 0.1)), x(start).max(x(start + 0.1)));
+            marks.push(EyeMark { views: BOTH_VIEWS, min: [p0, 0.68], max: [p1, 0.82], colour: [*level; 3] });
+        }
+    }
+    marks
 }
 
 /// The grid's cells across the screen.
@@ -140,7 +218,13 @@ pub fn test_pattern(calibration: &ScreenCalibration, width_px: u32) -> TestPatte
         marker("near", Vec3::new(1.0, 0.12, 0.08), (-0.3125 * w, -0.125 * h), 0.12 * d, 0.035 * h),
         marker("far", Vec3::new(0.08, 0.25, 1.0), (0.3125 * w, 0.125 * h), -0.15 * d, 0.07 * h),
     ];
-    TestPattern { scene, markers, grid_colour: GRID }
+    scene.display.parity = c.display.parity;
+    TestPattern {
+        scene,
+        markers,
+        grid_colour: GRID,
+        eye_marks: eye_marks(c.screen.aspect(), w * 1000.0, width_px),
+    }
 }
 
 impl Marker {
@@ -239,6 +323,24 @@ pub fn describe(calibration: &ScreenCalibration, source: &str, pattern: &TestPat
         c.screen.width_m() / GRID_COLUMNS as f32 * 1000.0,
         c.screen.height_m() / GRID_ROWS as f32 * 1000.0
     );
+    let _ = writeln!(
+        s,
+        "  the ruler along the bottom edge ticks every {RULER_TICK_MM:.0} mm (longer each 50 and 100 mm) from the \
+         picture's left edge: a ruler held against the glass must match it"
+    );
+    let _ = writeln!(
+        s,
+        "  close your right eye: the left eye must see the L (top left) and not the R; close your left eye: \
+         the right eye sees the R only. Seen the other way round, swap the eyes (E, --swap-eyes) or flip the \
+         parity (P, [display] parity)"
+    );
+    let _ = writeln!(
+        s,
+        "  crosstalk: with one eye, the other eye's white square (lower left for the left eye, lower right for \
+         the right) must look black; a ghost as bright as one of the grey patches beside it ({}) is that much \
+         of the other eye's picture leaking through",
+        CROSSTALK_LEVELS.map(|l| format!("{:.0} %", l * 100.0)).join(", ")
+    );
     for m in &pattern.markers {
         let _ = writeln!(
             s,
@@ -288,14 +390,20 @@ pub fn calibrate(options: &CalibrateOptions) -> Result<Calibrated> {
         None => (ScreenCalibration::shipped(), "calibration/screen.toml (built in)".to_owned()),
     };
     let pattern = test_pattern(&calibration, options.width_px);
+    // The display's own mode, from its calibration, unless the command line names others.
+    let display_modes = match options.display_modes.is_empty() {
+        true => calibration.display.mode.into_iter().collect(),
+        false => options.display_modes.clone(),
+    };
     let report = describe(&calibration, &source, &pattern);
     let render = RenderOptions {
         out_dir: options.out_dir.clone(),
-        display_modes: options.display_modes.clone(),
+        display_modes,
         progress: false,
         validation: options.validation,
         size_px: None,
         calibration: Some(calibration),
+        eye_marks: pattern.eye_marks.clone(),
     };
     let mut written = render_scene(&pattern.scene, &render)?;
     let written = written.pop().expect("the test pattern has one capture");
@@ -305,6 +413,35 @@ pub fn calibrate(options: &CalibrateOptions) -> Result<Calibrated> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_marks_are_a_millimetre_ruler_an_l_and_an_r_for_one_eye_each_and_crosstalk_squares() {
+        let c = ScreenCalibration::shipped();
+        let p = test_pattern(&c, 1000);
+        let width_mm = c.screen.width_m() * 1000.0;
+        let both: Vec<&EyeMark> = p.eye_marks.iter().filter(|m| m.views == BOTH_VIEWS).collect();
+        // 531.3 mm: ticks at 0, 10, …, 530 mm, each where its millimetres put it on the screen.
+        let ticks: Vec<&&EyeMark> = both.iter().filter(|m| m.max[1] == 1.0).collect();
+        assert_eq!(ticks.len(), 54);
+        for (k, t) in ticks.iter().enumerate() {
+            let mm = (t.min[0] + 1.0) / 2.0 * width_mm;
+            assert!((mm - 10.0 * k as f32).abs() < 0.01, "tick {k} at {mm} mm");
+            let long = 1.0 - t.min[1];
+            let expected = [0.09, 0.03, 0.03, 0.03, 0.03, 0.06, 0.03, 0.03, 0.03, 0.03][k % 10];
+            assert!((long - expected).abs() < 1e-5, "tick {k}: {long}");
+        }
+        // Three references for each eye's square, at the stated levels.
+        let references: Vec<f32> = both.iter().filter(|m| m.max[1] < 1.0).map(|m| m.colour[0]).collect();
+        assert_eq!(references, [CROSSTALK_LEVELS, CROSSTALK_LEVELS].concat());
+        let only = |views| p.eye_marks.iter().filter(move |m: &&EyeMark| m.views == views);
+        // The L lies in the left half, the R in the right; each eye's square on its side.
+        assert!(only(LEFT_VIEW).all(|m| m.max[0] < 0.0) && only(LEFT_VIEW).count() > 4);
+        assert!(only(RIGHT_VIEW).all(|m| m.min[0] > 0.0) && only(RIGHT_VIEW).count() > 4);
+        let squares = |views| only(views).filter(|m| m.max[1] - m.min[1] > 0.3).count();
+        assert_eq!((squares(LEFT_VIEW), squares(RIGHT_VIEW)), (1, 1));
+        let text = describe(&c, "shipped", &p);
+        assert!(text.contains("every 10 mm") && text.contains("2 %, 5 %, 10 %"), "{text}");
+    }
 
     #[test]
     fn the_shipped_pattern_expects_opposite_disparities_within_the_budget() {

@@ -36,6 +36,8 @@ pub struct RenderOptions {
     /// The screen the images are judged on for the parallax budget (the scene's `[head]`
     /// calibration, else the shipped `calibration/screen.toml`, when `None`).
     pub calibration: Option<crate::scene::ScreenCalibration>,
+    /// Marks drawn over one eye's picture or both in every capture (a calibration pattern's).
+    pub eye_marks: Vec<crate::render::EyeMark>,
 }
 
 /// One written capture.
@@ -182,6 +184,7 @@ fn render_over(
         }
         renderer.apply(diff)?;
         let mut frame = build_frame(&viewed, &playback.hands(), capture.show_tools);
+        frame.eye_marks.clone_from(&options.eye_marks);
         if capture.show_tools {
             frame.tools.extend(super::frame::lattice_glyphs(&playback));
             frame.tools.extend(super::frame::symmetry_glyphs(&playback));

@@ -182,6 +182,7 @@ pub fn build_frame(scene: &Scene, hands: &[(usize, crate::math::Pose)], show_too
         hud: Vec::new(),
         panel: None,
         floating_window: crate::stereo::floating::FloatingWindow::NONE,
+        eye_marks: Vec::new(),
     }
 }
 

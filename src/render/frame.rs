@@ -145,6 +145,8 @@ pub struct Frame {
     /// The strips masked on each eye's picture (over the scene, under the HUD and panels);
     /// [`FloatingWindow::NONE`] masks nothing.
     pub floating_window: crate::stereo::floating::FloatingWindow,
+    /// Rectangles at zero parallax over one eye's picture or both, under the HUD's text.
+    pub eye_marks: Vec<super::EyeMark>,
 }
 
 /// The number of lights the clay shader evaluates.

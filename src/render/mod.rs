@@ -42,6 +42,7 @@ mod xr_target;
 
 pub use frame::*;
 pub use gpu::{choose_device, DeviceInfo, DeviceKind, ValidationLog, DEVICE_VARIABLE};
+pub use hud::{EyeMark, BOTH_VIEWS, LEFT_VIEW, RIGHT_VIEW};
 pub use panel::{PanelBatch, PanelPaint, PanelTexture, PanelVertex, MAX_TEXTURE_SIDE};
 pub use renderer::{
     probe_devices, DeviceProbe, Renderer, RendererDesc, StereoImage, ViewPasses, VulkanHandles, VulkanMaker,

@@ -27,7 +27,9 @@ use super::target::{begin_pass, StereoTarget, ViewPass};
 pub use super::target::{ViewPasses, VIEW_PASSES_VARIABLE};
 use super::window::{to_rgba, Presented, WindowHandles, WindowOutput};
 use super::xr_target::{SwapchainImages, SwapchainTarget};
-use super::{Environment, Frame, GlyphShape, Light, PanelPaint, RenderError, ValidationLog, MAX_LIGHTS};
+use super::{
+    Environment, EyeMark, Frame, GlyphShape, Light, PanelPaint, RenderError, ValidationLog, MAX_LIGHTS,
+};
 use crate::math::Vec3;
 use crate::mesh::{MeshDiff, Vertex};
 use crate::stereo::display::{DisplayMode, Parity};
@@ -209,8 +211,9 @@ struct HudMesh {
     vertices: Buffer,
     indices: Buffer,
     index_count: u32,
-    /// What the buffers hold: the lines for an image of this size.
+    /// What the buffers hold: the lines and marks for an image of this size.
     text: Vec<String>,
+    marks: Vec<EyeMark>,
     extent: (u32, u32),
 }
 
@@ -509,6 +512,7 @@ impl Renderer {
                 indices: Buffer::new(&device, 1024, vk::BufferUsageFlags::INDEX_BUFFER, MemoryUse::Upload)?,
                 index_count: 0,
                 text: Vec::new(),
+                marks: Vec::new(),
                 extent: (0, 0),
             },
             panel: PanelGpu::new(&device)?,
@@ -559,14 +563,14 @@ impl Renderer {
         self.device.instance.validation()
     }
 
-    /// Lays out the HUD text again when it or the image size changed.
-    fn write_hud(&mut self, lines: &[String]) -> Result<(), RenderError> {
+    /// Lays out the HUD text and the eyes' marks again when they or the image size changed.
+    fn write_hud(&mut self, lines: &[String], marks: &[EyeMark]) -> Result<(), RenderError> {
         let extent = (self.target.extent.width, self.target.extent.height);
         let hud = &mut self.hud;
-        if hud.text == lines && hud.extent == extent {
+        if hud.text == lines && hud.marks == marks && hud.extent == extent {
             return Ok(());
         }
-        let (vertices, indices) = super::hud::layout(lines, extent.0, extent.1);
+        let (vertices, indices) = super::hud::layout(lines, marks, extent.0, extent.1);
         let vertex_bytes = std::mem::size_of_val(vertices.as_slice()) as u64;
         grow(&self.device, &mut hud.vertices, vertex_bytes, vk::BufferUsageFlags::VERTEX_BUFFER)?;
         grow(&self.device, &mut hud.indices, indices.len() as u64 * 4, vk::BufferUsageFlags::INDEX_BUFFER)?;
@@ -574,6 +578,7 @@ impl Renderer {
         hud.indices.write(0, &indices);
         hud.index_count = indices.len() as u32;
         hud.text = lines.to_vec();
+        hud.marks = marks.to_vec();
         hud.extent = extent;
         Ok(())
     }
@@ -629,7 +634,7 @@ impl Renderer {
     /// Draws one stereo frame (both eyes in one multiview pass) and waits for it to finish.
     pub fn draw(&mut self, frame: &Frame) -> Result<(), RenderError> {
         self.write_uniforms(frame);
-        self.write_hud(&frame.hud)?;
+        self.write_hud(&frame.hud, &frame.eye_marks)?;
         self.write_panel(frame.panel.as_ref())?;
         self.submit(|cb| self.record_stereo(cb, frame), None, None)?;
         self.finish()?;
@@ -755,7 +760,7 @@ impl Renderer {
             )?);
         }
         self.write_uniforms(frame);
-        self.write_hud(&frame.hud)?;
+        self.write_hud(&frame.hud, &frame.eye_marks)?;
         self.write_panel(frame.panel.as_ref())?;
         let shot_buffer = self.screenshot.as_ref().filter(|_| screenshot).map(|b| b.raw);
         let window = self.window.as_ref().expect("checked above");
@@ -1002,7 +1007,7 @@ impl Renderer {
         };
         let passes = swapchain.passes(&self.target, colour, depth)?;
         self.write_uniforms(frame);
-        self.write_hud(&frame.hud)?;
+        self.write_hud(&frame.hud, &frame.eye_marks)?;
         self.write_panel(frame.panel.as_ref())?;
         self.submit(
             |cb| {
@@ -1213,7 +1218,7 @@ fn make_pipelines(
                 name: "heads-up display",
                 vertex: spirv!("hud.vert"),
                 fragment: spirv!("hud.frag"),
-                attributes: 2,
+                attributes: 3,
                 cull: vk::CullModeFlags::NONE,
                 depth_test: false,
                 depth_write: false,
@@ -1420,6 +1425,7 @@ mod tests {
             hud: Vec::new(),
             panel: None,
             floating_window: FloatingWindow::NONE,
+            eye_marks: Vec::new(),
         };
         renderer.draw(&frame).unwrap();
         let format = vk::Format::R8G8B8A8_UNORM;
