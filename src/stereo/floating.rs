@@ -112,12 +112,6 @@ impl FloatingWindow {
         Self { strips: [self.strips[1], self.strips[0]] }
     }
 
-    /// Whether any strip is wider than a pixel of pictures `width_px` wide.
-    pub fn is_visible(&self, width_px: u32) -> bool {
-        let pixel = 1.0 / width_px.max(1) as f32;
-        self.strips.iter().any(|s| s.left >= pixel || s.right >= pixel)
-    }
-
     /// The widest strip, a fraction of the picture's width.
     pub fn widest(&self) -> f32 {
         self.strips.iter().map(|s| s.left.max(s.right)).fold(0.0, f32::max)
@@ -221,6 +215,6 @@ mod tests {
         }
         assert!((last - MAX_STRIP).abs() < 1e-3, "{last}");
         assert_eq!(FloatingWindow::NONE.eased(window, f32::NAN), FloatingWindow::NONE);
-        assert!(window.is_visible(100) && !FloatingWindow::NONE.is_visible(100));
+        assert_eq!((window.widest(), FloatingWindow::NONE.widest()), (MAX_STRIP, 0.0));
     }
 }
