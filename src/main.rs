@@ -246,6 +246,33 @@ enum Command {
         /// `[display] mode` when none is given).
         #[arg(long, value_enum)]
         display_mode: Vec<DisplayMode>,
+        /// Show the pattern in the station's window (full screen unless --size) and adjust the
+        /// calibration while it shows: the arrows size the screen, PageUp/PageDown move the
+        /// eye, = and - change the IPD, Enter or Ctrl+S writes them into the --calibration file
+        /// (created when missing), Backspace goes back to what it says.
+        #[arg(long, requires = "calibration")]
+        adjust: bool,
+        /// With --adjust: the window's size, WIDTHxHEIGHT, instead of the whole monitor.
+        #[arg(long, requires = "adjust", value_parser = parse_size)]
+        size: Option<(u32, u32)>,
+        /// With --adjust: the monitor the window opens on (its index or a part of its name).
+        #[arg(long, requires = "adjust")]
+        monitor: Option<argile::scene::MonitorName>,
+        /// With --adjust: key bindings read over the shipped ones (see calibration/keys.toml).
+        #[arg(long, requires = "adjust")]
+        keys: Option<PathBuf>,
+        /// With --adjust: close after this many frames (scripted runs, tests).
+        #[arg(long, requires = "adjust")]
+        frames: Option<u64>,
+        /// With --adjust and --frames: write what the window shows in the last frame to this PNG.
+        #[arg(long, requires = "frames")]
+        screenshot: Option<PathBuf>,
+        /// With --adjust: input events to play at given frames (see `argile::app::InputScript`).
+        #[arg(long, requires = "adjust")]
+        input_script: Option<PathBuf>,
+        /// Turn the Vulkan validation layer on (fails on any validation message).
+        #[arg(long)]
+        validation: bool,
     },
 }
 
@@ -375,6 +402,7 @@ fn main() -> ExitCode {
                 fullscreen,
                 monitor,
                 recovered: Vec::new(),
+                adjust: None,
             },
         ),
         Some(Command::Render {
@@ -436,12 +464,43 @@ fn main() -> ExitCode {
         Some(Command::Info { sculpt: Some(path), .. }) => app::describe_sculpt(&path).map(|d| print!("{d}")),
         Some(Command::Info { input, sculpt: None }) => info(input.as_deref()),
         Some(Command::Bench { json, quick, workloads }) => run_bench(json, quick, &workloads),
-        Some(Command::Calibrate { calibration, out, width, display_mode }) => {
+        Some(Command::Calibrate {
+            calibration: Some(file),
+            width,
+            display_mode,
+            adjust: true,
+            size,
+            monitor,
+            keys,
+            frames,
+            screenshot,
+            input_script,
+            validation,
+            ..
+        }) => app::signals::install().and_then(|()| {
+            let options = app::AdjustOptions {
+                calibration: file,
+                width_px: width,
+                station: app::StationOptions {
+                    frames,
+                    screenshot,
+                    script: input_script,
+                    keys,
+                    window_px: size,
+                    validation,
+                    display_mode: display_mode.first().copied(),
+                    monitor,
+                    ..Default::default()
+                },
+            };
+            app::adjust_calibration(&options).map(|_| ())
+        }),
+        Some(Command::Calibrate { calibration, out, width, display_mode, validation, .. }) => {
             let options = app::CalibrateOptions {
                 calibration,
                 out_dir: out,
                 width_px: width,
-                validation: false,
+                validation,
                 display_modes: display_mode,
             };
             app::calibrate(&options).map(|c| {

@@ -500,3 +500,74 @@ fn the_desk_panel_picks_the_tool_its_size_and_colour_undoes_from_its_history_sav
     assert_eq!(panel_differs, 0, "pixels of the panel that differ between the eyes");
     check_against_golden("panel", "side-by-side", &image);
 }
+
+/// `argile calibrate --adjust` in a window: keys size the screen and move the eye while the
+/// pattern shows, Enter writes them into the calibration file keeping its comments, and a run
+/// that leaves without writing says the values and leaves the file as it was.
+#[test]
+fn calibrate_adjust_writes_the_keys_changes_into_the_calibration_file() {
+    let x = Xvfb::start();
+    let dir = out_dir("calibrate-adjust");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("mine.toml");
+    std::fs::write(&file, "# the desk monitor\n[screen]\nwidth_m = 0.5   # guessed\nheight_m = 0.28125\n")
+        .unwrap();
+    let calibrate = |script: &str, shot: &Path| {
+        let script_path = dir.join("script.toml");
+        std::fs::write(&script_path, script).unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_argile"))
+            .args(["calibrate", "--adjust", "--calibration", file.to_str().unwrap(), "--width", "256"])
+            .args(["--size", "640x360", "--display-mode", "mono", "--frames", "8", "--validation"])
+            .args(["--input-script", script_path.to_str().unwrap(), "--screenshot", shot.to_str().unwrap()])
+            .env("DISPLAY", &x.display)
+            .env_remove("WAYLAND_DISPLAY")
+            .env("XDG_STATE_HOME", dir.join("state"))
+            .output()
+            .expect("the argile binary runs");
+        let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(out.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+        stdout
+    };
+    let event = |frame: u32, key: &str| format!("[[event]]\nframe = {frame}\npress = \"{key}\"\n");
+    let shot = dir.join("adjusted.png");
+    let script =
+        [event(2, "Shift+ArrowRight"), event(3, "Shift+ArrowRight"), event(4, "PageDown"), event(5, "Enter")];
+    let stdout = calibrate(&script.concat(), &shot);
+    assert!(stdout.contains("wrote the screen's size, the viewing distance and the IPD to"), "{stdout}");
+    let written = std::fs::read_to_string(&file).unwrap();
+    assert!(written.starts_with("# the desk monitor\n[screen]\nwidth_m = 0.52   # guessed\n"), "{written}");
+    assert!(
+        written.contains("height_m = 0.2925") && written.contains("default_eye_m = [0.0, 0.0, 0.595]"),
+        "{written}"
+    );
+    // The left eye's picture (mono) with the L, not the R, and the ruler's ticks along the bottom
+    // row, one each 10 mm of the picture: 640 pixels of Xvfb's 800-pixel screen, now 520 mm
+    // wide, are 416 mm.
+    let image = image::open(&shot).expect("the screenshot is written").to_rgba8();
+    let (w, h) = image.dimensions();
+    let white = |x: u32, y: u32| image.get_pixel(x, y).0[..3].iter().all(|&c| c > 200);
+    let count = |x0: u32, x1: u32, y0: u32, y1: u32| {
+        (y0..y1).flat_map(|y| (x0..x1).map(move |x| (x, y))).filter(|&(x, y)| white(x, y)).count()
+    };
+    // Below the heads-up display's four lines, clear of the grid's bars' highlights.
+    let (top, bottom) = (h * 3 / 20, h / 4);
+    assert!(count(w / 40, w / 5, top, bottom) > 20, "the L is in the left eye's picture");
+    assert_eq!(count(w * 177 / 200, w - w / 40, top, bottom), 0, "the R is not");
+    let mut runs = 0;
+    let mut last = false;
+    for x in 0..w {
+        let now = white(x, h - 1);
+        runs += usize::from(now && !last);
+        last = now;
+    }
+    assert_eq!(runs, 42, "ticks along the bottom edge, at 0 to 410 mm");
+
+    // Changed and not written: the run says the values and the file stays.
+    let stdout = calibrate(&event(2, "ArrowLeft"), &dir.join("unwritten.png"));
+    assert!(
+        stdout.contains("the adjustments were not written to") && stdout.contains("width_m = 0.51900"),
+        "{stdout}"
+    );
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), written);
+}

@@ -68,9 +68,9 @@ pub const CROSSTALK_LEVELS: [f32; 3] = [0.02, 0.05, 0.10];
 /// the grid's cells, at the left; the right eye's mirrors it.
 pub const CROSSTALK_SQUARE: ([f32; 2], [f32; 2]) = ([-0.95, 0.55], [-0.65, 0.95]);
 
-/// Where the left eye's letter L starts (device coordinates, y down): the top left cell; the
-/// right eye's R ends as far from the right edge.
-pub const LABEL_AT: [f32; 2] = [-0.93, -0.9];
+/// Where the left eye's letter L starts (device coordinates, y down): the top left cell, below
+/// the heads-up display's lines; the right eye's R ends as far from the right edge.
+pub const LABEL_AT: [f32; 2] = [-0.93, -0.8];
 
 /// Millimetres between the ruler's ticks; every fifth is longer, every tenth longer still.
 pub const RULER_TICK_MM: f32 = 10.0;
@@ -112,8 +112,8 @@ pub fn eye_marks(aspect: f32, width_mm: f32, width_px: u32) -> Vec<EyeMark> {
             colour: WHITE,
         });
     }
-    // Font pixels a fiftieth of the height, square on the screen.
-    let pixel = [0.04 / aspect.max(0.1), 0.04];
+    // Font pixels a 57th of the height, square on the screen.
+    let pixel = [0.035 / aspect.max(0.1), 0.035];
     marks.extend(EyeMark::text("L", LEFT_VIEW, LABEL_AT, pixel, WHITE));
     let r_at = [-LABEL_AT[0] - 8.0 * pixel[0], LABEL_AT[1]];
     marks.extend(EyeMark::text("R", RIGHT_VIEW, r_at, pixel, WHITE));
@@ -133,7 +133,7 @@ pub fn eye_marks(aspect: f32, width_mm: f32, width_px: u32) -> Vec<EyeMark> {
 }
 
 /// The grid's cells across the screen.
-const GRID_COLUMNS: u32 = 8;
+pub(crate) const GRID_COLUMNS: u32 = 8;
 /// The grid's cells up the screen.
 const GRID_ROWS: u32 = 4;
 
@@ -172,6 +172,8 @@ pub fn test_pattern(calibration: &ScreenCalibration, width_px: u32) -> TestPatte
     scene.rig.up = vu;
     scene.rig.convergence_m = d;
     scene.rig.interaxial_m = c.ipd_m;
+    // The screen's own field of view from the default eye: the rig's views are the tracked ones.
+    scene.rig.fov_y_deg = 2.0 * (0.5 * h / d).atan().to_degrees();
     scene.rig.near_m = c.near_m;
     scene.rig.far_m = c.far_m;
     scene.head = Some(HeadPath { calibration: *c, keys: Vec::new() });
@@ -410,6 +412,169 @@ pub fn calibrate(options: &CalibrateOptions) -> Result<Calibrated> {
     Ok(Calibrated { report, pattern, written })
 }
 
+/// Options of `argile calibrate --adjust`.
+#[derive(Clone, Debug, Default)]
+pub struct AdjustOptions {
+    /// The calibration file to adjust (created when missing, from the shipped calibration).
+    pub calibration: PathBuf,
+    /// Width of the pattern's eye images it is built for (its bars are about 2 pixels wide).
+    pub width_px: u32,
+    /// The station's window: the display, the monitor, key bindings, scripted frames. Its
+    /// window fills the monitor unless it names a size.
+    pub station: super::StationOptions,
+}
+
+/// Shows the test pattern of the calibration file in the station's window, where keys change
+/// the screen's size, the viewing distance and the IPD, and write them back to the file.
+pub fn adjust_calibration(options: &AdjustOptions) -> Result<super::StationReport> {
+    if let Some(reason) = super::no_display_reason() {
+        anyhow::bail!("cannot show the calibration's test pattern to adjust it: {reason}");
+    }
+    let path = &options.calibration;
+    let calibration = match path.exists() {
+        true => ScreenCalibration::load(path)?,
+        false => ScreenCalibration::shipped(),
+    };
+    let pattern = test_pattern(&calibration, options.width_px);
+    let mut station = options.station.clone();
+    station.fullscreen |= station.window_px.is_none();
+    station.adjust = Some(super::AdjustTarget::new(path.clone(), calibration, &pattern));
+    let source = match path.exists() {
+        true => path.display().to_string(),
+        false => format!("{} (not there yet: the shipped calibration until written)", path.display()),
+    };
+    print!("{}", describe(&calibration, &source, &pattern));
+    super::run_station(&pattern.scene, "calibration", &station)
+}
+
+/// A change `argile calibrate --adjust` makes to a calibration while its pattern shows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Adjustment {
+    /// The screen grows this much wider (metres), about its centre; its height follows, its
+    /// aspect ratio (the pixels') kept.
+    Width(f32),
+    /// The default eye moves this much farther from the screen, along its normal (metres).
+    Distance(f32),
+    /// The interpupillary distance grows by this (metres).
+    Ipd(f32),
+}
+
+/// The widths `--adjust` keeps a screen within, metres.
+pub const ADJUST_WIDTH_M: std::ops::RangeInclusive<f32> = 0.05..=20.0;
+/// The viewing distances it keeps the default eye within, metres.
+pub const ADJUST_DISTANCE_M: std::ops::RangeInclusive<f32> = 0.1..=10.0;
+/// The interpupillary distances it keeps within, metres (adults: 50 to 75 mm).
+pub const ADJUST_IPD_M: std::ops::RangeInclusive<f32> = 0.045..=0.08;
+
+/// `calibration` changed by `adjustment`, kept within the ranges above.
+pub fn adjusted(calibration: &ScreenCalibration, adjustment: Adjustment) -> ScreenCalibration {
+    let clamp = |v: f32, r: &std::ops::RangeInclusive<f32>| v.clamp(*r.start(), *r.end());
+    let mut c = *calibration;
+    match adjustment {
+        Adjustment::Width(delta) => {
+            let w = c.screen.width_m();
+            let s = clamp(w + delta, &ADJUST_WIDTH_M) / w;
+            let centre = c.screen.centre_m();
+            let about = |p: Vec3| centre + (p - centre) * s;
+            c.screen.lower_left_m = about(c.screen.lower_left_m);
+            c.screen.lower_right_m = about(c.screen.lower_right_m);
+            c.screen.upper_left_m = about(c.screen.upper_left_m);
+        }
+        Adjustment::Distance(delta) => {
+            let d = c.viewing_distance_m();
+            let to = clamp(d + delta, &ADJUST_DISTANCE_M).max(c.near_m + 0.01);
+            c.default_eye_m += c.screen.basis().2 * (to - d);
+        }
+        Adjustment::Ipd(delta) => c.ipd_m = clamp(c.ipd_m + delta, &ADJUST_IPD_M),
+    }
+    c
+}
+
+/// Micrometres: what a written calibration rounds its lengths to.
+fn rounded(v: f32) -> f64 {
+    (f64::from(v) * 1e7).round() / 1e7
+}
+
+/// Writes the screen size, the default eye and the IPD of `calibration` that differ from
+/// `before` into the calibration file `path` (created when missing), keeping its other keys,
+/// comments and layout. A screen given by its corners there keeps its corners, else it is
+/// given by `width_m` and `height_m` (the adjustment keeps its centre and turn). The file is
+/// written atomically and read back: what it then says is returned, and must be `calibration`
+/// within a micrometre, or nothing is left changed.
+pub fn write_calibration(
+    path: &std::path::Path,
+    before: &ScreenCalibration,
+    calibration: &ScreenCalibration,
+) -> Result<ScreenCalibration> {
+    use anyhow::Context as _;
+    use toml_edit::{DocumentMut, Item, Table, Value};
+    let text = match std::fs::read_to_string(path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
+        Err(e) => return Err(e).with_context(|| format!("cannot read {}", path.display())),
+    };
+    let mut doc: DocumentMut =
+        text.parse().with_context(|| format!("{} is not TOML: it is left as it was", path.display()))?;
+    // A value replaced keeps the comment after it.
+    let set = |table: &mut Table, key: &str, mut value: Value| {
+        if let Some(old) = table.get(key).and_then(Item::as_value) {
+            *value.decor_mut() = old.decor().clone();
+        }
+        table.insert(key, Item::Value(value));
+    };
+    let vector = |v: Vec3| Value::from_iter([rounded(v.x), rounded(v.y), rounded(v.z)]);
+    fn table<'d>(doc: &'d mut DocumentMut, name: &str, path: &std::path::Path) -> Result<&'d mut Table> {
+        let item = doc.entry(name).or_insert_with(toml_edit::table);
+        item.as_table_mut().with_context(|| {
+            format!("{}: `{name}` is not a table, so the adjustment cannot be written there", path.display())
+        })
+    }
+    let (s0, s1) = (&before.screen, &calibration.screen);
+    if s0 != s1 {
+        let screen = table(&mut doc, "screen", path)?;
+        let corners = ["lower_left_m", "lower_right_m", "upper_left_m"];
+        if corners.iter().any(|k| screen.contains_key(k)) {
+            for (key, p) in corners.into_iter().zip([s1.lower_left_m, s1.lower_right_m, s1.upper_left_m]) {
+                set(screen, key, vector(p));
+            }
+        } else {
+            set(screen, "width_m", Value::from(rounded(s1.width_m())));
+            set(screen, "height_m", Value::from(rounded(s1.height_m())));
+        }
+    }
+    if before.default_eye_m != calibration.default_eye_m {
+        set(table(&mut doc, "viewer", path)?, "default_eye_m", vector(calibration.default_eye_m));
+    }
+    if before.ipd_m != calibration.ipd_m {
+        set(table(&mut doc, "viewer", path)?, "ipd_m", Value::from(rounded(calibration.ipd_m)));
+    }
+    let written = doc.to_string();
+    let name = path.display().to_string();
+    let back = ScreenCalibration::parse(&written, &name).with_context(|| {
+        format!("the adjusted calibration would not read back, so {name} is left as it was")
+    })?;
+    let off = [
+        (back.screen.lower_left_m - s1.lower_left_m).abs().max_element(),
+        (back.screen.lower_right_m - s1.lower_right_m).abs().max_element(),
+        (back.screen.upper_left_m - s1.upper_left_m).abs().max_element(),
+        (back.default_eye_m - calibration.default_eye_m).abs().max_element(),
+        (back.ipd_m - calibration.ipd_m).abs(),
+    ];
+    let worst = off.into_iter().fold(0.0f32, f32::max);
+    if worst > 1e-6 {
+        anyhow::bail!(
+            "the adjusted calibration would read back {:.1} µm off what is shown (is the screen in {name} \
+             turned by corners that are not square?), so {name} is left as it was",
+            worst * 1e6
+        );
+    }
+    crate::io::write_atomically(path, true, |w| {
+        use std::io::Write as _;
+        w.write_all(written.as_bytes()).with_context(|| format!("cannot write {name}"))
+    })?;
+    Ok(back)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -471,5 +636,69 @@ mod tests {
         let mut scene = p.scene.clone();
         let verdict = super::super::comfort::apply_parallax_budget(&mut scene, c, clay);
         assert!(verdict.is_none(), "{:?}", verdict.map(|v| v.1));
+    }
+
+    #[test]
+    fn adjustments_keep_the_screen_centred_and_square_and_stay_within_their_ranges() {
+        let c = ScreenCalibration::shipped();
+        let wider = adjusted(&c, Adjustment::Width(0.05));
+        assert!((wider.screen.width_m() - c.screen.width_m() - 0.05).abs() < 1e-6);
+        assert!((wider.screen.aspect() - c.screen.aspect()).abs() < 1e-5);
+        assert!((wider.screen.centre_m() - c.screen.centre_m()).length() < 1e-6);
+        assert!((wider.viewing_distance_m() - c.viewing_distance_m()).abs() < 1e-6, "the eye stays");
+        assert_eq!(adjusted(&c, Adjustment::Width(-10.0)).screen.width_m(), *ADJUST_WIDTH_M.start());
+        let far = adjusted(&c, Adjustment::Distance(100.0));
+        assert!((far.viewing_distance_m() - ADJUST_DISTANCE_M.end()).abs() < 1e-4);
+        assert!(
+            (far.default_eye_m.truncate() - c.default_eye_m.truncate()).length() < 1e-6,
+            "along the normal"
+        );
+        assert_eq!(adjusted(&c, Adjustment::Ipd(-1.0)).ipd_m, *ADJUST_IPD_M.start());
+        assert_eq!(adjusted(&c, Adjustment::Ipd(1.0)).ipd_m, *ADJUST_IPD_M.end());
+    }
+
+    #[test]
+    fn written_adjustments_keep_the_file_s_comments_and_corners_and_read_back_as_shown() {
+        let dir = std::env::temp_dir().join(format!("argile-write-calibration-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        // A screen by its size, with comments and a key the adjustment does not touch.
+        let sized = dir.join("sized.toml");
+        let text = "# my monitor\n[screen]\nwidth_m = 0.6   # measured\nheight_m = 0.3375\n\n[tracker]\nport = 5000\n";
+        std::fs::write(&sized, text).unwrap();
+        let before = ScreenCalibration::load(&sized).unwrap();
+        let after = adjusted(&adjusted(&before, Adjustment::Width(0.004)), Adjustment::Ipd(0.002));
+        let back = write_calibration(&sized, &before, &after).unwrap();
+        let written = std::fs::read_to_string(&sized).unwrap();
+        assert!(written.starts_with("# my monitor\n[screen]\nwidth_m = 0.604   # measured\n"), "{written}");
+        assert!(written.contains("port = 5000") && written.contains("ipd_m = 0.065"), "{written}");
+        assert!(!written.contains("default_eye_m"), "the eye did not move: {written}");
+        assert_eq!(back, ScreenCalibration::load(&sized).unwrap());
+        assert!((back.screen.width_m() - 0.604).abs() < 1e-6 && (back.ipd_m - 0.065).abs() < 1e-6);
+
+        // A screen by its corners keeps its corners.
+        let cornered = dir.join("corners.toml");
+        std::fs::write(
+            &cornered,
+            "[screen]\nlower_left_m = [-0.3, -0.2, 0.0]\nlower_right_m = [0.3, -0.2, 0.0]\nupper_left_m = [-0.3, 0.2, 0.0]\n",
+        )
+        .unwrap();
+        let before = ScreenCalibration::load(&cornered).unwrap();
+        let after = adjusted(&adjusted(&before, Adjustment::Width(-0.06)), Adjustment::Distance(0.1));
+        write_calibration(&cornered, &before, &after).unwrap();
+        let written = std::fs::read_to_string(&cornered).unwrap();
+        assert!(
+            written.contains("lower_right_m = [0.27, -0.18, 0.0]") && !written.contains("width_m"),
+            "{written}"
+        );
+        assert!(written.contains("default_eye_m = [0.0, 0.0, 0.7]"), "{written}");
+
+        // A file that is not TOML is named and left as it was.
+        let broken = dir.join("broken.toml");
+        std::fs::write(&broken, "[screen\nwidth_m = ").unwrap();
+        let e = write_calibration(&broken, &before, &after).unwrap_err();
+        assert!(format!("{e:#}").contains("broken.toml is not TOML"), "{e:#}");
+        assert_eq!(std::fs::read_to_string(&broken).unwrap(), "[screen\nwidth_m = ");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

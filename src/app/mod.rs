@@ -28,7 +28,10 @@ pub use autosave::{
     autosave_root, close_session, recover_and_report, recover_sessions, recovered_dir,
     remove_stale_spill_folders, start_autosave, RecoveredSculpt, RecoveryCount,
 };
-pub use calibrate::{calibrate, describe, test_pattern, CalibrateOptions, Calibrated, Marker, TestPattern};
+pub use calibrate::{
+    adjust_calibration, adjusted, calibrate, describe, test_pattern, write_calibration, AdjustOptions,
+    Adjustment, CalibrateOptions, Calibrated, Marker, TestPattern,
+};
 pub use capture::{
     render_scene, render_scene_autosaved, render_sculpt, renderer_for, save_png_atomically, RenderOptions,
     WrittenCapture,
@@ -46,8 +49,8 @@ pub use sculpt::{
     save_scene_sculpt, with_lattice_applied, SavedSculpt, SCULPT_EXTENSION,
 };
 pub use station::{
-    no_display_reason, run_station, InputScript, ScriptEvent, Station, StationOptions, StationReport,
-    StepTimes, SCRIPTED_STEP_S,
+    no_display_reason, run_station, AdjustTarget, InputScript, ScriptEvent, Station, StationOptions,
+    StationReport, StepTimes, SCRIPTED_STEP_S,
 };
 pub use xr_station::{
     run_xr, xr_absent, XrReport, XrRunOptions, XrSculptor, BUTTON_PULSE, CONTACT_NS, TOUCH_PULSE,

@@ -30,7 +30,10 @@ use winit::window::{Fullscreen, Window, WindowId};
 
 use super::monitor::{frame_sequential_notice, pick_monitor, Monitor};
 
+mod calibrating;
 mod lattice;
+
+pub use calibrating::AdjustTarget;
 
 use super::document::Document;
 use super::environment::load_environment;
@@ -152,6 +155,9 @@ pub struct StationOptions {
     pub monitor: Option<crate::scene::MonitorName>,
     /// The sculpts recovered at start, with what each holds: the panel offers to open them.
     pub recovered: Vec<(PathBuf, String)>,
+    /// The scene is a calibration's test pattern, and the keys adjust that calibration
+    /// (`argile calibrate --adjust`): no panel, no tools.
+    pub adjust: Option<AdjustTarget>,
 }
 
 /// How a station run ended.
@@ -642,6 +648,8 @@ pub struct Station<'s> {
     /// panel's history; steps it did not see, a scene's, are numbered instead).
     step_names: Vec<String>,
     redo_names: Vec<String>,
+    /// The screen calibration being adjusted on its test pattern (`argile calibrate --adjust`).
+    adjusting: Option<calibrating::Adjusting>,
 }
 
 impl<'s> Station<'s> {
@@ -761,6 +769,7 @@ impl<'s> Station<'s> {
             panel_press: false,
             step_names: Vec::new(),
             redo_names: Vec::new(),
+            adjusting: None,
         };
         station.set_calibration(station.calibration);
         station.resize(window_px);
@@ -900,7 +909,9 @@ impl<'s> Station<'s> {
         if !self.held.insert(key) {
             return; // auto-repeat
         }
-        if let Some(action) = self.bindings.action(key, self.modifiers) {
+        if let Some(action) =
+            self.bindings.action(key, self.modifiers).or_else(|| self.adjusting_step_key(key))
+        {
             self.act(action);
         }
     }
@@ -1042,7 +1053,7 @@ impl<'s> Station<'s> {
     }
 
     fn act(&mut self, action: StationAction) {
-        if self.act_lattice(action) {
+        if self.act_adjusting(action) || self.act_lattice(action) {
             return;
         }
         match action {
@@ -1569,6 +1580,9 @@ impl<'s> Station<'s> {
 
     /// What the heads-up display shows: the desk tool, the stereo settings, the frame time.
     pub fn hud_lines(&self) -> Vec<String> {
+        if let Some(lines) = self.adjusting_hud() {
+            return lines;
+        }
         let rig = &self.view.rig;
         let mouse = match self.mouse.mode {
             MouseMode::Scene => "turns",
@@ -1674,7 +1688,7 @@ impl<'s> Station<'s> {
 
     /// Whether the views are head-tracked (opentrack, or the scene's scripted head).
     fn tracked(&self) -> bool {
-        self.head.is_some() || self.scene.head.is_some()
+        self.head.is_some() || self.scene.head.is_some() || self.adjusting.is_some()
     }
 
     /// The distance between the eyes of the views shown: the head-tracked eyes' while
@@ -1694,7 +1708,9 @@ impl<'s> Station<'s> {
         let rig = &self.view.rig;
         self.tracked().then(|| HeadTrackedRig {
             screen: c.screen,
-            placement: Placement::from_rig(&c.screen, c.default_eye_m, rig),
+            placement: self
+                .adjusting_placement()
+                .unwrap_or_else(|| Placement::from_rig(&c.screen, c.default_eye_m, rig)),
             interaxial_m: self.tracked_interaxial_m,
             near_m: rig.near_m,
             far_m: rig.far_m,
@@ -2201,7 +2217,9 @@ impl<'s> Station<'s> {
         // Tools: the scene's scripted hands, then the desk tool.
         let t = self.doc.playback.time_s() + dt_s;
         self.doc.playback.advance_to(t, |_| {});
-        let mut applying = self.holding(StationAction::Apply) || self.device_apply;
+        // While a calibration is adjusted, the pattern is not sculpted.
+        let mut applying =
+            (self.holding(StationAction::Apply) || self.device_apply) && self.adjusting.is_none();
         self.drive_active_part();
         // The desk tool acts on the active part, in its frame.
         let images = self.doc.playback.images().to_vec();
@@ -2298,6 +2316,8 @@ impl<'s> Station<'s> {
         }
         let head_pose = match (&mut self.head, &self.scene.head) {
             (Some(tracker), _) => Some(tracker.pose()),
+            // The pattern is seen from the default eye of the calibration as it stands.
+            (None, _) if self.adjusting.is_some() => Some(self.calibration.default_head()),
             (None, Some(path)) => Some(path.pose_at(self.doc.playback.time_s())),
             (None, None) => None,
         };
@@ -2307,14 +2327,17 @@ impl<'s> Station<'s> {
             let views = tracked.views(&head);
             let since = match self.tracked_for_s {
                 None => {
-                    self.messages.push(self.tracking_notice());
+                    if self.adjusting.is_none() {
+                        self.messages.push(self.tracking_notice());
+                    }
                     0.0
                 }
                 Some(t) => t + dt_s,
             };
             self.tracked_for_s = Some(since);
             let ease = self.calibration.tracker.ease_s;
-            frame.views = match ease > 0.0 && since < ease {
+            // A calibration's pattern is seen from the calibrated eye at once.
+            frame.views = match ease > 0.0 && since < ease && self.adjusting.is_none() {
                 true => {
                     let u = since / ease;
                     blend_views(&frame.views, &views, u * u * (3.0 - 2.0 * u))
@@ -2342,6 +2365,10 @@ impl<'s> Station<'s> {
         // The panel shows what the heads-up display would.
         frame.hud = if panel_paint.is_some() { Vec::new() } else { self.hud_lines() };
         frame.panel = panel_paint;
+        if self.adjusting.is_some() {
+            frame.eye_marks = self.adjusting_marks();
+            return frame;
+        }
         let tool = &self.desk_tool;
         let colour = Vec4::from(tool.colour).truncate().extend(0.35);
         frame.tools.push(tool_glyph(&tool.shape, pose, tool.scale, colour));
@@ -2458,7 +2485,10 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
                 station.set_calibration(c);
             }
             station.set_input_settings(&input);
-            station.set_panel_shown(true);
+            match &options.adjust {
+                Some(target) => station.start_adjusting(target.clone()),
+                None => station.set_panel_shown(true),
+            }
             if let Some(config) = &options.autosave {
                 station.set_autosave_restart(config.clone(), options.scene_toml.clone());
             }
@@ -2541,6 +2571,9 @@ pub fn run_station(scene: &Scene, scene_name: &str, options: &StationOptions) ->
     let changed = stats.undo_in_memory + stats.undo_on_disk > 0 && saved.is_none();
     if quitting && (changed || app.station.unsaved_work() > 0) {
         saved = Some(app.station.save_at_exit()?);
+    }
+    if let Some(said) = app.station.unwritten_adjustments() {
+        println!("{said}");
     }
     let unsaved = app.station.unsaved_work();
     // The sculpt is safe (saved when it changed): the session closes cleanly, so nothing is

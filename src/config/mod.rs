@@ -227,6 +227,22 @@ pub struct Chord {
     pub key: KeyCode,
 }
 
+impl std::fmt::Display for Chord {
+    /// As the bindings file writes it, without its `Key` and `Digit` prefixes: `Ctrl+S`,
+    /// `ArrowLeft`, `Shift+7`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let m = self.modifiers;
+        for (held, name) in [(m.ctrl, "Ctrl+"), (m.shift, "Shift+"), (m.alt, "Alt+"), (m.logo, "Super+")] {
+            if held {
+                f.write_str(name)?;
+            }
+        }
+        let key = format!("{:?}", self.key);
+        let key = key.strip_prefix("Key").or_else(|| key.strip_prefix("Digit")).unwrap_or(&key);
+        f.write_str(key)
+    }
+}
+
 impl Chord {
     /// Parses `"Ctrl+Shift+KeyZ"`; the error says what is wrong.
     pub fn parse(text: &str) -> Result<Self, String> {
@@ -373,6 +389,15 @@ impl KeyBindings {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn chords_are_written_as_the_bindings_file_names_them_without_prefixes() {
+        for (text, shown) in
+            [("Ctrl+KeyS", "Ctrl+S"), ("ArrowLeft", "ArrowLeft"), ("Shift+Digit7", "Shift+7")]
+        {
+            assert_eq!(Chord::parse(text).unwrap().to_string(), shown);
+        }
+    }
 
     #[test]
     fn the_shipped_bindings_bind_every_action_once() {
