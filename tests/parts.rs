@@ -218,6 +218,17 @@ fn bad_parts_are_refused_at_their_line_with_what_is_wrong() {
             "no part named \"c\" (parts: a, b)",
         ),
         (
+            format!("{}[[lattice]]\nname = \"l\"\npart = \"c\"\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [0.01, 0.01, 0.01]\n", part("")),
+            "no part named \"c\" (parts: a, b)",
+        ),
+        (
+            format!(
+                "{}[[lattice]]\nname = \"l\"\npart = \"b\"\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [0.01, 0.01, 0.01]\n",
+                part("locked = true")
+            ),
+            "lattice `l`: part \"b\" is locked: no lattice acts on it",
+        ),
+        (
             format!(
                 "{}[[tool]]\nname = \"t\"\nshape = \"sphere\"\nradius_m = 0.01\naction = \"add\"\n\n[[key]]\ntime_s = 0.0\ntool = \"t\"\npart = \"b\"\nposition_m = [0.0, 0.0, 0.0]\nactive = true\n",
                 part("locked = true")
@@ -329,4 +340,43 @@ fn export_parts_separate_writes_a_glb_node_per_part_with_its_placement() {
     );
     assert!(ply.unwrap_err().to_string().contains("a ply file holds one mesh"));
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A scene's lattice deforms the clay of the part it names, in that part's own frame: its box
+/// and its keys are where the part's clay is written, turned, moved and scaled with the part;
+/// the other part is left bit for bit.
+#[test]
+fn a_scene_lattice_deforms_the_part_it_names_in_that_part_s_frame() {
+    let text = "[field]\nvoxel_size_m = 0.002\n\
+        [[part]]\nname = \"base\"\n\
+        [[part]]\nname = \"arm\"\nposition_m = [0.3, 0.0, 0.0]\nrotation_deg = [0.0, 90.0, 0.0]\nscale = 2.0\nvoxel_size_m = 0.001\n\
+        [[clay]]\nshape = \"sphere\"\nradius_m = 0.03\n\
+        [[clay]]\npart = \"arm\"\nshape = \"sphere\"\nradius_m = 0.015\n\
+        [[lattice]]\nname = \"swell\"\npart = \"arm\"\nmin_m = [-0.025, -0.025, -0.025]\nmax_m = [0.025, 0.025, 0.025]\n\
+        controls = [4, 4, 4]\napply_s = 1.0\n\
+        [[lattice_key]]\ntime_s = 1.0\nlattice = \"swell\"\ni = [2, 3]\nvalue_offset = 0.5\n";
+    let scene = Scene::parse(text, "arm-lattice.toml", None).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.lattices[0].part, 1);
+    let mut playback = Playback::new(&scene);
+    let (base, arm) = (playback.field().clone(), playback.assembly().others()[0].clone());
+    let placement = scene.parts[1].placement;
+    // The arm's own +X (the side the raised controls are on) is the world's -Z, twice as far.
+    let (plus, minus) =
+        (placement.point(Vec3::new(0.018, 0.0, 0.0)), placement.point(Vec3::new(-0.018, 0.0, 0.0)));
+    assert!((plus - Vec3::new(0.3, 0.0, -0.036)).length() < 1e-5, "{plus}");
+    let composed = |p: &mut Playback<'_>| p.surface().clone();
+    let before = composed(&mut playback);
+    assert!(density(&before, plus) < 0.1 && density(&before, minus) < 0.1);
+    playback.advance_to(1.5, |_| {});
+    let after = composed(&mut playback);
+    assert!(density(&after, plus) > 0.5, "the arm swells on its own +X: {}", density(&after, plus));
+    assert!(density(&after, minus) < 0.1, "and not on its -X: {}", density(&after, minus));
+    assert!(playback.field().same_samples(&base), "the base part is left as it was");
+    let arm_now = &playback.assembly().others()[0];
+    assert!(arm_now.mass() > arm.mass() * 1.02, "{} against {}", arm_now.mass(), arm.mass());
+    assert_closed_and_oriented(&after, "the swelled arm with the base");
+    // One undo step gives the arm back.
+    assert!(playback.undo().unwrap());
+    assert!(playback.assembly().others()[0].same_samples(&arm));
+    assert!(!playback.undo().unwrap(), "the lattice was the one step");
 }

@@ -18,6 +18,13 @@ pub fn lattice_glyphs(playback: &super::playback::Playback<'_>) -> Vec<crate::re
             if let Some(k) = scene.slice {
                 glyphs.extend(super::glyphs::lattice_slice_glyphs(lattice.volume(), k, iso));
             }
+            // Drawn in its part's frame.
+            if let Some(frame) = playback.assembly().frame_of(scene.part) {
+                let frame = frame.to_matrix();
+                for g in &mut glyphs {
+                    g.model = frame * g.model;
+                }
+            }
             glyphs
         })
         .collect();

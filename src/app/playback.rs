@@ -655,12 +655,14 @@ impl<'s> Playback<'s> {
     fn step_lattices(&mut self, t: f32) {
         let scene = self.scene;
         for (state, sl) in self.lattices.iter_mut().zip(&scene.lattices) {
+            // It deforms its part's clay, in that part's frame.
+            let field = self.assembly.field_mut(&mut self.field, sl.part);
             if matches!(state, LatticeState::Waiting) && t >= sl.open_s {
-                if !self.field.in_stroke() {
-                    self.field.begin_stroke();
-                    self.owns_stroke = true;
+                if !field.in_stroke() {
+                    field.begin_stroke();
+                    self.owns_stroke |= sl.part == 0;
                 }
-                *state = match Lattice::open(&self.field, &sl.spec) {
+                *state = match Lattice::open(field, &sl.spec) {
                     Ok(l) => LatticeState::Open(Box::new(l), Aabb::EMPTY),
                     Err(e) => {
                         eprintln!("warning: {}: lattice `{}` cannot open: {e}", scene.source, sl.name);
@@ -676,7 +678,7 @@ impl<'s> Playback<'s> {
                     *pending = pending.union(&b);
                 }
                 if keyed && !pending.is_empty() {
-                    lattice.write(&mut self.field, std::mem::replace(pending, Aabb::EMPTY))?;
+                    lattice.write(field, std::mem::replace(pending, Aabb::EMPTY))?;
                 }
                 Ok(())
             });
@@ -761,7 +763,8 @@ impl<'s> Playback<'s> {
             if pending.is_empty() {
                 continue;
             }
-            if let Err(e) = lattice.write(&mut self.field, std::mem::replace(pending, Aabb::EMPTY)) {
+            let field = self.assembly.field_mut(&mut self.field, sl.part);
+            if let Err(e) = lattice.write(field, std::mem::replace(pending, Aabb::EMPTY)) {
                 eprintln!("warning: {}: lattice `{}` stops: {e}", scene.source, sl.name);
                 *state = LatticeState::Closed;
             }

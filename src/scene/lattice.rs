@@ -35,6 +35,7 @@ pub(super) struct LatticeFile {
     #[serde(default = "yes")]
     pub show: bool,
     pub slice: Option<usize>,
+    pub part: Option<String>,
 }
 
 fn four_each() -> [usize; 3] {
@@ -109,13 +110,15 @@ pub struct SceneLattice {
     pub slice: Option<usize>,
     /// Its keys' edits, in time order, each ramping in from the key before it.
     pub edits: Vec<TimedEdit>,
+    /// The part whose clay it deforms; its box and its keys are in that part's own frame.
+    pub part: usize,
 }
 
 /// The scene's lattices, validated.
 pub(super) fn resolve_lattices(
     lattices: &[Spanned<LatticeFile>],
     keys: &[Spanned<LatticeKeyFile>],
-    voxel_size_m: f32,
+    parts: &[super::ScenePart],
     at: &At<'_>,
 ) -> Result<Vec<SceneLattice>, SceneError> {
     let mut out: Vec<SceneLattice> = Vec::with_capacity(lattices.len());
@@ -127,6 +130,12 @@ pub(super) fn resolve_lattices(
         if l.name.is_empty() || out.iter().any(|o| o.name == l.name) {
             return Err(at(span, format!("lattice names must be non-empty and distinct: `{}`", l.name)));
         }
+        let part = super::part::part_index(parts, l.part.as_deref(), spanned.span(), at)?;
+        if parts[part].locked {
+            return fail(format!("part \"{}\" is locked: no lattice acts on it", parts[part].name));
+        }
+        // The part's finest voxel, in its own frame.
+        let voxel_size_m = parts[part].voxel_size_m;
         let (min, max) = (Vec3::from(l.min_m), Vec3::from(l.max_m));
         if !within_reach(l.min_m) || !within_reach(l.max_m) {
             return fail(format!("min_m and max_m must lie within ±{MAX_POSITION_M} m on each axis"));
@@ -260,8 +269,8 @@ pub(super) fn resolve_lattices(
                 return fail(format!(
                     "its box and the room its keys move its control points into hold {points} \
                      samples of the clay at {t} s, over the limit of {MAX_SOURCE_POINTS}; make \
-                     the box smaller, move its control points less far, or use a coarser [field] \
-                     voxel_size_m"
+                     the box smaller, move its control points less far, or use a coarser voxel_size_m \
+                     for its part"
                 ));
             }
         }
@@ -273,6 +282,7 @@ pub(super) fn resolve_lattices(
             show: l.show,
             slice: l.slice,
             edits: timed,
+            part,
         });
     }
     if let Some(key) = keys.iter().find(|k| !out.iter().any(|l| l.name == k.get_ref().lattice)) {

@@ -900,7 +900,7 @@ fn resolve(
         ));
     }
     let timeline = Timeline::new(keys, step_s).map_err(|(i, msg)| at(Some(file.key[i].span()), msg))?;
-    let lattices = lattice::resolve_lattices(&file.lattice, &file.lattice_key, field_voxel, at)?;
+    let lattices = lattice::resolve_lattices(&file.lattice, &file.lattice_key, &parts, at)?;
     let symmetry = symmetry::resolve_symmetry(file.symmetry.as_ref(), at)?;
     let regions = region::resolve_regions(&file.region, field_voxel, at)?;
     // Those act on the first part in world coordinates: it must be at rest in the world.
@@ -908,7 +908,6 @@ fn resolve(
         let pushing = tools.iter().any(|t| t.action.is_clay_body());
         let acting = [
             (!regions.is_empty(), "[[region]]", file.region.first().map(|r| r.span())),
-            (!lattices.is_empty(), "[[lattice]]", file.lattice.first().map(|l| l.span())),
             (pushing, "a push or support tool", file.tool.first().map(|t| t.span())),
         ];
         if let Some((_, what, span)) = acting.into_iter().find(|(present, ..)| *present) {
