@@ -298,7 +298,7 @@ mod tests {
 
     fn open_lattice(doc: &mut Document<'_>) {
         let region = crate::parts::local_bounds(doc.playback.field()).expanded(0.005);
-        doc.playback.open_lattice(&super::super::held_lattice::held_spec(region)).unwrap();
+        doc.playback.open_lattice(&crate::lattice::LatticeForm::default().over(region)).unwrap();
         doc.playback.held_lattice_mut().unwrap().add_value(0.3).unwrap();
         doc.playback.sync_lattices();
     }

@@ -11,9 +11,6 @@ use crate::math::{Aabb, Mat4, Vec3, Vec4};
 use crate::render::ToolGlyph;
 use crate::spline::{KnotStyle, SplineKind};
 
-/// Control points per axis of a lattice opened at the desk or in the headset.
-pub const HELD_COUNTS: [usize; 3] = [4, 4, 4];
-
 /// How much one press raises or lowers the picked control's function value (a density).
 pub const VALUE_STEP: f64 = 0.1;
 
@@ -33,17 +30,6 @@ pub const PART_MARGIN: f32 = 0.05;
 
 /// The colour of the picked control's marker: a bright ring yellow.
 pub const PICKED_COLOUR: Vec4 = Vec4::new(1.0, 0.85, 0.2, 0.35);
-
-/// The spec of a lattice opened by hand over `region` (the part's own frame): a cubic NURBS
-/// volume of [`HELD_COUNTS`] controls with clamped knots, so that its weights can be changed
-/// too and, while they are all 1, it is the cubic B-spline volume.
-pub fn held_spec(region: Aabb) -> LatticeSpec {
-    LatticeSpec {
-        kind: SplineKind::Nurbs,
-        knots: KnotStyle::Clamped,
-        ..LatticeSpec::cubic(region, HELD_COUNTS)
-    }
-}
 
 /// A lattice held open over part `part`'s clay, with the control picked and the drag under way.
 #[derive(Clone, Debug)]

@@ -74,6 +74,8 @@ pub struct Playback<'s> {
     regions: Vec<RegionState>,
     /// The symmetry strokes and pushes act through, and its images.
     symmetry: Symmetry,
+    /// The form of the lattices the desk and the headset open.
+    lattice_form: crate::lattice::LatticeForm,
     images: Vec<Isometry>,
     /// The lattice the desk or the headset holds open over a part's clay: its part's stroke
     /// stays open until it is applied (one undo step) or put back.
@@ -211,6 +213,7 @@ impl<'s> Playback<'s> {
             lattices: scene.lattices.iter().map(|_| LatticeState::Waiting).collect(),
             regions: scene.regions.iter().map(|_| RegionState::Waiting).collect(),
             symmetry: scene.symmetry,
+            lattice_form: crate::lattice::LatticeForm::default(),
             images: scene.symmetry.images(),
             held: None,
             lattice_kept: None,
@@ -986,6 +989,16 @@ impl<'s> Playback<'s> {
         &self.tools
     }
 
+    /// The form of the lattices the desk and the headset open (a cubic NURBS 4³ at first).
+    pub fn lattice_form(&self) -> crate::lattice::LatticeForm {
+        self.lattice_form
+    }
+
+    /// Changes the form of the lattices opened from now on (brought within its limits).
+    pub fn set_lattice_form(&mut self, form: crate::lattice::LatticeForm) {
+        self.lattice_form = form.within_limits();
+    }
+
     /// The symmetry the hands' strokes and pushes act through.
     pub fn symmetry(&self) -> &Symmetry {
         &self.symmetry
@@ -1413,7 +1426,7 @@ position_m = [0.036, -0.014, 0.0]
         let mut p = autosaved_bar(&scene, &root);
         let at_rest = p.field().clone();
         let region = crate::parts::local_bounds(p.field()).expanded(0.005);
-        p.open_lattice(&super::super::held_lattice::held_spec(region)).unwrap();
+        p.open_lattice(&crate::lattice::LatticeForm::default().over(region)).unwrap();
         p.keep_lattice();
         let held = p.held_lattice_mut().unwrap();
         held.pick_nearest(Vec3::new(0.01, 0.0, 0.0));
@@ -1444,7 +1457,7 @@ position_m = [0.036, -0.014, 0.0]
             let mut p = autosaved_bar(&scene, &root);
             let at_rest = p.field().clone();
             let region = crate::parts::local_bounds(p.field()).expanded(0.005);
-            p.open_lattice(&super::super::held_lattice::held_spec(region)).unwrap();
+            p.open_lattice(&crate::lattice::LatticeForm::default().over(region)).unwrap();
             p.held_lattice_mut().unwrap().add_value(0.3).unwrap();
             for _ in 0..2 {
                 p.sync_lattices();
@@ -1473,7 +1486,7 @@ position_m = [0.036, -0.014, 0.0]
         let scene = bar_scene();
         let mut p = autosaved_bar(&scene, &root);
         let region = crate::parts::local_bounds(p.field()).expanded(0.005);
-        p.open_lattice(&super::super::held_lattice::held_spec(region)).unwrap();
+        p.open_lattice(&crate::lattice::LatticeForm::default().over(region)).unwrap();
         p.held_lattice_mut().unwrap().add_value(0.3).unwrap();
         p.sync_lattices();
         p.keep_lattice();

@@ -1261,7 +1261,8 @@ impl<'s> Station<'s> {
             | StationAction::LowerValue
             | StationAction::HeavierWeight
             | StationAction::LighterWeight
-            | StationAction::NextLatticeSlice => {}
+            | StationAction::NextLatticeSlice
+            | StationAction::NextLatticeKind => {}
         }
     }
 
@@ -1382,6 +1383,7 @@ impl<'s> Station<'s> {
             parts,
             active_part: assembly.active(),
             symmetry: (symmetry.describe(), !symmetry.is_none()),
+            lattice: self.lattice_row(),
             stereo,
             shapes: cycle.iter().map(|(_, n)| *n).collect(),
             shape,
@@ -1506,6 +1508,23 @@ impl<'s> Station<'s> {
                 }
             }
             PanelCommand::Save => self.act(StationAction::Save),
+            PanelCommand::LatticeForm(form) => {
+                let said = self.set_lattice_form(form);
+                self.messages.push(said);
+            }
+            PanelCommand::OpenLattice(whole_part) => self.act(match whole_part {
+                true => StationAction::OpenPartLattice,
+                false => StationAction::OpenLattice,
+            }),
+            PanelCommand::ApplyLattice => self.act(StationAction::ApplyLattice),
+            PanelCommand::CancelLattice => self.act(StationAction::CancelLattice),
+            PanelCommand::NextLatticeSlice => self.act(StationAction::NextLatticeSlice),
+            PanelCommand::ControlValue(up) => {
+                self.act(if up { StationAction::RaiseValue } else { StationAction::LowerValue })
+            }
+            PanelCommand::ControlWeight(heavier) => {
+                self.act(if heavier { StationAction::HeavierWeight } else { StationAction::LighterWeight })
+            }
             PanelCommand::SaveAs(path) => self.save_as(&path),
             PanelCommand::Open(path) => self.open_from_panel(&path),
             PanelCommand::Export(path) => self.export_to(&path),
@@ -3518,6 +3537,72 @@ mod tests {
         assert!(station.doc.playback.held_lattice().is_none());
         assert!(station.doc.playback.field().same_samples(&ball));
         assert_eq!(station.doc.playback.field().history_stats().undo_in_memory, steps);
+    }
+
+    #[test]
+    fn the_desk_opens_lattices_of_the_kind_counts_order_and_knots_chosen() {
+        use crate::spline::SplineKind;
+        let scene = ball_scene();
+        let mut station = small_station(&scene);
+        station.mouse.tool_position_m = Vec3::ZERO;
+        sculpt_for(&mut station, 2);
+        let ball = station.doc.playback.field().clone();
+        let chord = Chord::parse("Ctrl+KeyF").unwrap();
+        station.modifiers = chord.modifiers;
+        station.key(chord.key, true);
+        station.key(chord.key, false);
+        station.modifiers = Modifiers::default();
+        assert_eq!(
+            station.doc.playback.lattice_form().kind,
+            SplineKind::Bezier,
+            "Ctrl+F: NURBS, then Bézier"
+        );
+        assert!(station.messages.last().unwrap().starts_with("lattices open as: Bézier, 4 × 4 × 4"));
+        // The panel sets a quadratic B-spline of 6 × 3 × 2 controls with uniform knots.
+        let form = crate::lattice::LatticeForm {
+            kind: SplineKind::BSpline,
+            counts: [6, 3, 2],
+            order: 3,
+            knots: crate::spline::KnotStyle::Uniform,
+        };
+        station.panel_command(PanelCommand::LatticeForm(form));
+        assert_eq!(station.panel_view().lattice.form, form);
+        station.panel_command(PanelCommand::OpenLattice(true));
+        let held = station.doc.playback.held_lattice().expect("the panel opened one over the part");
+        let spec = *held.lattice().spec();
+        assert_eq!((spec.kind, spec.counts, spec.order, spec.knots), (form.kind, form.counts, 3, form.knots));
+        assert!(station
+            .messages
+            .last()
+            .unwrap()
+            .contains("quadratic B-spline, 6 × 3 × 2 controls, uniform knots"));
+        let row = station.panel_view().lattice;
+        assert!(
+            row.open.as_deref().is_some_and(|o| o.starts_with("open: quadratic B-spline")) && !row.weighted
+        );
+        // A B-spline has no weights: the weight key says so and changes nothing.
+        station.act(StationAction::HeavierWeight);
+        assert!(
+            station.messages.last().unwrap().starts_with("the control's weight stays"),
+            "{:?}",
+            station.messages
+        );
+        // The panel's buttons shape and apply it: one undo step.
+        station.panel_command(PanelCommand::ControlValue(true));
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert!(!station.doc.playback.field().same_samples(&ball));
+        station.panel_command(PanelCommand::ApplyLattice);
+        assert!(station.doc.playback.held_lattice().is_none());
+        station.act(StationAction::Undo);
+        assert!(station.doc.playback.field().same_samples(&ball), "one undo takes it back");
+        // Out of range counts and orders are brought within 2 to 16.
+        station.panel_command(PanelCommand::LatticeForm(crate::lattice::LatticeForm {
+            counts: [1, 40, 4],
+            order: 0,
+            ..form
+        }));
+        assert_eq!(station.doc.playback.lattice_form().counts, [2, 16, 4]);
+        assert_eq!(station.doc.playback.lattice_form().order, 2);
     }
 
     #[test]

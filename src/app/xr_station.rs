@@ -391,14 +391,16 @@ impl<'s> XrSculptor<'s> {
             return;
         }
         let region = clay.expanded(super::held_lattice::PART_MARGIN * clay.size().max_element());
-        self.messages.push(match self.doc.playback.open_lattice(&super::held_lattice::held_spec(region)) {
-            Ok(()) => {
-                "lattice open: the trigger drags the control nearest the tool, the thumbstick its value; \
+        self.messages.push(
+            match self.doc.playback.open_lattice(&self.doc.playback.lattice_form().over(region)) {
+                Ok(()) => {
+                    "lattice open: the trigger drags the control nearest the tool, the thumbstick its value; \
                        the lattice button applies it, undo puts the clay back"
-                    .into()
-            }
-            Err(e) => e,
-        });
+                        .into()
+                }
+                Err(e) => e,
+            },
+        );
     }
 
     /// With a lattice open, the tool hand at `pose` (the scene): the control nearest it is

@@ -133,6 +133,8 @@ pub enum StationAction {
     /// Show the open lattice's next slice (ESM §4.2): a patch of controls with stems for their
     /// values and the function's zero contour on it; after the last, none.
     NextLatticeSlice,
+    /// The lattices opened from now on are of the next kind: Bézier, B-spline, NURBS.
+    NextLatticeKind,
     /// Show or hide the desk panel (tool, history, view, file).
     TogglePanel,
 }
@@ -190,6 +192,7 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("heavier-weight", StationAction::HeavierWeight),
     ("lighter-weight", StationAction::LighterWeight),
     ("next-lattice-slice", StationAction::NextLatticeSlice),
+    ("next-lattice-kind", StationAction::NextLatticeKind),
     ("toggle-panel", StationAction::TogglePanel),
 ];
 

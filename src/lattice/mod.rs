@@ -104,6 +104,78 @@ pub const MAX_SHIFT_SPACINGS: f64 = 1.0;
 /// sees every surface rather than aliasing it.
 pub const FIT_SPACING_VOXELS: f32 = 2.0;
 
+/// A lattice without its box: its kind, its control points per axis, its order and its knots,
+/// as the desk and the headset open one over the clay.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LatticeForm {
+    /// Bézier, B-spline or NURBS.
+    pub kind: SplineKind,
+    /// Control points per axis, 2 to 16.
+    pub counts: [usize; 3],
+    /// The B-spline or NURBS order (degree + 1), 2 to 16; on an axis of fewer controls, their
+    /// count. A Bézier lattice's order is its counts.
+    pub order: usize,
+    /// The knots' spacing (B-spline and NURBS).
+    pub knots: KnotStyle,
+}
+
+impl Default for LatticeForm {
+    /// A cubic NURBS lattice of 4 × 4 × 4 controls with clamped knots: while its weights are
+    /// all 1 it is the cubic B-spline, and its weights can be changed too.
+    fn default() -> Self {
+        Self { kind: SplineKind::Nurbs, counts: [4; 3], order: 4, knots: KnotStyle::Clamped }
+    }
+}
+
+impl LatticeForm {
+    /// The kinds in the order the desk steps through them.
+    pub const KINDS: [SplineKind; 3] = [SplineKind::Bezier, SplineKind::BSpline, SplineKind::Nurbs];
+
+    /// The form with its counts and order brought within 2 to 16.
+    pub fn within_limits(self) -> Self {
+        Self { counts: self.counts.map(|n| n.clamp(2, 16)), order: self.order.clamp(2, 16), ..self }
+    }
+
+    /// The lattice of this form over `region` (the part's own frame).
+    pub fn over(&self, region: Aabb) -> LatticeSpec {
+        let f = self.within_limits();
+        LatticeSpec {
+            region,
+            counts: f.counts,
+            kind: f.kind,
+            order: f.order,
+            knots: f.knots,
+            samples_per_span: None,
+        }
+    }
+
+    /// The next kind: Bézier, B-spline, NURBS, Bézier, …
+    pub fn next_kind(self) -> Self {
+        let at = Self::KINDS.iter().position(|k| *k == self.kind).unwrap_or(0);
+        Self { kind: Self::KINDS[(at + 1) % Self::KINDS.len()], ..self }
+    }
+
+    /// In words: "cubic NURBS, 4 × 4 × 4 controls, clamped knots".
+    pub fn describe(&self) -> String {
+        let [l, m, n] = self.counts;
+        let degree = match self.order {
+            2 => "linear".to_owned(),
+            3 => "quadratic".to_owned(),
+            4 => "cubic".to_owned(),
+            k => format!("order-{k}"),
+        };
+        let knots = match self.knots {
+            KnotStyle::Clamped => "clamped",
+            KnotStyle::Uniform => "uniform",
+        };
+        match self.kind {
+            SplineKind::Bezier => format!("Bézier, {l} × {m} × {n} controls"),
+            SplineKind::BSpline => format!("{degree} B-spline, {l} × {m} × {n} controls, {knots} knots"),
+            SplineKind::Nurbs => format!("{degree} NURBS, {l} × {m} × {n} controls, {knots} knots"),
+        }
+    }
+}
+
 /// What a lattice is made of: where, how many control points, which kind of spline.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LatticeSpec {

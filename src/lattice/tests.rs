@@ -332,3 +332,30 @@ fn the_interpolated_mapping_matches_the_exact_one() {
     assert!(worst < 0.15 && mean < 1e-3, "worst {worst}, mean {mean}");
     assert!(fast.iter().all(|d| d.is_finite() && (0.0..=1.0).contains(d)));
 }
+
+#[test]
+fn a_lattice_form_steps_through_the_kinds_stays_within_its_limits_and_says_what_it_is() {
+    let form = LatticeForm::default();
+    assert_eq!(form.describe(), "cubic NURBS, 4 × 4 × 4 controls, clamped knots");
+    let kinds: Vec<SplineKind> =
+        std::iter::successors(Some(form), |f| Some(f.next_kind())).skip(1).take(3).map(|f| f.kind).collect();
+    assert_eq!(kinds, [SplineKind::Bezier, SplineKind::BSpline, SplineKind::Nurbs]);
+    let odd = LatticeForm { counts: [0, 3, 99], order: 1, ..form.next_kind() };
+    assert_eq!(odd.within_limits().counts, [2, 3, 16]);
+    let region = Aabb { min: Vec3::ZERO, max: Vec3::ONE };
+    let spec = odd.over(region);
+    assert_eq!(
+        (spec.counts, spec.order, spec.kind, spec.region),
+        ([2, 3, 16], 2, SplineKind::Bezier, region)
+    );
+    assert_eq!(odd.within_limits().describe(), "Bézier, 2 × 3 × 16 controls");
+    let quadratic = LatticeForm { kind: SplineKind::BSpline, order: 3, knots: KnotStyle::Uniform, ..form };
+    assert_eq!(quadratic.describe(), "quadratic B-spline, 4 × 4 × 4 controls, uniform knots");
+    // Every form within its limits makes a volume.
+    for kind in LatticeForm::KINDS {
+        for order in [2, 4, 16] {
+            let f = LatticeForm { kind, order, counts: [2, 5, 16], knots: KnotStyle::Clamped };
+            assert!(f.over(region).volume().is_ok(), "{f:?}");
+        }
+    }
+}

@@ -50,6 +50,8 @@ pub struct PanelView {
     pub active_part: usize,
     /// The symmetry the tools act through, as a phrase, and whether it is on.
     pub symmetry: (String, bool),
+    /// The lattices the tools open, and the one open.
+    pub lattice: LatticeRow,
     /// The stereo view.
     pub stereo: StereoRow,
     /// The undo history: the steps that can be undone, oldest first.
@@ -95,6 +97,17 @@ pub struct PartRow {
     pub visible: bool,
     /// Whether the tools leave it alone.
     pub locked: bool,
+}
+
+/// The lattice tool as the panel shows it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LatticeRow {
+    /// The form the next lattice opens with.
+    pub form: crate::lattice::LatticeForm,
+    /// The open lattice in words (its form, the picked control's value and weight), if one is.
+    pub open: Option<String>,
+    /// Whether the open lattice's controls carry weights (NURBS).
+    pub weighted: bool,
 }
 
 /// The stereo view as the panel shows it.
@@ -179,6 +192,20 @@ pub enum PanelCommand {
     Undo(usize),
     /// Redo this many steps.
     Redo(usize),
+    /// The lattices opened from now on have this form.
+    LatticeForm(crate::lattice::LatticeForm),
+    /// Open a lattice around the tool (`false`) or over the active part's clay (`true`).
+    OpenLattice(bool),
+    /// Apply the open lattice (one undo step).
+    ApplyLattice,
+    /// Close the open lattice, the clay as it was.
+    CancelLattice,
+    /// Show the open lattice's next slice.
+    NextLatticeSlice,
+    /// Raise (`true`) or lower the picked control's value.
+    ControlValue(bool),
+    /// Make the picked control's weight heavier (`true`) or lighter.
+    ControlWeight(bool),
     /// Show the display mode of this index of [`PanelView::display_modes`].
     DisplayMode(usize),
     /// Save the sculpt.
@@ -477,6 +504,7 @@ fn panel_ui(
             }
             section(ui, "Tool", |ui| tool_ui(ui, view, commands));
             section(ui, "Parts", |ui| parts_ui(ui, view, commands));
+            section(ui, "Lattice", |ui| lattice_ui(ui, &view.lattice, commands));
             section(ui, "History", |ui| history_ui(ui, view, commands));
             section(ui, "View", |ui| {
                 ui.horizontal_wrapped(|ui| {
@@ -538,6 +566,72 @@ fn recovered_ui(ui: &mut egui::Ui, view: &PanelView, commands: &mut Vec<PanelCom
         }
         if ui.button("dismiss").clicked() {
             commands.push(PanelCommand::DismissRecovered);
+        }
+    });
+}
+
+/// The lattice tool: the form the next one opens with, and the open one's keys as buttons.
+fn lattice_ui(ui: &mut egui::Ui, row: &LatticeRow, commands: &mut Vec<PanelCommand>) {
+    use crate::spline::{KnotStyle, SplineKind};
+    if let Some(open) = &row.open {
+        ui.label(egui::RichText::new(open).small());
+        ui.horizontal_wrapped(|ui| {
+            for (label, command) in [
+                ("value +", PanelCommand::ControlValue(true)),
+                ("value −", PanelCommand::ControlValue(false)),
+                ("next slice", PanelCommand::NextLatticeSlice),
+            ] {
+                if ui.button(label).clicked() {
+                    commands.push(command);
+                }
+            }
+            if row.weighted {
+                for (label, heavier) in [("weight +", true), ("weight −", false)] {
+                    if ui.button(label).clicked() {
+                        commands.push(PanelCommand::ControlWeight(heavier));
+                    }
+                }
+            }
+        });
+        ui.horizontal(|ui| {
+            if ui.button("apply").on_hover_text("one undo step").clicked() {
+                commands.push(PanelCommand::ApplyLattice);
+            }
+            if ui.button("put the clay back").clicked() {
+                commands.push(PanelCommand::CancelLattice);
+            }
+        });
+        return;
+    }
+    let mut form = row.form;
+    ui.horizontal(|ui| {
+        for (kind, name) in
+            [(SplineKind::Bezier, "Bézier"), (SplineKind::BSpline, "B-spline"), (SplineKind::Nurbs, "NURBS")]
+        {
+            ui.radio_value(&mut form.kind, kind, name);
+        }
+    });
+    for (axis, name) in ["X", "Y", "Z"].iter().enumerate() {
+        ui.add(egui::Slider::new(&mut form.counts[axis], 2..=16).text(format!("controls along {name}")));
+    }
+    ui.add_enabled_ui(form.kind != SplineKind::Bezier, |ui| {
+        ui.add(egui::Slider::new(&mut form.order, 2..=16).text("order (4: cubic)"))
+            .on_hover_text("degree + 1; on an axis of fewer controls, their count");
+        ui.horizontal(|ui| {
+            ui.radio_value(&mut form.knots, KnotStyle::Clamped, "clamped knots")
+                .on_hover_text("the box's faces stay where they are: no seam with the clay outside");
+            ui.radio_value(&mut form.knots, KnotStyle::Uniform, "uniform knots");
+        });
+    });
+    if form != row.form {
+        commands.push(PanelCommand::LatticeForm(form));
+    }
+    ui.horizontal(|ui| {
+        if ui.button("open around the tool").clicked() {
+            commands.push(PanelCommand::OpenLattice(false));
+        }
+        if ui.button("open over the part").clicked() {
+            commands.push(PanelCommand::OpenLattice(true));
         }
     });
 }
@@ -830,6 +924,7 @@ mod tests {
             ],
             active_part: 0,
             symmetry: ("off".into(), false),
+            lattice: LatticeRow::default(),
             stereo: StereoRow {
                 convergence_m: 0.6,
                 convergence_range_m: (0.1, 5.0),
@@ -870,50 +965,84 @@ mod tests {
         commands
     }
 
-    /// Where the widget showing `text` was laid out, found by clicking down the panel's band.
-    fn find(view: &PanelView, wanted: &PanelCommand) -> Option<[f32; 2]> {
+    /// Every command a click down the panel's band gives, once each, with where it was.
+    fn sweep(view: &PanelView) -> Vec<(PanelCommand, [f32; 2])> {
+        let mut found: Vec<(PanelCommand, [f32; 2])> = Vec::new();
         for y in (4..TALL).step_by(4) {
             for x in [20.0, 60.0, 100.0, 140.0, 180.0] {
-                let mut panel = Panel::new();
-                if click(&mut panel, view, [x, y as f32]).contains(wanted) {
-                    return Some([x, y as f32]);
+                for command in click(&mut Panel::new(), view, [x, y as f32]) {
+                    if !found.iter().any(|(c, _)| *c == command) {
+                        found.push((command, [x, y as f32]));
+                    }
                 }
             }
         }
-        None
+        found
+    }
+
+    /// Where a click gives `wanted`, in a sweep.
+    fn find(swept: &[(PanelCommand, [f32; 2])], wanted: &PanelCommand) -> Option<[f32; 2]> {
+        swept.iter().find(|(c, _)| c == wanted).map(|(_, at)| *at)
     }
 
     #[test]
     fn clicks_on_the_panel_give_its_commands_and_the_panel_holds_the_pointer() {
         let view = view();
+        let swept = sweep(&view);
         // The history: "the start" undoes both steps; the redo entry redoes one.
-        assert!(find(&view, &PanelCommand::Undo(2)).is_some(), "the start of the history");
-        assert!(find(&view, &PanelCommand::Redo(1)).is_some(), "a redo entry");
-        assert!(find(&view, &PanelCommand::Shape(1)).is_some(), "the box shape");
-        assert!(find(&view, &PanelCommand::Action(2)).is_some(), "the paint action");
-        assert!(find(&view, &PanelCommand::DisplayMode(0)).is_some(), "mono");
-        assert!(find(&view, &PanelCommand::ActivePart(1)).is_some(), "the second part");
-        assert!(find(&view, &PanelCommand::ToggleSymmetry).is_some(), "the symmetry box");
-        assert!(find(&view, &PanelCommand::LevelSamples(None)).is_some(), "the finest level box");
-        assert!(find(&view, &PanelCommand::SwapEyes(true)).is_some(), "the swap eyes box");
-        assert!(find(&view, &PanelCommand::FloatingWindow(true)).is_some(), "the floating window box");
-        assert!(find(&view, &PanelCommand::AutoConvergence(true)).is_some(), "auto-convergence");
-        assert!(find(&view, &PanelCommand::RecentreHead).is_some(), "recentre");
-        let sliders = |view: &PanelView| {
-            let mut found = (false, false);
-            for y in (4..TALL).step_by(4) {
-                let commands = click(&mut Panel::new(), view, [20.0, y as f32]);
-                found.0 |= commands.iter().any(|c| matches!(c, PanelCommand::ConvergenceM(_)));
-                found.1 |= commands.iter().any(|c| matches!(c, PanelCommand::InteraxialMm(_)));
-            }
-            found
+        assert!(find(&swept, &PanelCommand::Undo(2)).is_some(), "the start of the history");
+        assert!(find(&swept, &PanelCommand::Redo(1)).is_some(), "a redo entry");
+        assert!(find(&swept, &PanelCommand::Shape(1)).is_some(), "the box shape");
+        assert!(find(&swept, &PanelCommand::Action(2)).is_some(), "the paint action");
+        assert!(find(&swept, &PanelCommand::DisplayMode(0)).is_some(), "mono");
+        assert!(find(&swept, &PanelCommand::ActivePart(1)).is_some(), "the second part");
+        assert!(find(&swept, &PanelCommand::ToggleSymmetry).is_some(), "the symmetry box");
+        assert!(find(&swept, &PanelCommand::LevelSamples(None)).is_some(), "the finest level box");
+        assert!(find(&swept, &PanelCommand::SwapEyes(true)).is_some(), "the swap eyes box");
+        assert!(find(&swept, &PanelCommand::FloatingWindow(true)).is_some(), "the floating window box");
+        assert!(find(&swept, &PanelCommand::AutoConvergence(true)).is_some(), "auto-convergence");
+        assert!(find(&swept, &PanelCommand::RecentreHead).is_some(), "recentre");
+        // The lattice: its kind (NURBS at first) and its opening buttons; once open, its own.
+        let bezier =
+            crate::lattice::LatticeForm { kind: crate::spline::SplineKind::Bezier, ..Default::default() };
+        assert!(find(&swept, &PanelCommand::LatticeForm(bezier)).is_some(), "the Bézier kind");
+        assert!(find(&swept, &PanelCommand::OpenLattice(true)).is_some(), "open over the part");
+        let open = PanelView {
+            lattice: LatticeRow {
+                open: Some("open: cubic NURBS".into()),
+                weighted: true,
+                ..Default::default()
+            },
+            ..view.clone()
         };
-        assert_eq!(sliders(&view), (true, true), "the convergence and interaxial sliders");
-        let auto =
-            PanelView { stereo: StereoRow { auto_convergence: true, ..view.stereo.clone() }, ..view.clone() };
-        assert_eq!(sliders(&auto), (false, true), "the convergence slider is off while it follows the clay");
-        let untracked = PanelView { stereo: StereoRow { head: None, ..view.stereo.clone() }, ..view.clone() };
-        assert!(find(&untracked, &PanelCommand::RecentreHead).is_none(), "nothing to recentre");
+        let open_swept = sweep(&open);
+        for wanted in
+            [PanelCommand::ApplyLattice, PanelCommand::CancelLattice, PanelCommand::ControlWeight(true)]
+        {
+            assert!(find(&open_swept, &wanted).is_some(), "{wanted:?} with a lattice open");
+        }
+        assert!(find(&open_swept, &PanelCommand::OpenLattice(true)).is_none(), "one lattice at a time");
+        let sliders = |swept: &[(PanelCommand, [f32; 2])]| {
+            let any = |f: fn(&PanelCommand) -> bool| swept.iter().any(|(c, _)| f(c));
+            (
+                any(|c| matches!(c, PanelCommand::ConvergenceM(_))),
+                any(|c| matches!(c, PanelCommand::InteraxialMm(_))),
+            )
+        };
+        assert_eq!(sliders(&swept), (true, true), "the convergence and interaxial sliders");
+        // The convergence slider is off while it follows the clay, and with no head tracked
+        // there is nothing to recentre.
+        let other = PanelView {
+            stereo: StereoRow { auto_convergence: true, head: None, ..view.stereo.clone() },
+            ..view.clone()
+        };
+        let other_swept = sweep(&other);
+        assert_eq!(
+            sliders(&other_swept),
+            (false, true),
+            "the convergence slider is off while it follows the clay"
+        );
+        assert!(find(&other_swept, &PanelCommand::RecentreHead).is_none(), "nothing to recentre");
         let mut panel = Panel::new();
         panel.run(&view, (800, 600), 0.0);
         panel.pointer(PointerEvent::Moved([100.0, 100.0]));

@@ -1,7 +1,7 @@
 //! The lattice held open at the desk: its keys, and the picked control following the tool.
 
 use super::Station;
-use crate::app::held_lattice::{held_spec, PART_MARGIN, VALUE_STEP, WEIGHT_STEP};
+use crate::app::held_lattice::{PART_MARGIN, VALUE_STEP, WEIGHT_STEP};
 use crate::config::StationAction;
 use crate::input::motion::Target;
 use crate::math::{Aabb, Vec3};
@@ -61,11 +61,51 @@ impl Station<'_> {
                     None => "lattice slice hidden".to_owned(),
                 },
             },
+            StationAction::NextLatticeKind => {
+                let form = self.doc.playback.lattice_form().next_kind();
+                self.set_lattice_form(form)
+            }
             StationAction::DragControl => return true,
             _ => return false,
         };
         self.messages.push(said);
         true
+    }
+
+    /// The lattice tool as the panel shows it.
+    pub(super) fn lattice_row(&self) -> crate::ui::LatticeRow {
+        let held = self.doc.playback.held_lattice();
+        let open = held.map(|h| {
+            let spec = h.lattice().spec();
+            let form = crate::lattice::LatticeForm {
+                kind: spec.kind,
+                counts: spec.counts,
+                order: spec.order,
+                knots: spec.knots,
+            };
+            let [i, j, k] = h.picked();
+            let control = h.lattice().volume().control(i, j, k).ok();
+            format!(
+                "open: {}; control ({i}, {j}, {k}){}",
+                form.describe(),
+                control.map_or(String::new(), |c| format!(", value {:.2}, weight {:.2}", c.value, c.weight))
+            )
+        });
+        crate::ui::LatticeRow {
+            form: self.doc.playback.lattice_form(),
+            weighted: held.is_some_and(|h| h.lattice().spec().kind == crate::spline::SplineKind::Nurbs),
+            open,
+        }
+    }
+
+    /// The lattices opened from now on have `form`; says so.
+    pub(super) fn set_lattice_form(&mut self, form: crate::lattice::LatticeForm) -> String {
+        self.doc.playback.set_lattice_form(form);
+        let form = self.doc.playback.lattice_form().describe();
+        match self.doc.playback.held_lattice() {
+            Some(_) => format!("the open lattice stays as it is; the next opens as: {form}"),
+            None => format!("lattices open as: {form} (F, Shift+F)"),
+        }
     }
 
     /// Opens a lattice over the clay around the desk tool, or over the active part's whole
@@ -86,13 +126,21 @@ impl Station<'_> {
             let half = AROUND_TOOL * tool.half_extents_m().max_element();
             Aabb::from_centre_half(local.position_m, Vec3::splat(half))
         };
-        match self.doc.playback.open_lattice(&held_spec(region)) {
+        let form = self.doc.playback.lattice_form();
+        match self.doc.playback.open_lattice(&form.over(region)) {
             Ok(()) => {
                 let size = region.size() * 1000.0;
+                let weights = match form.kind {
+                    crate::spline::SplineKind::Nurbs => ", W/Shift+W its weight",
+                    _ => "",
+                };
                 format!(
-                    "lattice open over {:.0} × {:.0} × {:.0} mm: D drags the control nearest the tool, R/Shift+R \
-                     its value, W/Shift+W its weight; Enter applies, Backspace puts the clay back",
-                    size.x, size.y, size.z
+                    "lattice open ({}) over {:.0} × {:.0} × {:.0} mm: D drags the control nearest the tool, R/Shift+R \
+                     its value{weights}; Enter applies, Backspace puts the clay back",
+                    form.describe(),
+                    size.x,
+                    size.y,
+                    size.z
                 )
             }
             Err(e) => e,
