@@ -494,7 +494,7 @@ fn the_calibration_test_pattern_shows_zero_parallax_on_the_screen_and_the_predic
 
 /// A virtual-clay scene of `scenes/`, every capture of its timeline at 256² per eye: the goldens
 /// are named after the captures.
-fn golden_timeline_case(scene_path: &str) {
+fn golden_timeline_case(scene_path: &str) -> Vec<argile::app::WrittenCapture> {
     let case = Path::new(scene_path).file_stem().and_then(|s| s.to_str()).expect("scene file name");
     let scene = Scene::load(&root().join(scene_path)).expect("test scene loads");
     let options = RenderOptions {
@@ -516,6 +516,7 @@ fn golden_timeline_case(scene_path: &str) {
         check_against_golden(&capture.name, "left", &left);
         check_against_golden(&capture.name, "right", &right);
     }
+    written
 }
 
 #[test]
@@ -526,6 +527,37 @@ fn bend_bar_matches_golden_through_its_timeline() {
 #[test]
 fn lattice_bars_match_golden_through_their_timeline() {
     golden_timeline_case("scenes/lattice-bars.toml");
+}
+
+/// A bar standing along Z under a lattice, seen from the side, with the slice through the
+/// lattice's middle layer drawn: its zero contour, a red ring around the bar, shows as a red
+/// line across the bar's middle in both eyes, at rest and swelled (a run of rows with red in the
+/// middle third of the width, longer than any control's sphere).
+#[test]
+fn a_lattice_slice_shows_its_zero_contour_across_the_bar_and_matches_golden() {
+    let written = golden_timeline_case("scenes/lattice-slice.toml");
+    assert_eq!(written.len(), 2);
+    for capture in &written {
+        for path in [&capture.left, &capture.right] {
+            let image = image::open(path).expect("rendered image reads back").to_rgba8();
+            let (w, h) = image.dimensions();
+            // The contour's red, lit: red well above green and blue.
+            let red = |x: u32, y: u32| {
+                let [r, g, b, _] = image.get_pixel(x, y).0.map(i32::from);
+                r > 170 && r - g > 70 && r - b > 80
+            };
+            let (mut run, mut longest) = (0, 0);
+            for y in 0..h {
+                run = if (w / 3..2 * w / 3).any(|x| red(x, y)) { run + 1 } else { 0 };
+                longest = longest.max(run);
+            }
+            assert!(
+                longest >= 16,
+                "{}: the contour across the bar: {longest} rows of red in a run",
+                path.display()
+            );
+        }
+    }
 }
 
 /// A figure's arm bent up (half way, its grab ball drawn), a block carried onto its head (half

@@ -285,7 +285,7 @@ pub fn lattice_slice_glyphs(volume: &crate::spline::SplineVolume, k: usize, iso:
         volume
             .slice_contour(w, iso, crate::spline::SLICE_SAMPLES)
             .into_iter()
-            .map(|[a, b]| segment(a, b, 0.2 * radius, CONTOUR_COLOUR)),
+            .map(|[a, b]| segment(a, b, 0.4 * radius, CONTOUR_COLOUR)),
     );
     glyphs
 }

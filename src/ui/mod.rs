@@ -277,6 +277,8 @@ pub struct Panel {
     using_pointer: bool,
     /// The right edge of the panel as last laid out, points.
     right_pt: f32,
+    /// The primary button is down (as the pointer events given so far say).
+    primary_down: bool,
     wants_keyboard: bool,
     /// The file browser's folder, listing and name field.
     browser: files::Browser,
@@ -320,6 +322,7 @@ impl Panel {
             wants_pointer: false,
             using_pointer: false,
             right_pt: PANEL_WIDTH_PT,
+            primary_down: false,
             wants_keyboard: false,
             browser: files::Browser::default(),
             pixels_per_point: 1.0,
@@ -403,11 +406,14 @@ impl Panel {
                 self.pointer = Some(at);
                 self.push(egui::Event::PointerMoved(at));
                 // Over the panel (as it was last laid out) or one of its popups, or dragging
-                // one of its controls.
+                // one of its controls (egui still calls a drag released since the last frame
+                // in use: it is not).
                 let popup = self.ctx.layer_id_at(at).is_some_and(|l| l.order != egui::Order::Background);
-                self.wants_pointer = self.shown && (self.using_pointer || at.x <= self.right_pt || popup);
+                let dragging = self.using_pointer && self.primary_down;
+                self.wants_pointer = self.shown && (dragging || at.x <= self.right_pt || popup);
             }
             PointerEvent::Primary(pressed) => {
+                self.primary_down = pressed;
                 if let Some(pos) = self.pointer {
                     let event = egui::Event::PointerButton {
                         pos,
