@@ -66,7 +66,9 @@ use crate::stereo::{HeadTrackedRig, Placement, StereoRig};
 use crate::tool::{
     edit_level_for, Action, Ellipsoid, Falloff, Solid, Stroke, Tool, ToolShape, HAND_SIZE_SAMPLES,
 };
-use crate::ui::{Disparity, Panel, PanelCommand, PanelKey, PanelView, PartRow, PointerEvent, StereoRow};
+use crate::ui::{
+    DeviceRow, Disparity, Panel, PanelCommand, PanelKey, PanelView, PartRow, PointerEvent, StereoRow,
+};
 
 /// The time step of a scripted run, seconds.
 pub const SCRIPTED_STEP_S: f32 = 1.0 / 60.0;
@@ -650,6 +652,8 @@ pub struct Station<'s> {
     redo_names: Vec<String>,
     /// The screen calibration being adjusted on its test pattern (`argile calibrate --adjust`).
     adjusting: Option<calibrating::Adjusting>,
+    /// The gamepads connected, by name (the panel lists them).
+    gamepad_names: Vec<String>,
 }
 
 impl<'s> Station<'s> {
@@ -770,6 +774,7 @@ impl<'s> Station<'s> {
             step_names: Vec::new(),
             redo_names: Vec::new(),
             adjusting: None,
+            gamepad_names: Vec::new(),
         };
         station.set_calibration(station.calibration);
         station.resize(window_px);
@@ -810,6 +815,26 @@ impl<'s> Station<'s> {
         if settings.mapping.target(DeviceClass::Mouse) == Target::Tool {
             self.mouse.mode = MouseMode::Cursor;
         }
+    }
+
+    /// Device family `class` drives `target` from now on; a mouse set to the tool becomes its
+    /// 3D cursor, one set to the scene turns it again.
+    fn set_device_target(&mut self, class: DeviceClass, target: Target) {
+        self.desk.mapping.set(class, target);
+        if class == DeviceClass::Mouse {
+            self.mouse.mode = if target == Target::Tool { MouseMode::Cursor } else { MouseMode::Scene };
+            self.cursor_clutch = None;
+        }
+        self.messages.push(format!(
+            "the {} drives the {} now",
+            class.name(),
+            target.name().replace('_', " ")
+        ));
+    }
+
+    /// The names of the gamepads connected now (the window's gamepad library lists them).
+    pub fn set_gamepad_names(&mut self, names: Vec<String>) {
+        self.gamepad_names = names;
     }
 
     /// The 3D cursor's clutch (Galyean–Hughes §2.2.2) after a mouse event that moved the tool
@@ -1384,6 +1409,26 @@ impl<'s> Station<'s> {
             active_part: assembly.active(),
             symmetry: (symmetry.describe(), !symmetry.is_none()),
             lattice: self.lattice_row(),
+            devices: DeviceClass::ALL
+                .iter()
+                .map(|&class| DeviceRow {
+                    family: class.name(),
+                    target: self.desk.mapping.target(class).index(),
+                    connected: match class {
+                        DeviceClass::SpaceMouse => self.desk.spacemouse_names(),
+                        DeviceClass::Gamepad => self.gamepad_names.clone(),
+                        DeviceClass::Mouse => vec!["the system pointer".to_owned()],
+                    },
+                })
+                .collect(),
+            targets: Target::ALL.iter().map(|t| t.name()).collect(),
+            head_tracker: self.head.as_ref().map(|h| {
+                format!(
+                    "head tracker: opentrack on UDP {}, {}",
+                    h.receiver().local_addr(),
+                    if h.lost() { "no head seen (lost)" } else { "tracking" }
+                )
+            }),
             stereo,
             shapes: cycle.iter().map(|(_, n)| *n).collect(),
             shape,
@@ -1508,6 +1553,12 @@ impl<'s> Station<'s> {
                 }
             }
             PanelCommand::Save => self.act(StationAction::Save),
+            PanelCommand::DeviceTarget(device, target) => {
+                if let (Some(&class), Some(&target)) = (DeviceClass::ALL.get(device), Target::ALL.get(target))
+                {
+                    self.set_device_target(class, target);
+                }
+            }
             PanelCommand::LatticeForm(form) => {
                 let said = self.set_lattice_form(form);
                 self.messages.push(said);
@@ -2771,6 +2822,7 @@ impl WindowApp<'_, '_> {
         if let Some(g) = &mut self.gamepads {
             g.poll(&mut device_actions);
             motions.extend(g.motions().map(|(_, m)| m));
+            self.station.set_gamepad_names(g.names());
         }
         self.station.devices(dt, &motions, device_actions);
         self.follow_fullscreen();
@@ -4345,6 +4397,46 @@ mod tests {
         }
         assert!((station.desk.poses.get(Target::Tool).position_m - at).length() > 0.005);
         assert!(station.stroke.is_none());
+    }
+
+    #[test]
+    fn the_panel_lists_the_devices_by_name_and_changes_what_each_family_drives() {
+        use crate::input::reader::{DeviceId, DeviceInfo, ReaderEvent};
+        let scene = ball_scene();
+        let mut station = small_station(&scene);
+        let mailbox = Arc::new(Mailbox::new(16));
+        station.attach_spacemice(mailbox.clone());
+        let info = DeviceInfo { path: "hid-a".into(), name: "SpaceMouse Compact".into() };
+        mailbox.push_event(ReaderEvent::Connected { id: DeviceId(1), info });
+        station.set_gamepad_names(vec!["Xbox Wireless Controller".into()]);
+        station.devices(SCRIPTED_STEP_S, &[], Vec::new());
+        let view = station.panel_view();
+        let rows: Vec<(&str, &str, Vec<String>)> =
+            view.devices.iter().map(|d| (d.family, view.targets[d.target], d.connected.clone())).collect();
+        assert_eq!(rows[0], ("spacemouse", "tool", vec!["SpaceMouse Compact".to_owned()]));
+        assert_eq!(rows[1], ("gamepad", "second_tool", vec!["Xbox Wireless Controller".to_owned()]));
+        assert_eq!((rows[2].0, rows[2].1), ("mouse", "scene"));
+        assert!(view.head_tracker.is_none());
+        // The mouse set to the tool becomes its 3D cursor, and back to the scene turns it.
+        let (mouse, tool, scene_target) = (2, Target::Tool.index(), Target::Scene.index());
+        station.panel_command(PanelCommand::DeviceTarget(mouse, tool));
+        assert_eq!(station.desk.mapping.target(DeviceClass::Mouse), Target::Tool);
+        assert_eq!(station.mouse.mode, MouseMode::Cursor);
+        assert_eq!(station.messages.last().unwrap(), "the mouse drives the tool now");
+        station.panel_command(PanelCommand::DeviceTarget(mouse, scene_target));
+        assert_eq!(station.mouse.mode, MouseMode::Scene);
+        // The SpaceMouse set to the light moves the light, not the tool.
+        station.panel_command(PanelCommand::DeviceTarget(0, Target::Light.index()));
+        assert_eq!(station.desk.mapping.target(DeviceClass::SpaceMouse), Target::Light);
+        assert_eq!(station.panel_view().devices[0].target, Target::Light.index());
+        // Unplugged, it is listed no more.
+        mailbox.push_event(ReaderEvent::Lost { id: DeviceId(1), released: 0, reason: "unplugged".into() });
+        station.devices(SCRIPTED_STEP_S, &[], Vec::new());
+        assert!(station.panel_view().devices[0].connected.is_empty());
+        // Out of range indices change nothing.
+        station.panel_command(PanelCommand::DeviceTarget(7, 0));
+        station.panel_command(PanelCommand::DeviceTarget(0, 99));
+        assert_eq!(station.desk.mapping.target(DeviceClass::SpaceMouse), Target::Light);
     }
 
     #[test]

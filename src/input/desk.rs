@@ -42,9 +42,11 @@ pub struct FrameInput<'a> {
     pub mouse_turn: Quat,
 }
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct SpaceMouseSlot {
     id: DeviceId,
+    /// Its name, for the user.
+    name: String,
     translation: OneEuroFilter,
     rotation: OneEuroFilter,
     buttons: u64,
@@ -162,10 +164,11 @@ impl DeskInput {
             }
         };
         match &self.drained.events[index] {
-            ReaderEvent::Connected { id, .. } => {
+            ReaderEvent::Connected { id, info } => {
                 if self.spacemice.iter().all(|s| s.id != *id) {
                     self.spacemice.push(SpaceMouseSlot {
                         id: *id,
+                        name: info.name.clone(),
                         translation: deflection_filter(),
                         rotation: deflection_filter(),
                         buttons: 0,
@@ -191,6 +194,11 @@ impl DeskInput {
         if action.action == InputAction::CycleTarget && action.pressed {
             self.mapping.cycle(action.device);
         }
+    }
+
+    /// The names of the SpaceMice connected now, in the order they came.
+    pub fn spacemouse_names(&self) -> Vec<String> {
+        self.spacemice.iter().map(|s| s.name.clone()).collect()
     }
 
     /// Applies an action that came from elsewhere (a gamepad, keys) to the desk's own state:

@@ -598,6 +598,11 @@ impl Gamepads {
         self.pads.iter().find(|(p, _)| *p == id).map(|(_, m)| m)
     }
 
+    /// The names of the pads that have sent events, as their drivers give them.
+    pub fn names(&self) -> Vec<String> {
+        self.pads.iter().map(|(id, _)| self.gilrs.gamepad(*id).name().to_owned()).collect()
+    }
+
     /// The pads that have sent events (connected ones).
     pub fn pad_ids(&self) -> impl Iterator<Item = GamepadId> + '_ {
         self.pads.iter().map(|(id, _)| *id)

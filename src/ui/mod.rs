@@ -52,6 +52,12 @@ pub struct PanelView {
     pub symmetry: (String, bool),
     /// The lattices the tools open, and the one open.
     pub lattice: LatticeRow,
+    /// The desk's device families, each with the target it drives and what is connected.
+    pub devices: Vec<DeviceRow>,
+    /// The targets a device family can drive, by name.
+    pub targets: Vec<&'static str>,
+    /// The head tracker in words (where it listens and whether a head is seen), if one runs.
+    pub head_tracker: Option<String>,
     /// The stereo view.
     pub stereo: StereoRow,
     /// The undo history: the steps that can be undone, oldest first.
@@ -97,6 +103,17 @@ pub struct PartRow {
     pub visible: bool,
     /// Whether the tools leave it alone.
     pub locked: bool,
+}
+
+/// A device family as the panel lists it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DeviceRow {
+    /// The family: "spacemouse", "gamepad", "mouse".
+    pub family: &'static str,
+    /// The index in [`PanelView::targets`] of the target it drives.
+    pub target: usize,
+    /// The devices of the family connected now, by name.
+    pub connected: Vec<String>,
 }
 
 /// The lattice tool as the panel shows it.
@@ -192,6 +209,9 @@ pub enum PanelCommand {
     Undo(usize),
     /// Redo this many steps.
     Redo(usize),
+    /// The device family of this index of [`PanelView::devices`] drives the target of this
+    /// index of [`PanelView::targets`].
+    DeviceTarget(usize, usize),
     /// The lattices opened from now on have this form.
     LatticeForm(crate::lattice::LatticeForm),
     /// Open a lattice around the tool (`false`) or over the active part's clay (`true`).
@@ -512,6 +532,7 @@ fn panel_ui(
             section(ui, "Parts", |ui| parts_ui(ui, view, commands));
             section(ui, "Lattice", |ui| lattice_ui(ui, &view.lattice, commands));
             section(ui, "History", |ui| history_ui(ui, view, commands));
+            section(ui, "Devices", |ui| devices_ui(ui, view, commands));
             section(ui, "View", |ui| {
                 ui.horizontal_wrapped(|ui| {
                     for (i, name) in view.display_modes.iter().enumerate() {
@@ -574,6 +595,29 @@ fn recovered_ui(ui: &mut egui::Ui, view: &PanelView, commands: &mut Vec<PanelCom
             commands.push(PanelCommand::DismissRecovered);
         }
     });
+}
+
+/// The desk's devices: each family's target, changeable, and what of it is connected; the head
+/// tracker.
+fn devices_ui(ui: &mut egui::Ui, view: &PanelView, commands: &mut Vec<PanelCommand>) {
+    for (i, row) in view.devices.iter().enumerate() {
+        ui.horizontal_wrapped(|ui| {
+            ui.label(egui::RichText::new(row.family).strong());
+            for (t, name) in view.targets.iter().enumerate() {
+                let shown = name.replace('_', " ");
+                if ui.selectable_label(t == row.target, shown).clicked() && t != row.target {
+                    commands.push(PanelCommand::DeviceTarget(i, t));
+                }
+            }
+        });
+        let connected = match row.connected.is_empty() {
+            true => "none connected".to_owned(),
+            false => row.connected.join(", "),
+        };
+        ui.label(egui::RichText::new(connected).small());
+    }
+    let head = view.head_tracker.as_deref().unwrap_or("head tracker: none (--opentrack ADDRESS starts one)");
+    ui.label(egui::RichText::new(head).small());
 }
 
 /// The lattice tool: the form the next one opens with, and the open one's keys as buttons.
@@ -931,6 +975,12 @@ mod tests {
             active_part: 0,
             symmetry: ("off".into(), false),
             lattice: LatticeRow::default(),
+            devices: vec![
+                DeviceRow { family: "spacemouse", target: 0, connected: vec!["SpaceMouse Compact".into()] },
+                DeviceRow { family: "mouse", target: 1, connected: Vec::new() },
+            ],
+            targets: vec!["tool", "scene", "light"],
+            head_tracker: None,
             stereo: StereoRow {
                 convergence_m: 0.6,
                 convergence_range_m: (0.1, 5.0),
@@ -1008,6 +1058,10 @@ mod tests {
         assert!(find(&swept, &PanelCommand::FloatingWindow(true)).is_some(), "the floating window box");
         assert!(find(&swept, &PanelCommand::AutoConvergence(true)).is_some(), "auto-convergence");
         assert!(find(&swept, &PanelCommand::RecentreHead).is_some(), "recentre");
+        // The devices: the mouse set to drive the light; the one driving the tool already
+        // offers no click on the tool.
+        assert!(find(&swept, &PanelCommand::DeviceTarget(1, 2)).is_some(), "the mouse to the light");
+        assert!(find(&swept, &PanelCommand::DeviceTarget(0, 0)).is_none(), "the SpaceMouse drives the tool");
         // The lattice: its kind (NURBS at first) and its opening buttons; once open, its own.
         let bezier =
             crate::lattice::LatticeForm { kind: crate::spline::SplineKind::Bezier, ..Default::default() };
