@@ -530,9 +530,7 @@ fn panel_ui(
             }
             section(ui, "Tool", |ui| tool_ui(ui, view, commands));
             section(ui, "Parts", |ui| parts_ui(ui, view, commands));
-            section(ui, "Lattice", |ui| lattice_ui(ui, &view.lattice, commands));
             section(ui, "History", |ui| history_ui(ui, view, commands));
-            section(ui, "Devices", |ui| devices_ui(ui, view, commands));
             section(ui, "View", |ui| {
                 ui.horizontal_wrapped(|ui| {
                     for (i, name) in view.display_modes.iter().enumerate() {
@@ -544,6 +542,8 @@ fn panel_ui(
                 stereo_ui(ui, &view.stereo, commands);
             });
             section(ui, "File", |ui| browser.ui(ui, view, commands));
+            section(ui, "Lattice", |ui| lattice_ui(ui, &view.lattice, commands));
+            section(ui, "Devices", |ui| devices_ui(ui, view, commands));
             if !view.status.is_empty() {
                 ui.separator();
                 for line in &view.status {
@@ -635,14 +635,16 @@ fn lattice_ui(ui: &mut egui::Ui, row: &LatticeRow, commands: &mut Vec<PanelComma
                     commands.push(command);
                 }
             }
-            if row.weighted {
+        });
+        if row.weighted {
+            ui.horizontal(|ui| {
                 for (label, heavier) in [("weight +", true), ("weight −", false)] {
                     if ui.button(label).clicked() {
                         commands.push(PanelCommand::ControlWeight(heavier));
                     }
                 }
-            }
-        });
+            });
+        }
         ui.horizontal(|ui| {
             if ui.button("apply").on_hover_text("one undo step").clicked() {
                 commands.push(PanelCommand::ApplyLattice);
@@ -662,11 +664,11 @@ fn lattice_ui(ui: &mut egui::Ui, row: &LatticeRow, commands: &mut Vec<PanelComma
         }
     });
     for (axis, name) in ["X", "Y", "Z"].iter().enumerate() {
-        ui.add(egui::Slider::new(&mut form.counts[axis], 2..=16).text(format!("controls along {name}")));
+        ui.add(egui::Slider::new(&mut form.counts[axis], 2..=16).text(format!("controls, {name}")));
     }
     ui.add_enabled_ui(form.kind != SplineKind::Bezier, |ui| {
-        ui.add(egui::Slider::new(&mut form.order, 2..=16).text("order (4: cubic)"))
-            .on_hover_text("degree + 1; on an axis of fewer controls, their count");
+        ui.add(egui::Slider::new(&mut form.order, 2..=16).text("order"))
+            .on_hover_text("degree + 1 (4: cubic); on an axis of fewer controls, their count");
         ui.horizontal(|ui| {
             ui.radio_value(&mut form.knots, KnotStyle::Clamped, "clamped knots")
                 .on_hover_text("the box's faces stay where they are: no seam with the clay outside");
@@ -677,10 +679,11 @@ fn lattice_ui(ui: &mut egui::Ui, row: &LatticeRow, commands: &mut Vec<PanelComma
         commands.push(PanelCommand::LatticeForm(form));
     }
     ui.horizontal(|ui| {
-        if ui.button("open around the tool").clicked() {
+        ui.label("open");
+        if ui.button("around the tool").on_hover_text("F: a box twice the tool's size").clicked() {
             commands.push(PanelCommand::OpenLattice(false));
         }
-        if ui.button("open over the part").clicked() {
+        if ui.button("over the part").on_hover_text("Shift+F: the active part's clay").clicked() {
             commands.push(PanelCommand::OpenLattice(true));
         }
     });
@@ -1002,7 +1005,7 @@ mod tests {
     }
 
     /// The height of the test's eye image, pixels: the whole panel fits.
-    const TALL: u32 = 1000;
+    const TALL: u32 = 1500;
 
     /// Runs frames until the panel has laid out, then clicks at `at` (points = pixels here).
     fn click(panel: &mut Panel, view: &PanelView, at: [f32; 2]) -> Vec<PanelCommand> {
