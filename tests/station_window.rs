@@ -571,3 +571,51 @@ fn calibrate_adjust_writes_the_keys_changes_into_the_calibration_file() {
     );
     assert_eq!(std::fs::read_to_string(&file).unwrap(), written);
 }
+
+/// The recovered-sessions prompt, end to end: a run that could save nowhere leaves its stroke
+/// in an unclosed session; the next start recovers it and its panel offers the sculpt; a click
+/// on "open" opens it, and a save writes the groove back to that sculpt.
+#[test]
+fn the_next_start_offers_the_recovered_sculpt_and_a_click_opens_it() {
+    let x = Xvfb::start();
+    let (dir, scene, script, state) = carving_case("station-recovered-prompt");
+    let run = |args: &[&str]| run_station_ok(&x, &state, &[&[scene.to_str().unwrap()], args].concat());
+    let said = run(&["--frames", "8", "--size", "320x240", "--input-script", script.to_str().unwrap()]);
+    assert!(said.contains("stroke(s) of this run are not saved"), "{said}");
+    // The next start: the prompt heads the panel; its "open" button, then Ctrl+S.
+    let clicks = dir.join("open-recovered.toml");
+    std::fs::write(
+        &clicks,
+        "[[event]]\nframe = 2\nclick = [32, 48]\n[[event]]\nframe = 5\npress = \"Ctrl+KeyS\"\n",
+    )
+    .unwrap();
+    let elsewhere = dir.join("elsewhere.argile");
+    let said = run(&[
+        "--frames",
+        "8",
+        "--size",
+        "960x540",
+        "--display-mode",
+        "mono",
+        "--validation",
+        "--input-script",
+        clicks.to_str().unwrap(),
+        "--save-to",
+        elsewhere.to_str().unwrap(),
+    ]);
+    assert!(said.contains("its sculpt is recovered"), "recovered at start: {said}");
+    let opened =
+        said.lines().find(|l| l.starts_with("opened ")).unwrap_or_else(|| panic!("nothing opened: {said}"));
+    assert!(opened.contains("sculpt-"), "the recovered sculpt is what opened: {opened}");
+    let saved = said
+        .lines()
+        .find_map(|l| l.strip_prefix("saved the sculpt to "))
+        .unwrap_or_else(|| panic!("no save: {said}"));
+    assert!(
+        !elsewhere.exists() && saved.contains("sculpt-"),
+        "saving writes back to the opened sculpt: {saved}"
+    );
+    let sculpt = argile::app::load_sculpt(Path::new(saved.trim())).expect("the saved sculpt loads");
+    let slab = argile::app::final_field(&argile::scene::Scene::load(&scene).unwrap());
+    assert!(sculpt.field.mass() < 0.95 * slab.mass(), "the station held the recovered groove");
+}
