@@ -658,13 +658,80 @@ fn sigterm_in_the_headset_saves_closes_the_session_and_exits_143() {
     nothing_to_recover(&dir);
 }
 
+/// The panel in the headset: the left hand holds its palette up in front of the head, the
+/// right hand presses the palette's panel button (the eighth, 12.25 cm to the right of the
+/// left grip, 12.5 cm ahead of it, 3 cm above it), then points its aim at the panel's middle
+/// from below and to the right. Captured at frame 10 at 512 × 512 per eye over 50°, about the
+/// panel's share of a headset's view at its recommended resolution.
+fn panel_script() -> String {
+    let grip = Vec3::new(-0.03, 1.153, -0.214);
+    let button = grip + Vec3::new(0.1225, 0.03, -0.125);
+    // The panel's pixel (256, 300): its lower edge 6 cm above and 11 cm ahead of the grip,
+    // then 0.187 m up the board, which leans back by 0.35 rad.
+    let lean = 0.35_f32;
+    let target = grip + Vec3::new(0.0, 0.06, -0.11) + 0.187 * Vec3::new(0.0, lean.cos(), -lean.sin());
+    let from = Vec3::new(0.12, 1.25, -0.12);
+    let turn = Quat::from_rotation_arc(Vec3::NEG_Z, (target - from).normalize());
+    let pose = |p: Vec3, q: Quat| {
+        format!(
+            "{{ position = [{}, {}, {}], orientation = [{}, {}, {}, {}] }}",
+            p.x, p.y, p.z, q.x, q.y, q.z, q.w
+        )
+    };
+    let still = pose(Vec3::new(0.25, 1.2, -0.2), Quat::IDENTITY);
+    let on_button = pose(button, Quat::IDENTITY);
+    let aiming = pose(from, turn);
+    let left = pose(grip, Quat::IDENTITY);
+    format!(
+        r#"
+display_hz = 90.0
+interaction_profile = "/interaction_profiles/oculus/touch_controller"
+recommended_size = [512, 512]
+fov_deg = [-25.0, 25.0, 25.0, -25.0]
+ipd_m = 0.064
+capture = [10]
+[[key]]
+frame = 0
+{HEAD}
+left = {{ grip = {left}, aim = {left} }}
+right = {{ grip = {still}, aim = {still}, trigger = 0.0 }}
+[[key]]
+frame = 2
+right = {{ grip = {on_button}, aim = {on_button}, trigger = 0.0 }}
+[[key]]
+frame = 3
+right = {{ trigger = 1.0 }}
+[[key]]
+frame = 4
+right = {{ trigger = 0.0 }}
+[[key]]
+frame = 6
+right = {{ grip = {aiming}, aim = {aiming}, trigger = 0.0 }}
+"#
+    )
+}
+
+#[test]
+fn the_headset_panel_shows_on_the_palette_with_the_hands_ray_on_it() {
+    let dir = case_dir("xr-panel");
+    let manifest = common::xr::test_runtime_manifest(&dir);
+    let out = run_xr(&dir, &manifest, &panel_script(), &["--frames", "12"], &[]);
+    succeeded(&dir, &out);
+    no_violations(&log(&dir));
+    for eye in ["left", "right"] {
+        let path = dir.join(format!("runtime/frame-0010-{eye}.png"));
+        let captured = image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgba8();
+        check_against_golden("xr-panel", eye, &captured);
+    }
+}
+
 #[test]
 fn the_palettes_quit_button_saves_and_ends_the_session() {
     let dir = case_dir("xr-quit-button");
     let manifest = common::xr::test_runtime_manifest(&dir);
     // The left hand holds its palette still, facing forward; the right hand's grip goes onto
-    // the quit button (the fifth, 7 cm to the right of the palette, 12.5 cm ahead of the left
-    // grip, 3 cm above it) and pulls the trigger.
+    // the quit button (the sixth of eight, 5.25 cm to the right of the palette, 12.5 cm ahead
+    // of the left grip, 3 cm above it) and pulls the trigger.
     let script = format!(
         r#"
 recommended_size = [64, 64]
@@ -675,7 +742,7 @@ left = {{ grip = {{ position = [-0.1, 1.2, -0.1], orientation = [0, 0, 0, 1] }} 
 right = {{ grip = {{ position = [0.2, 1.2, -0.1], orientation = [0, 0, 0, 1] }} }}
 [[key]]
 frame = 3
-right = {{ grip = {{ position = [-0.03, 1.23, -0.225] }}, trigger = 0.0 }}
+right = {{ grip = {{ position = [-0.0475, 1.23, -0.225] }}, trigger = 0.0 }}
 [[key]]
 frame = 5
 right = {{ trigger = 1.0 }}

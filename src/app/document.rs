@@ -97,7 +97,16 @@ impl<'s> Document<'s> {
         self.unsaved_strokes + u64::from(lattice.is_some() && lattice != self.saved_lattice)
     }
 
-    /// Where a save writes.
+    /// What becomes of the unsaved work if another sculpt is opened, as a clause.
+    pub fn unsaved_fate(&self) -> &'static str {
+        if self.playback.autosave().is_some() {
+            "they are kept for recovery at the next start"
+        } else {
+            "they will be lost"
+        }
+    }
+
+    /// Where saving writes.
     pub fn save_to(&self) -> &Path {
         &self.save_to
     }

@@ -19,9 +19,9 @@
 //! ```text
 //!   palette, seen from above the hand that holds no tool (grip frame: −Z forward, +X right)
 //!
-//!   symmetry undo redo recentre save quit lattice   buttons: BUTTON_AHEAD_M in front of the
-//!     (▮)    (●)  (●)    (◎)    [■]  [■]    (○)      grip, the tool hand pokes one and pulls
-//!                                                     its trigger
+//!   symmetry undo redo recentre save quit lattice panel   buttons: BUTTON_AHEAD_M in front
+//!     (▮)    (●)  (●)    (◎)    [■]  [■]    (○)   [▭]     of the grip, the tool hand pokes
+//!                                                          one and pulls its trigger
 //!
 //!        shape   action   size bar (its length: the tool's largest extent)
 //!        ( ◇ )    (●)     ══════════►  +X
@@ -39,6 +39,12 @@
 //! | save | green cube | saves the sculpt |
 //! | quit | red cube | saves the sculpt and ends the headset session |
 //! | lattice | violet ring | opens a lattice over the active part's clay; pressed again, applies it |
+//! | panel | pale slab | shows the panel above the palette, or hides it |
+//!
+//! The panel ([`panel_placement`]) stands on the palette like a board held in the hand: its
+//! lower edge [`PANEL_ABOVE_M`] above the grip and [`PANEL_AHEAD_M`] in front of it, leaning
+//! back by [`PANEL_LEAN_RAD`] so that it faces a head above and behind the hand. The tool hand
+//! points at it with a ray ([`ray_glyphs`]).
 //!
 //! [`XrSculptor`]: super::XrSculptor
 
@@ -80,6 +86,77 @@ pub const BUTTON_RADIUS_M: f32 = 0.01;
 /// How near a button the tool hand's grip must be to point at it, room metres.
 pub const BUTTON_REACH_M: f32 = 0.02;
 
+/// The headset panel's width in the hand, room metres (its height follows its image's
+/// aspect).
+pub const PANEL_WIDTH_M: f32 = 0.18;
+/// How far above the grip (its +Y) the panel's lower edge is, room metres.
+pub const PANEL_ABOVE_M: f32 = 0.06;
+/// How far in front of the grip (its −Z) the panel's lower edge is, room metres.
+pub const PANEL_AHEAD_M: f32 = 0.11;
+/// How far the panel leans back from upright, radians.
+pub const PANEL_LEAN_RAD: f32 = 0.35;
+/// The ray's radius and colour, and the radius of the dot where it meets the panel.
+pub const RAY_RADIUS_M: f32 = 0.0012;
+/// The ray's colour and opacity.
+pub const RAY_COLOUR: Vec4 = Vec4::new(0.9, 0.95, 1.0, 0.7);
+/// The dot where the ray meets the panel, radius, room metres.
+pub const RAY_DOT_M: f32 = 0.003;
+
+/// Where the panel of `size_px` pixels lies for the hand at `grip` (room): the matrix taking
+/// its pixels (x right, y down, z 0) into the room. Its lower edge's middle is the point
+/// [`PANEL_ABOVE_M`] above and [`PANEL_AHEAD_M`] in front of the grip; it spans
+/// [`PANEL_WIDTH_M`] along the grip's X, and rises from there leaning back.
+pub fn panel_placement(grip: Pose, size_px: (u32, u32)) -> Mat4 {
+    let (w, h) = (size_px.0.max(1) as f32, size_px.1.max(1) as f32);
+    let m_per_px = PANEL_WIDTH_M / w;
+    grip.to_matrix()
+        * Mat4::from_translation(Vec3::new(0.0, PANEL_ABOVE_M, -PANEL_AHEAD_M))
+        * Mat4::from_rotation_x(-PANEL_LEAN_RAD)
+        * Mat4::from_scale(Vec3::new(m_per_px, -m_per_px, 1.0))
+        * Mat4::from_translation(Vec3::new(-0.5 * w, -h, 0.0))
+}
+
+/// Where a ray from `from` along `direction` (room) meets the panel placed by `placement` (see
+/// [`panel_placement`]) of `size_px` pixels, within `reach_m`: the pixel it meets and the
+/// point in the room. `None` when it misses the panel or runs along it.
+pub fn ray_on_panel(
+    placement: Mat4,
+    size_px: (u32, u32),
+    from: Vec3,
+    direction: Vec3,
+    reach_m: f32,
+) -> Option<([f32; 2], Vec3)> {
+    let direction = direction.try_normalize()?;
+    let to_panel = placement.inverse();
+    let (o, d) = (to_panel.transform_point3(from), to_panel.transform_vector3(direction));
+    if d.z.abs() < 1e-12 {
+        return None;
+    }
+    // Room metres along the ray: the panel's matrix is affine, so its parameter is the room's.
+    let t = -o.z / d.z;
+    let px = o + t * d;
+    let inside = (0.0..size_px.0 as f32).contains(&px.x) && (0.0..size_px.1 as f32).contains(&px.y);
+    (t >= 0.0 && t <= reach_m && inside && px.is_finite()).then(|| ([px.x, px.y], from + t * direction))
+}
+
+/// The ray from `from` to `to` (room) as a thin cylinder, with a dot where it ends.
+pub fn ray_glyphs(from: Vec3, to: Vec3) -> [ToolGlyph; 2] {
+    let along = to - from;
+    let length = along.length();
+    let turn = crate::math::Quat::from_rotation_arc(Vec3::Y, along.try_normalize().unwrap_or(Vec3::Y));
+    let ray = ToolGlyph {
+        shape: GlyphShape::Cylinder,
+        model: Mat4::from_rotation_translation(turn, from + 0.5 * along)
+            * Mat4::from_scale(Vec3::new(RAY_RADIUS_M, 0.5 * length, RAY_RADIUS_M)),
+        colour: RAY_COLOUR,
+    };
+    let dot = ToolGlyph::sphere(
+        Mat4::from_translation(to) * Mat4::from_scale(Vec3::splat(RAY_DOT_M)),
+        RAY_COLOUR.truncate().extend(1.0),
+    );
+    [ray, dot]
+}
+
 /// A button of the headset's palette.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Button {
@@ -97,11 +174,13 @@ pub enum Button {
     Symmetry,
     /// Open a lattice over the active part's clay; with one open, apply it.
     Lattice,
+    /// Show the panel, or hide it.
+    Panel,
 }
 
 impl Button {
     /// The buttons in their row, from the grip's −X to its +X.
-    pub const ALL: [Button; 7] = [
+    pub const ALL: [Button; 8] = [
         Button::Symmetry,
         Button::Undo,
         Button::Redo,
@@ -109,6 +188,7 @@ impl Button {
         Button::Save,
         Button::Quit,
         Button::Lattice,
+        Button::Panel,
     ];
 
     /// What the button is called.
@@ -121,6 +201,7 @@ impl Button {
             Button::Quit => "quit",
             Button::Symmetry => "symmetry",
             Button::Lattice => "lattice",
+            Button::Panel => "panel",
         }
     }
 
@@ -152,6 +233,7 @@ impl Button {
             Button::Quit => (GlyphShape::Box, [0.9, 0.2, 0.2]),
             Button::Symmetry => (GlyphShape::Cylinder, [0.45, 0.7, 1.0]),
             Button::Lattice => (GlyphShape::Torus { tube: 0.2 }, [0.7, 0.45, 0.95]),
+            Button::Panel => (GlyphShape::Box, [0.85, 0.87, 0.92]),
         };
         let (size, opacity) = if pointed { (1.3 * BUTTON_RADIUS_M, 1.0) } else { (BUTTON_RADIUS_M, 0.75) };
         // The ring faces the viewer: its axis along the grip's Z.
@@ -160,10 +242,15 @@ impl Button {
             _ => Mat4::IDENTITY,
         };
         let at = Pose { position_m: self.centre(grip), rotation: grip.rotation };
-        let half = if shape == GlyphShape::Box { 0.8 * size } else { size };
+        let half = match self {
+            // A slab, as the panel is.
+            Button::Panel => Vec3::new(0.8 * size, size, 0.25 * size),
+            _ if shape == GlyphShape::Box => Vec3::splat(0.8 * size),
+            _ => Vec3::splat(size),
+        };
         ToolGlyph {
             shape,
-            model: at.to_matrix() * turn * Mat4::from_scale(Vec3::splat(half)),
+            model: at.to_matrix() * turn * Mat4::from_scale(half),
             colour: Vec3::from(rgb).extend(opacity),
         }
     }

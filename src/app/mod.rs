@@ -15,6 +15,7 @@ mod frame;
 mod glyphs;
 mod held_lattice;
 mod monitor;
+mod panel_rows;
 mod playback;
 mod recent;
 mod sculpt;

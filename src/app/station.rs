@@ -39,6 +39,7 @@ use super::document::Document;
 use super::environment::load_environment;
 use super::frame::build_frame;
 use super::glyphs::tool_glyph;
+use super::panel_rows;
 use super::playback::Playback;
 use super::recent::RecentSculpts;
 use crate::config::{Chord, KeyBindings, Modifiers, StationAction};
@@ -63,12 +64,8 @@ use crate::stereo::comfort::{AutoConvergence, BudgetCheck};
 use crate::stereo::display::{choose_mode, DisplayMode, Parity};
 use crate::stereo::floating::FloatingWindow;
 use crate::stereo::{HeadTrackedRig, Placement, StereoRig};
-use crate::tool::{
-    edit_level_for, Action, Ellipsoid, Falloff, Solid, Stroke, Tool, ToolShape, HAND_SIZE_SAMPLES,
-};
-use crate::ui::{
-    DeviceRow, Disparity, Panel, PanelCommand, PanelKey, PanelView, PartRow, PointerEvent, StereoRow,
-};
+use crate::tool::{Action, Ellipsoid, Falloff, Solid, Stroke, Tool, ToolShape, HAND_SIZE_SAMPLES};
+use crate::ui::{DeviceRow, Disparity, Panel, PanelCommand, PanelKey, PanelView, PointerEvent, StereoRow};
 
 /// The time step of a scripted run, seconds.
 pub const SCRIPTED_STEP_S: f32 = 1.0 / 60.0;
@@ -78,32 +75,8 @@ const POINTER_SPEED_M_PER_S: f32 = 0.1;
 const SIZE_STEP: f32 = 1.25;
 /// How much one press moves the convergence plane or changes the interaxial distance.
 const STEREO_STEP: f32 = 1.1;
-/// The range of the panel's size slider, millimetres (wider when the tool already is).
-const PANEL_SIZE_MM: (f32, f32) = (1.0, 200.0);
 /// The most step names the panel's history keeps.
 const STEP_NAMES_KEPT: usize = 256;
-
-/// The rate per second of an action that has one.
-fn rate_of(action: Action) -> Option<f32> {
-    match action {
-        Action::Build { rate_per_s }
-        | Action::SoftRemove { rate_per_s }
-        | Action::SoftPaint { rate_per_s }
-        | Action::Smooth { rate_per_s, .. } => Some(rate_per_s),
-        _ => None,
-    }
-}
-
-/// `action` at `rate` per second, where it has a rate.
-fn with_rate(action: Action, rate: f32) -> Action {
-    match action {
-        Action::Build { .. } => Action::Build { rate_per_s: rate },
-        Action::SoftRemove { .. } => Action::SoftRemove { rate_per_s: rate },
-        Action::SoftPaint { .. } => Action::SoftPaint { rate_per_s: rate },
-        Action::Smooth { centre_weight, .. } => Action::Smooth { centre_weight, rate_per_s: rate },
-        other => other,
-    }
-}
 
 /// How the station runs.
 #[derive(Clone, Debug, Default)]
@@ -1348,41 +1321,14 @@ impl<'s> Station<'s> {
 
     /// What the panel shows now.
     fn panel_view(&self) -> PanelView {
-        let tool = &self.desk_tool;
-        let size_m = tool.size_m();
-        let cycle = shape_cycle(1.0);
-        let shape = cycle.iter().position(|(_, n)| *n == shape_name(&tool.shape));
-        let (undo, redo) = self.doc.playback.assembly().history_len(self.doc.playback.field());
         // The names kept for the newest steps; older ones (a scene's) by number alone.
-        let undo_list = (0..undo)
-            .map(|i| {
-                let k = (self.step_names.len() + i).checked_sub(undo);
-                format!("{}. {}", i + 1, k.map_or("step", |k| self.step_names[k].as_str()))
-            })
-            .collect();
-        let redo_list = (0..redo)
-            .map(|i| {
-                let k = self.redo_names.len().checked_sub(1 + i);
-                format!("{}. {}", undo + i + 1, k.map_or("step", |k| self.redo_names[k].as_str()))
-            })
-            .collect();
+        let history = self.doc.playback.assembly().history_len(self.doc.playback.field());
+        let (undo_list, redo_list) = panel_rows::history_rows(history, &self.step_names, &self.redo_names);
         let modes: Vec<DisplayMode> =
             DisplayMode::ALL.iter().copied().filter(|m| self.quad_buffer || m.layers() == 1).collect();
         let mut status = self.hud_lines();
         status.extend(self.messages.iter().rev().take(3).rev().cloned());
-        let size_mm = size_m * 1000.0;
         let assembly = self.doc.playback.assembly();
-        let parts = assembly
-            .parts()
-            .iter()
-            .map(|p| PartRow {
-                name: p.name.clone(),
-                op: p.op.name(),
-                voxel_mm: p.voxel_size_m * 1000.0,
-                visible: p.visible,
-                locked: p.locked,
-            })
-            .collect();
         let symmetry = self.doc.playback.symmetry();
         let rig = &self.view.rig;
         let stereo = StereoRow {
@@ -1402,13 +1348,13 @@ impl<'s> Station<'s> {
             floating_window: self.floating_window.0,
             head: self.head.as_ref().map(|h| !h.lost()),
         };
-        PanelView {
+        let mut view = PanelView {
             level_samples: self.acting_tool().level_samples,
             level: self.edit_level(),
-            parts,
+            parts: panel_rows::part_rows(&self.doc.playback),
             active_part: assembly.active(),
             symmetry: (symmetry.describe(), !symmetry.is_none()),
-            lattice: self.lattice_row(),
+            lattice: panel_rows::lattice_row(&self.doc.playback),
             devices: DeviceClass::ALL
                 .iter()
                 .map(|&class| DeviceRow {
@@ -1430,18 +1376,6 @@ impl<'s> Station<'s> {
                 )
             }),
             stereo,
-            shapes: cycle.iter().map(|(_, n)| *n).collect(),
-            shape,
-            actions: action_cycle().iter().map(|a| a.name()).collect(),
-            action: action_cycle()
-                .iter()
-                .position(|a| a.name() == tool.action.name())
-                .unwrap_or(self.action_index),
-            size_mm,
-            size_range_mm: (PANEL_SIZE_MM.0.min(size_mm), PANEL_SIZE_MM.1.max(size_mm)),
-            rate_per_s: rate_of(tool.action),
-            spacing: tool.spacing,
-            colour: [tool.colour[0], tool.colour[1], tool.colour[2]],
             undo: undo_list,
             redo: redo_list,
             display_mode: modes.iter().position(|m| *m == self.display_mode).unwrap_or(0),
@@ -1459,54 +1393,43 @@ impl<'s> Station<'s> {
             recent: self.recent.list().to_vec(),
             recovered: self.recovered.clone(),
             status,
-        }
+            ..PanelView::default()
+        };
+        panel_rows::fill_tool(&mut view, &self.desk_tool, self.action_index);
+        view
     }
 
     /// Does what the panel asked.
     fn panel_command(&mut self, command: PanelCommand) {
+        if panel_rows::apply_tool(
+            &command,
+            &mut self.desk_tool,
+            &mut self.action_index,
+            &mut self.hand_samples,
+        ) {
+            return;
+        }
+        if let Some(step) = panel_rows::LatticeStep::of(&command) {
+            let said = panel_rows::lattice_step(&mut self.doc, step, lattice::LATTICE_OPENS);
+            self.messages.push(said);
+            return;
+        }
         match command {
-            PanelCommand::Shape(i) => {
-                let size = self.desk_tool.shape.half_extents_m().min_element();
-                if let Some((shape, _)) = shape_cycle(size).get(i) {
-                    self.desk_tool.shape = shape.clone();
-                }
-            }
-            PanelCommand::Action(i) => {
-                if let Some(action) = action_cycle().get(i) {
-                    self.action_index = i;
-                    self.desk_tool.action = *action;
-                }
-            }
-            PanelCommand::SizeMm(mm) => {
-                let now = self.desk_tool.size_m();
-                if mm.is_finite() && mm > 0.0 && now > 0.0 {
-                    self.desk_tool.scale *= mm * 1e-3 / now;
-                }
-            }
-            PanelCommand::Rate(rate) => {
-                if rate.is_finite() && rate > 0.0 {
-                    self.desk_tool.action = with_rate(self.desk_tool.action, rate);
-                }
-            }
-            PanelCommand::Spacing(spacing) => {
-                if spacing.is_finite() {
-                    self.desk_tool.spacing = spacing.clamp(0.05, 1.0);
-                }
-            }
-            PanelCommand::Colour(rgb) => {
-                if rgb.iter().all(|c| c.is_finite()) {
-                    let [r, g, b] = rgb.map(|c| c.clamp(0.0, 1.0));
-                    self.desk_tool.colour = [r, g, b, self.desk_tool.colour[3]];
-                }
-            }
-            PanelCommand::LevelSamples(samples) => {
-                self.hand_samples = samples.filter(|n| n.is_finite() && *n >= 1.0);
-                self.desk_tool.level_samples = self.hand_samples;
-            }
-            PanelCommand::LevelBySize => {
-                self.hand_samples = Some(HAND_SIZE_SAMPLES);
-                self.desk_tool.level_samples = self.hand_samples;
-            }
+            // The tool's and the lattice's, taken above; the desk ends by closing its window.
+            PanelCommand::Shape(_)
+            | PanelCommand::Action(_)
+            | PanelCommand::SizeMm(_)
+            | PanelCommand::Rate(_)
+            | PanelCommand::Spacing(_)
+            | PanelCommand::Colour(_)
+            | PanelCommand::LevelSamples(_)
+            | PanelCommand::LevelBySize
+            | PanelCommand::ApplyLattice
+            | PanelCommand::CancelLattice
+            | PanelCommand::NextLatticeSlice
+            | PanelCommand::ControlValue(_)
+            | PanelCommand::ControlWeight(_)
+            | PanelCommand::Quit => {}
             PanelCommand::ActivePart(i) => self.pick_part(i),
             PanelCommand::ToggleSymmetry => self.act(StationAction::ToggleSymmetry),
             PanelCommand::NextSymmetry => self.act(StationAction::NextSymmetry),
@@ -1567,15 +1490,6 @@ impl<'s> Station<'s> {
                 true => StationAction::OpenPartLattice,
                 false => StationAction::OpenLattice,
             }),
-            PanelCommand::ApplyLattice => self.act(StationAction::ApplyLattice),
-            PanelCommand::CancelLattice => self.act(StationAction::CancelLattice),
-            PanelCommand::NextLatticeSlice => self.act(StationAction::NextLatticeSlice),
-            PanelCommand::ControlValue(up) => {
-                self.act(if up { StationAction::RaiseValue } else { StationAction::LowerValue })
-            }
-            PanelCommand::ControlWeight(heavier) => {
-                self.act(if heavier { StationAction::HeavierWeight } else { StationAction::LighterWeight })
-            }
             PanelCommand::SaveAs(path) => self.save_as(&path),
             PanelCommand::Open(path) => self.open_from_panel(&path),
             PanelCommand::Export(path) => self.export_to(&path),
@@ -1642,10 +1556,7 @@ impl<'s> Station<'s> {
 
     /// The level the desk tool edits (its size chooses it) and its voxel size, millimetres.
     fn edit_level(&self) -> (u32, f32) {
-        let acting = self.acting_tool();
-        let field = self.doc.playback.field();
-        let level = acting.level_samples.map_or(0, |n| edit_level_for(field, acting.size_m(), n));
-        (level as u32, field.level_transform(level).voxel_size_m * 1000.0)
+        panel_rows::edit_level(&self.doc.playback, &self.acting_tool())
     }
 
     /// What the heads-up display shows: the desk tool, the stereo settings, the frame time.
@@ -2031,11 +1942,7 @@ impl<'s> Station<'s> {
 
     /// What becomes of unsaved work when another sculpt is opened.
     fn unsaved_fate(&self) -> &'static str {
-        if self.doc.playback.autosave().is_some() {
-            "they are kept for recovery at the next start"
-        } else {
-            "they will be lost"
-        }
+        self.doc.unsaved_fate()
     }
 
     /// The panel's open: the sculpt at `path`, whatever the unsaved work (the panel said what
@@ -2044,13 +1951,7 @@ impl<'s> Station<'s> {
         let left = self.unsaved_work();
         let fate = self.unsaved_fate();
         match self.open(path) {
-            Ok(()) => {
-                let left = match left {
-                    0 => String::new(),
-                    n => format!(" ({n} unsaved change(s) left behind: {fate})"),
-                };
-                self.messages.push(format!("opened {}{left}", path.display()));
-            }
+            Ok(()) => self.messages.push(panel_rows::opened_said(path, left, fate)),
             Err(e) => self.messages.push(format!("{e:#}")),
         }
     }
@@ -2076,20 +1977,8 @@ impl<'s> Station<'s> {
     /// The panel's export: the surface as it stands to `path`, in the format its extension
     /// names.
     fn export_to(&mut self, path: &Path) {
-        let Some(format) = crate::mesh::export::ExportFormat::of_path(path) else {
-            self.messages
-                .push(format!("{}: not an extension the export knows (obj, ply, stl, glb)", path.display()));
-            return;
-        };
-        match super::export::export_surface(self.doc.playback.surface(), format, path, true) {
-            Ok(done) => self.messages.push(format!(
-                "exported {} triangles ({} vertices) to {}",
-                done.triangles,
-                done.vertices,
-                path.display()
-            )),
-            Err(e) => self.messages.push(format!("{e:#}")),
-        }
+        let said = panel_rows::export_to(&mut self.doc.playback, path);
+        self.messages.push(said);
     }
 
     /// The open key: the sculpt after the one opened last in the open folder, newest first.

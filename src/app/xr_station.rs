@@ -22,6 +22,12 @@
 //! - the palette's buttons (symmetry, undo, redo, recentre, save, quit, lattice), in front of
 //!   the left controller: touch one with the right controller and pull the trigger. Every
 //!   profile has a trigger, so each of these is reachable on every controller.
+//! - the palette's panel button shows the panel (the desk's, less its view and devices
+//!   sections, with a first row that saves, recentres and quits) on a board standing on the
+//!   palette; a ray from the right controller's aim points at it (a dot where it meets it), the
+//!   trigger clicks and drags there, and the right thumbstick scrolls it. Every tool setting,
+//!   the parts, the history, the files (save, save as, open, export) and the lattice's form
+//!   are reached from it. While the ray is on the panel the hand does not sculpt.
 //! - with a lattice open (the palette's lattice button; pressed again it applies the lattice,
 //!   one undo step, and A puts the clay back): the control nearest the right controller is
 //!   picked and ringed, the right trigger pulled off the palette drags it with the hand, and
@@ -34,7 +40,11 @@ use anyhow::Result;
 
 use super::document::Document;
 use super::frame::build_frame;
-use super::glyphs::{action_colour, buttons, controller_glyph, palette, tool_glyph, Button};
+use super::glyphs::{
+    action_colour, buttons, controller_glyph, palette, panel_placement, ray_glyphs, ray_on_panel, tool_glyph,
+    Button,
+};
+use super::panel_rows::{self, LatticeStep};
 use super::playback::Playback;
 use super::station::{action_cycle, shape_cycle, shape_name};
 use crate::field::{Field, FieldReader};
@@ -43,9 +53,10 @@ use crate::io::Sculpt;
 use crate::math::{Pose, Vec3};
 use crate::mesh::{MeshDiff, Mesher};
 use crate::parts::{Symmetry, SymmetrySwitch};
-use crate::render::{Frame, ToolGlyph};
+use crate::render::{Frame, PanelPaint, ToolGlyph};
 use crate::scene::{Hand, HandState as PlaybackHand, Scene};
 use crate::tool::{Action, Stroke, Tool, ToolShape, HAND_SIZE_SAMPLES};
+use crate::ui::{Panel, PanelCommand, PanelView, PointerEvent, HEADSET_PANEL_PX};
 use crate::xr::{
     one_hand_grab, recentred, two_hand_grab, FrameInput, FrameOutput, HandState, Haptic, Held, Placement,
     Turn, XrError, XrOptions, XrStation,
@@ -71,6 +82,12 @@ const TOUCH_DENSITY: f32 = 0.5;
 const VALUE_PER_S: f32 = 0.5;
 /// The tick when the tool comes onto a palette button.
 pub const BUTTON_PULSE: (f32, i64) = (0.3, 10_000_000);
+/// How far the tool hand's ray reaches the panel, room metres.
+const RAY_REACH_M: f32 = 1.5;
+/// How fast a full thumbstick deflection scrolls the panel, lines per second.
+const SCROLL_LINES_PER_S: f32 = 12.0;
+/// How a lattice is opened in the headset, as the messages say it.
+const LATTICE_OPENS: &str = "the palette's lattice button or the panel opens one";
 
 /// How long a headset run waits for a runtime that went away to come back by default, seconds.
 pub const WAIT_FOR_RUNTIME_S: f64 = 30.0;
@@ -198,6 +215,16 @@ pub struct XrSculptor<'s> {
     pub messages: Vec<String>,
     /// Re-meshes what each frame's edits dirtied, reusing its buffers from frame to frame.
     mesher: Mesher,
+    /// The panel, shown and hidden by the palette's panel button.
+    panel: Panel,
+    /// Where the tool hand's ray meets the panel: the pixel, and the point in the room.
+    panel_hit: Option<([f32; 2], Vec3)>,
+    /// The trigger went down on the panel and is held: the panel keeps the hand.
+    panel_held: bool,
+    /// What the panel painted last (`None` while hidden).
+    panel_paint: Option<PanelPaint>,
+    /// Where the tool was last (the scene), for a lattice opened around it.
+    last_tool_pose: Option<Pose>,
 }
 
 impl<'s> XrSculptor<'s> {
@@ -231,6 +258,15 @@ impl<'s> XrSculptor<'s> {
             quit: false,
             messages: Vec::new(),
             mesher: Mesher::default(),
+            panel: {
+                let mut panel = Panel::headset();
+                panel.set_shown(false);
+                panel
+            },
+            panel_hit: None,
+            panel_held: false,
+            panel_paint: None,
+            last_tool_pose: None,
         }
     }
 
@@ -359,19 +395,216 @@ impl<'s> XrSculptor<'s> {
             Some(Button::Undo) => self.undo(),
             Some(Button::Redo) => self.redo(),
             Some(Button::Recentre) => self.placement = recentred(self.scene.rig.target_m, input.head),
-            Some(Button::Save) => match self.save() {
-                Ok(p) => self.messages.push(format!("saved the sculpt to {}", p.display())),
-                Err(e) => self.messages.push(format!("cannot save the sculpt: {e:#}")),
-            },
+            Some(Button::Save) => self.save_and_say(),
             Some(Button::Quit) => self.quit = true,
             Some(Button::Symmetry) => {
                 let symmetry = self.symmetry.step();
                 self.set_symmetry(symmetry);
             }
             Some(Button::Lattice) => self.lattice_button(),
+            Some(Button::Panel) => {
+                let shown = !self.panel.shown();
+                self.panel.set_shown(shown);
+                if !shown {
+                    self.panel_hit = None;
+                    self.panel_held = false;
+                    self.panel_paint = None;
+                }
+            }
             None => {}
         }
         pointed.is_some()
+    }
+
+    /// Whether the panel is shown.
+    pub fn panel_shown(&self) -> bool {
+        self.panel.shown()
+    }
+
+    /// The pixel of the panel the tool hand's ray meets, if it does.
+    pub fn panel_pointer(&self) -> Option<[f32; 2]> {
+        self.panel_hit.map(|(px, _)| px)
+    }
+
+    /// The tool hand's ray on the panel: where it meets the panel is the panel's pointer, the
+    /// trigger going down there presses (and the panel keeps the hand until it is let go), and
+    /// the thumbstick scrolls (a press is taken only where `may_press`: the hand is not on a
+    /// palette button). Returns whether the panel has the hand (it does not sculpt).
+    fn point_at_panel(&mut self, input: &FrameInput, may_press: bool, dt_s: f32) -> bool {
+        if !self.panel.shown() {
+            return false;
+        }
+        let (d, o) = (self.dominant, 1 - self.dominant);
+        let (now, before) = (input.hands[d], self.previous[d]);
+        let hit = match (input.hands[o].grip, now.aim.or(now.grip)) {
+            (Some(grip), Some(aim)) => ray_on_panel(
+                panel_placement(grip, HEADSET_PANEL_PX),
+                HEADSET_PANEL_PX,
+                aim.position_m,
+                aim.rotation * Vec3::NEG_Z,
+                RAY_REACH_M,
+            ),
+            _ => None,
+        };
+        let down = now.trigger >= TRIGGER_ON;
+        if let Some((px, _)) = hit {
+            self.panel.pointer(PointerEvent::Moved(px));
+            if down && before.trigger < TRIGGER_ON && may_press {
+                self.panel.pointer(PointerEvent::Primary(true));
+                self.panel_held = true;
+            }
+            let y = now.thumbstick.y;
+            if y.abs() > 0.2 {
+                self.panel.pointer(PointerEvent::Wheel(y * SCROLL_LINES_PER_S * dt_s));
+            }
+        }
+        if self.panel_held && !down {
+            self.panel.pointer(PointerEvent::Primary(false));
+            self.panel_held = false;
+        }
+        // Off the panel, the pointer leaves it (a drag keeps it to the end).
+        if hit.is_none() && self.panel_hit.is_some() && !self.panel_held {
+            self.panel.pointer(PointerEvent::Left);
+        }
+        self.panel_hit = hit;
+        hit.is_some() || self.panel_held
+    }
+
+    /// What the panel shows now.
+    fn panel_view(&self) -> PanelView {
+        let playback = &self.doc.playback;
+        let history = playback.assembly().history_len(playback.field());
+        let (undo, redo) = panel_rows::history_rows(history, &[], &[]);
+        let symmetry = playback.symmetry();
+        let save_to = self.doc.save_to();
+        let acting = self.tool.clone().by_size_unless_set(self.hand_samples);
+        let mut view = PanelView {
+            headset: true,
+            level_samples: acting.level_samples,
+            level: panel_rows::edit_level(playback, &acting),
+            parts: panel_rows::part_rows(playback),
+            active_part: playback.assembly().active(),
+            symmetry: (symmetry.describe(), !symmetry.is_none()),
+            lattice: panel_rows::lattice_row(playback),
+            undo,
+            redo,
+            save_to: save_to.display().to_string(),
+            save_name: save_to.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
+            unsaved: self.doc.unsaved_work(),
+            unsaved_fate: self.doc.unsaved_fate(),
+            sculpt_extension: super::SCULPT_EXTENSION,
+            export_formats: crate::mesh::export::ExportFormat::ALL.map(|f| f.extension()).to_vec(),
+            status: self.messages.iter().rev().take(3).rev().cloned().collect(),
+            ..PanelView::default()
+        };
+        panel_rows::fill_tool(&mut view, &self.tool, self.action_index);
+        view
+    }
+
+    /// Does what the panel asked; `head` is where the head is (for recentring).
+    fn panel_command(&mut self, command: PanelCommand, head: Option<Pose>) {
+        if panel_rows::apply_tool(&command, &mut self.tool, &mut self.action_index, &mut self.hand_samples) {
+            return;
+        }
+        if let Some(step) = LatticeStep::of(&command) {
+            self.end_stroke();
+            let said = panel_rows::lattice_step(&mut self.doc, step, LATTICE_OPENS);
+            self.messages.push(said);
+            return;
+        }
+        match command {
+            PanelCommand::ActivePart(i) => {
+                self.end_stroke();
+                let count = self.doc.playback.assembly().parts().len();
+                let part = self.doc.playback.set_active_part(i);
+                let name = &self.doc.playback.assembly().parts()[part].name;
+                self.messages.push(format!("active part {} of {count}: {name}", part + 1));
+            }
+            PanelCommand::ToggleSymmetry => {
+                let symmetry = self.symmetry.toggle();
+                self.set_symmetry(symmetry);
+            }
+            PanelCommand::NextSymmetry => {
+                let symmetry = self.symmetry.next_choice();
+                self.set_symmetry(symmetry);
+            }
+            PanelCommand::RecentreHead => self.placement = recentred(self.scene.rig.target_m, head),
+            PanelCommand::Undo(n) => (0..n).for_each(|_| self.undo()),
+            PanelCommand::Redo(n) => (0..n).for_each(|_| self.redo()),
+            PanelCommand::LatticeForm(form) => {
+                self.doc.playback.set_lattice_form(form);
+                let form = self.doc.playback.lattice_form().describe();
+                self.messages.push(format!("lattices open as: {form}"));
+            }
+            PanelCommand::OpenLattice(whole_part) => self.open_lattice(whole_part),
+            PanelCommand::Save => self.save_and_say(),
+            PanelCommand::SaveAs(path) => {
+                self.end_stroke();
+                self.messages.push(match self.doc.save_as(&path, None) {
+                    Ok(saved) => {
+                        format!(
+                            "saved the sculpt to {}, where saving writes from now on",
+                            saved.path.display()
+                        )
+                    }
+                    Err(e) => format!("{e:#}; saving still writes to {}", self.doc.save_to().display()),
+                });
+            }
+            PanelCommand::Open(path) => self.open(&path),
+            PanelCommand::Export(path) => {
+                self.end_stroke();
+                let said = panel_rows::export_to(&mut self.doc.playback, &path);
+                self.messages.push(said);
+            }
+            PanelCommand::Quit => self.quit = true,
+            // The tool's and the lattice's were taken above; the desk's view, devices and
+            // recovered sculpts are not on the headset's panel.
+            _ => {}
+        }
+    }
+
+    /// Saves, and says where (or why not).
+    fn save_and_say(&mut self) {
+        match self.save() {
+            Ok(p) => self.messages.push(format!("saved the sculpt to {}", p.display())),
+            Err(e) => self.messages.push(format!("cannot save the sculpt: {e:#}")),
+        }
+    }
+
+    /// Opens the sculpt at `path` in place of this one (its own file from then on); says so.
+    fn open(&mut self, path: &std::path::Path) {
+        self.end_stroke();
+        let left = self.doc.unsaved_work();
+        let fate = self.doc.unsaved_fate();
+        match self.doc.open(path) {
+            Ok(opened) => {
+                self.messages.push(panel_rows::opened_said(path, left, fate));
+                self.messages.extend(opened.notes);
+            }
+            Err(e) => self.messages.push(format!("{e:#}")),
+        }
+    }
+
+    /// Opens a lattice around the tool (where it was last) or over the active part's clay.
+    fn open_lattice(&mut self, whole_part: bool) {
+        self.end_stroke();
+        if self.doc.playback.held_lattice().is_some() {
+            self.messages.push("a lattice is open already: apply it or put the clay back first".into());
+            return;
+        }
+        let around = self.last_tool_pose.filter(|_| !whole_part).map(|pose| (&self.tool, pose));
+        let form = self.doc.playback.lattice_form();
+        let said = match panel_rows::lattice_region(&self.doc.playback, around) {
+            Ok(region) => match self.doc.playback.open_lattice(&form.over(region)) {
+                Ok(()) => format!(
+                    "lattice open ({}): the trigger drags the control nearest the tool, the thumbstick its value",
+                    form.describe()
+                ),
+                Err(e) => e,
+            },
+            Err(why) => why,
+        };
+        self.messages.push(said);
     }
 
     /// The palette's lattice button: opens a lattice over the active part's whole clay, or
@@ -383,14 +616,13 @@ impl<'s> XrSculptor<'s> {
             self.messages.push("lattice applied (undo takes it back)".into());
             return;
         }
-        let part = self.doc.playback.assembly().active();
-        let clay =
-            crate::parts::local_bounds(self.doc.playback.assembly().field(self.doc.playback.field(), part));
-        if clay.is_empty() {
-            self.messages.push("the active part holds no clay to open a lattice over".into());
-            return;
-        }
-        let region = clay.expanded(super::held_lattice::PART_MARGIN * clay.size().max_element());
+        let region = match panel_rows::lattice_region(&self.doc.playback, None) {
+            Ok(region) => region,
+            Err(why) => {
+                self.messages.push(why);
+                return;
+            }
+        };
         self.messages.push(
             match self.doc.playback.open_lattice(&self.doc.playback.lattice_form().over(region)) {
                 Ok(()) => {
@@ -435,8 +667,9 @@ impl<'s> XrSculptor<'s> {
         true
     }
 
-    /// Buttons and thumbstick of the dominant hand; menu of the other.
-    fn controls(&mut self, input: &FrameInput, dt_s: f32) {
+    /// Buttons and thumbstick of the dominant hand (its thumbstick's up and down scroll the
+    /// panel instead while the hand is `on_panel`); menu of the other.
+    fn controls(&mut self, input: &FrameInput, on_panel: bool, dt_s: f32) {
         let (d, o) = (self.dominant, 1 - self.dominant);
         let (now, before) = (input.hands[d], self.previous[d]);
         if now.primary && !before.primary {
@@ -446,7 +679,7 @@ impl<'s> XrSculptor<'s> {
         }
         let y = now.thumbstick.y;
         // With a lattice open the thumbstick sets the picked control's value instead.
-        if y.abs() > 0.2 && self.doc.playback.held_lattice().is_none() {
+        if y.abs() > 0.2 && self.doc.playback.held_lattice().is_none() && !on_panel {
             self.tool.scale *= RESIZE_PER_S.powf(y * dt_s);
         }
         let flick = |x: f32| {
@@ -563,10 +796,21 @@ impl<'s> XrSculptor<'s> {
         let dt_s = input.period_s.clamp(1e-4, 0.1);
         let mut haptics = Vec::new();
         let on_palette = self.palette_buttons(input, &mut haptics);
-        self.controls(input, dt_s);
+        let on_panel = self.point_at_panel(input, !on_palette, dt_s);
+        if self.panel.shown() {
+            let view = self.panel_view();
+            let (commands, paint) = self.panel.run(&view, HEADSET_PANEL_PX, f64::from(self.time_s));
+            for command in commands {
+                self.panel_command(command, input.head);
+            }
+            self.panel_paint = paint;
+        }
+        let on_palette = on_palette || on_panel;
+        self.controls(input, on_panel, dt_s);
         self.grabs(&input.hands, dt_s);
         let hand = input.hands[self.dominant];
         let tool_pose = hand.grip.map(|g| self.placement.pose_to_world(g));
+        self.last_tool_pose = tool_pose.or(self.last_tool_pose);
         let lattice = self.drive_lattice(input, tool_pose, on_palette, dt_s);
         let applying = hand.trigger >= TRIGGER_ON
             && tool_pose.is_some()
@@ -649,7 +893,21 @@ impl<'s> XrSculptor<'s> {
             apply(diff);
         }
         self.times = (tools_ms, meshing.elapsed().as_secs_f64() * 1e3);
-        let (frame, held) = self.frame(&input.hands, tool_pose.map(|pose| (pose, applying)), &tool);
+        let (mut frame, mut held) = self.frame(&input.hands, tool_pose.map(|pose| (pose, applying)), &tool);
+        // The panel on its board in the support hand; without that hand tracked, its textures
+        // still go to the renderer (each is given once) and nothing is drawn.
+        if let Some(mut paint) = self.panel_paint.take() {
+            let support = 1 - self.dominant;
+            match input.hands[support].grip {
+                Some(grip) => {
+                    let room_to_scene = self.placement.matrix().inverse();
+                    paint.placement = Some(room_to_scene * panel_placement(grip, HEADSET_PANEL_PX));
+                    held[support].push(Held::Panel);
+                }
+                None => paint.batches.clear(),
+            }
+            frame.panel = Some(paint);
+        }
         self.previous = input.hands;
         FrameOutput { frame, placement: self.placement, haptics, held }
     }
@@ -710,6 +968,13 @@ impl XrSculptor<'_> {
                 frame.controllers.extend(buttons(grip, self.pointed).map(in_scene));
             }
             held[i].extend((first..frame.controllers.len()).map(Held::Controller));
+        }
+        // The ray from the tool hand to where it meets the panel.
+        let hand = hands[self.dominant];
+        if let (Some((_, hit)), Some(aim)) = (self.panel_hit, hand.aim.or(hand.grip)) {
+            let first = frame.controllers.len();
+            frame.controllers.extend(ray_glyphs(aim.position_m, hit).map(in_scene));
+            held[self.dominant].extend((first..frame.controllers.len()).map(Held::Controller));
         }
         (frame, held)
     }
@@ -878,6 +1143,8 @@ pub fn run_xr(
                         );
                         validation = back.renderer().validation_log();
                         let diff = sculptor.mesher.mesh_all(sculptor.doc.playback.surface());
+                        // The new renderer holds none of the panel's textures yet.
+                        sculptor.panel.renew_textures();
                         if let Err(e) = back.renderer_mut().apply(diff) {
                             break Err(
                                 anyhow::Error::new(e).context("cannot draw the sculpt in the new session")
@@ -1079,6 +1346,92 @@ mod tests {
     fn density(s: &XrSculptor<'_>, p: Vec3) -> f32 {
         let field = s.field();
         FieldReader::new(field).density_at(field.transform().world_to_index(p))
+    }
+
+    /// The tool hand 30 cm in front of the panel's pixel `px` (for the left hand at `palette`),
+    /// its aim (and grip) pointing at it, its trigger at `trigger`.
+    fn aiming(palette: Pose, px: [f32; 2], trigger: f32) -> HandState {
+        let on = panel_placement(palette, HEADSET_PANEL_PX).transform_point3(Vec3::new(px[0], px[1], 0.0));
+        let from = on + Vec3::new(0.05, 0.1, 0.3);
+        let pose = Pose {
+            position_m: from,
+            rotation: Quat::from_rotation_arc(Vec3::NEG_Z, (on - from).normalize()),
+        };
+        HandState { grip: Some(pose), aim: Some(pose), trigger, ..HandState::default() }
+    }
+
+    #[test]
+    fn the_panel_button_shows_the_panel_whose_ray_points_clicks_scrolls_saves_and_quits_without_sculpting() {
+        let scene = ball();
+        let dir = std::env::temp_dir().join(format!("argile-xr-panel-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("panel.argile");
+        let _ = std::fs::remove_file(&path);
+        let mut s = XrSculptor::new(&scene, Playback::new(&scene), path.clone(), false);
+        let palette = Pose { position_m: Vec3::new(-0.1, 1.3, -0.3), rotation: Quat::IDENTITY };
+        let left = HandState { grip: Some(palette), ..HandState::default() };
+        let out = frame(&mut s, [left, aiming(palette, [256.0, 400.0], 0.0)]);
+        assert!(!s.panel_shown() && out.frame.panel.is_none(), "hidden at first");
+        assert_eq!(s.panel_pointer(), None, "a hidden panel is not pointed at");
+        // The palette's panel button shows it, on its board in the left hand.
+        let on = |trigger: f32| HandState {
+            grip: Some(Pose { position_m: Button::Panel.centre(palette), rotation: Quat::IDENTITY }),
+            trigger,
+            ..HandState::default()
+        };
+        for trigger in [0.0, 1.0, 0.0] {
+            frame(&mut s, [left, on(trigger)]);
+        }
+        assert!(s.panel_shown());
+        // The ray meets the panel where it is aimed; the frame draws the panel where the left
+        // hand holds it, with the ray and its dot.
+        let out = frame(&mut s, [left, aiming(palette, [256.0, 400.0], 0.0)]);
+        let [x, y] = s.panel_pointer().expect("the ray meets the panel");
+        assert!((x - 256.0).abs() < 0.05 && (y - 400.0).abs() < 0.05, "{x}, {y}");
+        let paint = out.frame.panel.as_ref().expect("the panel is drawn");
+        let placed = paint.placement.expect("on its board");
+        let expected = s.placement().matrix().inverse() * panel_placement(palette, HEADSET_PANEL_PX);
+        assert!(placed.abs_diff_eq(expected, 1e-5));
+        assert!(!paint.batches.is_empty());
+        assert!(out.held[0].contains(&Held::Panel), "the left hand carries it to its last pose");
+        let dot = out.frame.controllers.last().expect("the ray's dot");
+        let hit = s.placement().matrix().transform_point3(dot.model.w_axis.truncate());
+        let aimed = panel_placement(palette, HEADSET_PANEL_PX).transform_point3(Vec3::new(256.0, 400.0, 0.0));
+        assert!(hit.distance(aimed) < 1e-4, "the dot is where the ray meets the panel");
+        // The trigger on the panel presses its controls and sculpts nothing; the thumbstick
+        // scrolls it and leaves the tool's size.
+        let before = s.field().history_stats();
+        let scale = s.tool().scale;
+        for trigger in [1.0, 1.0, 0.0] {
+            frame(&mut s, [left, aiming(palette, [256.0, 400.0], trigger)]);
+        }
+        let mut scroll = aiming(palette, [256.0, 400.0], 0.0);
+        scroll.thumbstick = Vec2::new(0.0, -1.0);
+        frame(&mut s, [left, scroll]);
+        assert_eq!(s.field().history_stats(), before, "no stroke from the panel");
+        assert_eq!(s.tool().scale, scale, "the thumbstick scrolled the panel");
+        // Back at the top, the first row: Save writes the sculpt, Quit asks to end.
+        scroll.thumbstick = Vec2::new(0.0, 1.0);
+        for _ in 0..30 {
+            frame(&mut s, [left, scroll]);
+        }
+        let mut x = 16.0;
+        while !s.wants_quit() && x < HEADSET_PANEL_PX.0 as f32 {
+            for trigger in [0.0, 1.0, 0.0, 0.0] {
+                frame(&mut s, [left, aiming(palette, [x, 20.0], trigger)]);
+            }
+            x += 16.0;
+        }
+        assert!(s.wants_quit(), "the first row's Quit");
+        assert!(crate::app::load_sculpt(&path).is_ok(), "the first row's Save wrote the sculpt");
+        assert!(s.messages.iter().any(|m| m.starts_with("saved the sculpt to")), "{:?}", s.messages);
+        // Pressed again, the panel button hides it: no ray, nothing drawn.
+        for trigger in [0.0, 1.0, 0.0] {
+            frame(&mut s, [left, on(trigger)]);
+        }
+        let out = frame(&mut s, [left, aiming(palette, [256.0, 400.0], 0.0)]);
+        assert!(!s.panel_shown() && out.frame.panel.is_none() && s.panel_pointer().is_none());
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
@@ -1379,7 +1732,7 @@ mod tests {
         let grip = |y: f32, stick: f32| HandState {
             grip: at(-0.1, y, -0.4),
             squeeze: 1.0,
-            thumbstick: crate::math::Vec2::new(0.0, stick),
+            thumbstick: Vec2::new(0.0, stick),
             ..HandState::default()
         };
         frame(&mut s, [grip(1.3, 0.0), HandState::default()]);

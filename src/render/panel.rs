@@ -8,6 +8,11 @@
 //! (so each letter lands on the same pixel in the left and the right eye: the panel sits on
 //! the screen plane whatever the convergence), clips each batch by a scissor, and blends
 //! premultiplied colour over the scene. Textures are sRGB: sampling gives linear colour.
+//!
+//! A panel may instead lie on a surface in the scene ([`PanelPaint::placement`], the headset's
+//! panel in the support hand): its pixels are then taken into the scene and seen by each eye
+//! through its own view, depth-tested against the clay, and each batch is clipped to its
+//! rectangle in the fragment shader (a scissor cannot follow a surface seen at an angle).
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -73,6 +78,19 @@ pub struct PanelPaint {
     pub textures: Vec<PanelTexture>,
     /// Textures no longer used, freed after drawing.
     pub freed: Vec<u64>,
+    /// Where the panel is: `None`, on the screen plane of every view (zero parallax);
+    /// `Some(m)`, on a surface in the scene, `m` taking its pixels (x right, y down, z 0) to
+    /// scene metres.
+    pub placement: Option<glam::Mat4>,
+}
+
+/// What the panel pipeline's shaders read from the push constants (`shaders/panel.vert`).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct PanelPush {
+    placement: [[f32; 4]; 4],
+    clip: [f32; 4],
+    placed: [f32; 4],
 }
 
 /// The largest side of a panel texture, texels: every Vulkan device can sample it.
@@ -95,6 +113,8 @@ pub(crate) struct PanelGpu {
     /// The batches the buffers hold, and the extent they were laid out for.
     pub(crate) batches: Vec<PanelBatch>,
     extent: vk::Extent2D,
+    /// Where the panel written last lies (see [`PanelPaint::placement`]).
+    pub(crate) placement: Option<glam::Mat4>,
     textures: HashMap<u64, PanelImage>,
     pool: vk::DescriptorPool,
     sampler: Sampler,
@@ -127,6 +147,7 @@ impl PanelGpu {
             indices,
             batches: Vec::new(),
             extent: vk::Extent2D::default(),
+            placement: None,
             textures: HashMap::new(),
             pool: scopeguard::ScopeGuard::into_inner(pool_guard),
             sampler,
@@ -147,12 +168,19 @@ impl PanelGpu {
             self.update_texture(update, set_layout)?;
         }
         self.extent = extent;
+        self.placement = paint.placement.filter(|m| m.is_finite());
         let (w, h) = (paint.extent_px.0.max(1) as f32, paint.extent_px.1.max(1) as f32);
+        // On the screen plane, normalised device coordinates; on a surface, the pixels (the
+        // vertex shader places them).
+        let position = |[x, y]: [f32; 2]| match self.placement {
+            None => [2.0 * x / w - 1.0, 2.0 * y / h - 1.0, 0.0],
+            Some(_) => [x, y, 0.0],
+        };
         let vertices: Vec<Vertex> = paint
             .vertices
             .iter()
             .map(|v| Vertex {
-                position: [2.0 * v.position_px[0] / w - 1.0, 2.0 * v.position_px[1] / h - 1.0, 0.0],
+                position: position(v.position_px),
                 normal: [v.uv[0], v.uv[1], 0.0],
                 colour: v.colour,
             })
@@ -296,13 +324,14 @@ impl PanelGpu {
         })
     }
 
-    /// Records the batches (inside a view pass, the panel pipeline bound): a full viewport,
-    /// then per batch its texture's set and its clip as the scissor.
+    /// Records the batches (inside a view pass): a full viewport, then per batch its texture's
+    /// set and its clip, as the scissor on the screen plane or in the push constants on a
+    /// surface. `pipelines` are the screen plane's and the surface's.
     pub(crate) fn record(
         &self,
         cb: vk::CommandBuffer,
         pipeline_layout: vk::PipelineLayout,
-        pipeline: vk::Pipeline,
+        (on_screen, on_surface): (vk::Pipeline, vk::Pipeline),
     ) {
         if self.batches.is_empty() {
             return;
@@ -310,6 +339,13 @@ impl PanelGpu {
         let d = &self.device.raw;
         let extent = self.extent;
         let viewport = full_viewport(extent);
+        let pipeline = if self.placement.is_some() { on_surface } else { on_screen };
+        let everything = [f32::MIN, f32::MIN, f32::MAX, f32::MAX];
+        let push = |clip: [f32; 4]| PanelPush {
+            placement: self.placement.unwrap_or(glam::Mat4::IDENTITY).to_cols_array_2d(),
+            clip,
+            placed: [0.0, 0.0, 0.0, if self.placement.is_some() { 1.0 } else { 0.0 }],
+        };
         // SAFETY: `cb` is recording inside a view pass; the pipeline was made with dynamic
         // viewport and scissor; buffers and sets are live until the frame finishes.
         unsafe {
@@ -317,19 +353,33 @@ impl PanelGpu {
             d.cmd_set_viewport(cb, 0, &[viewport]);
             d.cmd_bind_vertex_buffers(cb, 0, &[self.vertices.raw], &[0]);
             d.cmd_bind_index_buffer(cb, self.indices.raw, 0, vk::IndexType::UINT32);
+            let whole = vk::Rect2D { offset: vk::Offset2D::default(), extent };
             for b in &self.batches {
-                let x0 = b.clip_px[0].min(extent.width);
-                let y0 = b.clip_px[1].min(extent.height);
-                let x1 = b.clip_px[2].clamp(x0, extent.width);
-                let y1 = b.clip_px[3].clamp(y0, extent.height);
-                if x1 == x0 || y1 == y0 {
-                    continue;
+                let [x0, y0, x1, y1] = b.clip_px;
+                let (x1, y1) = (x1.max(x0), y1.max(y0));
+                if self.placement.is_some() {
+                    // The rectangle is in the panel's own pixels, wherever the surface is seen.
+                    if x1 == x0 || y1 == y0 {
+                        continue;
+                    }
+                    d.cmd_set_scissor(cb, 0, &[whole]);
+                    let clip = [x0 as f32, y0 as f32, x1 as f32, y1 as f32];
+                    push_panel(d, cb, pipeline_layout, &push(clip));
+                } else {
+                    let x0 = x0.min(extent.width);
+                    let y0 = y0.min(extent.height);
+                    let x1 = x1.clamp(x0, extent.width);
+                    let y1 = y1.clamp(y0, extent.height);
+                    if x1 == x0 || y1 == y0 {
+                        continue;
+                    }
+                    let scissor = vk::Rect2D {
+                        offset: vk::Offset2D { x: x0 as i32, y: y0 as i32 },
+                        extent: vk::Extent2D { width: x1 - x0, height: y1 - y0 },
+                    };
+                    d.cmd_set_scissor(cb, 0, &[scissor]);
+                    push_panel(d, cb, pipeline_layout, &push(everything));
                 }
-                let scissor = vk::Rect2D {
-                    offset: vk::Offset2D { x: x0 as i32, y: y0 as i32 },
-                    extent: vk::Extent2D { width: x1 - x0, height: y1 - y0 },
-                };
-                d.cmd_set_scissor(cb, 0, &[scissor]);
                 let set = self.textures[&b.texture].set;
                 d.cmd_bind_descriptor_sets(
                     cb,
@@ -342,6 +392,23 @@ impl PanelGpu {
                 d.cmd_draw_indexed(cb, b.index_count, 1, b.first_index, 0, 0);
             }
         }
+    }
+}
+
+/// Writes the panel's push constants.
+///
+/// # Safety
+/// `cb` is recording, with a pipeline of `layout` bound.
+unsafe fn push_panel(d: &ash::Device, cb: vk::CommandBuffer, layout: vk::PipelineLayout, push: &PanelPush) {
+    // SAFETY: the caller's; the struct fits the layout's push constant range (96 of 128 bytes).
+    unsafe {
+        d.cmd_push_constants(
+            cb,
+            layout,
+            vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+            0,
+            bytemuck::bytes_of(push),
+        )
     }
 }
 

@@ -202,6 +202,9 @@ struct Pipelines {
     hud: Pipeline,
     /// Viewport and scissor set when recording (each batch is clipped).
     panel: Pipeline,
+    /// The panel on a surface in the scene: depth-tested against the clay, drawn before the
+    /// translucent glyphs (the hand's ray lies over it).
+    panel_in_scene: Pipeline,
     /// The floating window's strips, over the scene and under the HUD.
     window_mask: Pipeline,
 }
@@ -875,6 +878,13 @@ impl Renderer {
             }
             d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, pipelines.background.raw);
             self.draw_shape(cb, &self.shapes.quad);
+        }
+        let panel_pipelines = (pipelines.panel.raw, pipelines.panel_in_scene.raw);
+        if self.panel.placement.is_some() {
+            self.panel.record(cb, self.layout.pipeline, panel_pipelines);
+        }
+        // SAFETY: as above.
+        unsafe {
             if !(frame.tools.is_empty() && frame.controllers.is_empty()) {
                 d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, pipelines.glyph.raw);
                 for glyph in frame.tools.iter().chain(&frame.controllers) {
@@ -906,7 +916,9 @@ impl Renderer {
                 d.cmd_draw_indexed(cb, self.hud.index_count, 1, 0, 0, 0);
             }
         }
-        self.panel.record(cb, self.layout.pipeline, pipelines.panel.raw);
+        if self.panel.placement.is_none() {
+            self.panel.record(cb, self.layout.pipeline, panel_pipelines);
+        }
     }
 
     fn draw_shape(&self, cb: vk::CommandBuffer, shape: &ShapeMesh) {
@@ -1160,6 +1172,18 @@ fn make_pipelines(
         premultiplied: false,
         fragment_constant: None,
     };
+    let panel = PipelineDesc {
+        name: "panel",
+        vertex: spirv!("panel.vert"),
+        fragment: spirv!("panel.frag"),
+        attributes: 3,
+        cull: vk::CullModeFlags::NONE,
+        depth_test: false,
+        depth_write: false,
+        blend: true,
+        premultiplied: true,
+        ..base
+    };
     let pipelines_for = |pass: &ViewPass| -> Result<Pipelines, RenderError> {
         let make = |desc: PipelineDesc| {
             Pipeline::new(
@@ -1225,20 +1249,10 @@ fn make_pipelines(
                 blend: true,
                 ..base
             })?,
-            panel: Pipeline::new(
+            panel: Pipeline::new(device, &panel, layout.pipeline, pass.render_pass, None, target.samples)?,
+            panel_in_scene: Pipeline::new(
                 device,
-                &PipelineDesc {
-                    name: "panel",
-                    vertex: spirv!("panel.vert"),
-                    fragment: spirv!("panel.frag"),
-                    attributes: 3,
-                    cull: vk::CullModeFlags::NONE,
-                    depth_test: false,
-                    depth_write: false,
-                    blend: true,
-                    premultiplied: true,
-                    ..base
-                },
+                &PipelineDesc { name: "panel in the scene", depth_test: true, ..panel },
                 layout.pipeline,
                 pass.render_pass,
                 None,

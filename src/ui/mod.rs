@@ -88,6 +88,9 @@ pub struct PanelView {
     /// Status lines (what the heads-up display shows while the panel is hidden) and the
     /// latest messages.
     pub status: Vec<String>,
+    /// The panel is the headset's: a first row saves, recentres the sculpture and quits, and
+    /// the desk's view and devices sections are left out.
+    pub headset: bool,
 }
 
 /// A part as the panel lists it.
@@ -238,6 +241,8 @@ pub enum PanelCommand {
     Export(PathBuf),
     /// The recovered sculpts need no more showing.
     DismissRecovered,
+    /// End the session, saving the sculpt (the headset's panel).
+    Quit,
 }
 
 /// A key a text field of the panel reads (typed characters come as text, see
@@ -278,6 +283,14 @@ pub enum PointerEvent {
 /// The panel's width, points.
 const PANEL_WIDTH_PT: f32 = 256.0;
 
+/// Pixels per point of the headset's panel: its text is drawn twice as finely as a desk
+/// monitor's, as the eye comes close to it.
+pub const HEADSET_PIXELS_PER_POINT: f32 = 2.0;
+
+/// The size of the headset's panel, pixels: the desk panel's width, and tall enough for the
+/// tool and history sections without scrolling (the thumbstick scrolls the rest).
+pub const HEADSET_PANEL_PX: (u32, u32) = (512, 832);
+
 /// How far a section's controls sit in from its heading, points.
 const SECTION_INDENT_PT: f32 = 6.0;
 
@@ -304,6 +317,9 @@ pub struct Panel {
     browser: files::Browser,
     /// The pixels per point the textures were made for.
     pixels_per_point: f32,
+    /// The pixels per point it is drawn at whatever its image's width (the headset's);
+    /// `None`, by the width ([`pixels_per_point`]).
+    fixed_pixels_per_point: Option<f32>,
     /// The time of the last frame run, seconds.
     time_s: f64,
 }
@@ -320,6 +336,15 @@ impl Default for Panel {
     }
 }
 
+/// The panel's egui context: dark, with a narrow indent under the sections' headings (it keeps
+/// the sliders' names whole).
+fn context() -> egui::Context {
+    let ctx = egui::Context::default();
+    ctx.set_theme(egui::Theme::Dark);
+    ctx.style_mut(|style| style.spacing.indent = SECTION_INDENT_PT);
+    ctx
+}
+
 /// Pixels per point for an image `width` pixels wide: 1 below 1280 pixels, then in steps of a
 /// half up to 3, so the panel keeps about the same share of a wide window.
 pub fn pixels_per_point(width: u32) -> f32 {
@@ -329,12 +354,8 @@ pub fn pixels_per_point(width: u32) -> f32 {
 impl Panel {
     /// A panel, shown.
     pub fn new() -> Self {
-        let ctx = egui::Context::default();
-        ctx.set_theme(egui::Theme::Dark);
-        // Sections fold under their headings; a narrow indent keeps the sliders' names whole.
-        ctx.style_mut(|style| style.spacing.indent = SECTION_INDENT_PT);
         Self {
-            ctx,
+            ctx: context(),
             shown: true,
             events: Vec::new(),
             deferred: Vec::new(),
@@ -346,8 +367,24 @@ impl Panel {
             wants_keyboard: false,
             browser: files::Browser::default(),
             pixels_per_point: 1.0,
+            fixed_pixels_per_point: None,
             time_s: 0.0,
         }
+    }
+
+    /// The headset's panel, shown: drawn at [`HEADSET_PIXELS_PER_POINT`] into an image of
+    /// [`HEADSET_PANEL_PX`], which it fills.
+    pub fn headset() -> Self {
+        let mut panel = Self::new();
+        panel.fixed_pixels_per_point = Some(HEADSET_PIXELS_PER_POINT);
+        panel.pixels_per_point = HEADSET_PIXELS_PER_POINT;
+        panel
+    }
+
+    /// Paints every texture anew from the next frame (for a renderer that holds none of
+    /// them: one made again after its device was lost). What the panel shows stays.
+    pub fn renew_textures(&mut self) {
+        self.ctx = context();
     }
 
     /// A panel, hidden.
@@ -483,7 +520,7 @@ impl Panel {
         if !self.shown || extent_px.0 == 0 || extent_px.1 == 0 {
             return (Vec::new(), None);
         }
-        let ppp = pixels_per_point(extent_px.0);
+        let ppp = self.fixed_pixels_per_point.unwrap_or_else(|| pixels_per_point(extent_px.0));
         self.pixels_per_point = ppp;
         // egui's time never goes back (a clock that does, or NaN, holds it where it was).
         let time_s = if time_s >= self.time_s { time_s } else { self.time_s };
@@ -525,25 +562,32 @@ fn panel_ui(
         let sources =
             egui::scroll_area::ScrollSource::SCROLL_BAR | egui::scroll_area::ScrollSource::MOUSE_WHEEL;
         egui::ScrollArea::vertical().scroll_source(sources).show(ui, |ui| {
+            if view.headset {
+                headset_ui(ui, view, commands);
+            }
             if !view.recovered.is_empty() {
                 recovered_ui(ui, view, commands);
             }
             section(ui, "Tool", |ui| tool_ui(ui, view, commands));
             section(ui, "Parts", |ui| parts_ui(ui, view, commands));
             section(ui, "History", |ui| history_ui(ui, view, commands));
-            section(ui, "View", |ui| {
-                ui.horizontal_wrapped(|ui| {
-                    for (i, name) in view.display_modes.iter().enumerate() {
-                        if ui.radio(view.display_mode == i, *name).clicked() && view.display_mode != i {
-                            commands.push(PanelCommand::DisplayMode(i));
+            if !view.headset {
+                section(ui, "View", |ui| {
+                    ui.horizontal_wrapped(|ui| {
+                        for (i, name) in view.display_modes.iter().enumerate() {
+                            if ui.radio(view.display_mode == i, *name).clicked() && view.display_mode != i {
+                                commands.push(PanelCommand::DisplayMode(i));
+                            }
                         }
-                    }
+                    });
+                    stereo_ui(ui, &view.stereo, commands);
                 });
-                stereo_ui(ui, &view.stereo, commands);
-            });
+            }
             section(ui, "File", |ui| browser.ui(ui, view, commands));
             section(ui, "Lattice", |ui| lattice_ui(ui, &view.lattice, commands));
-            section(ui, "Devices", |ui| devices_ui(ui, view, commands));
+            if !view.headset {
+                section(ui, "Devices", |ui| devices_ui(ui, view, commands));
+            }
             if !view.status.is_empty() {
                 ui.separator();
                 for line in &view.status {
@@ -574,6 +618,26 @@ fn level_ui(ui: &mut egui::Ui, view: &PanelView, commands: &mut Vec<PanelCommand
             commands.push(PanelCommand::LevelSamples(Some(samples)));
         }
     }
+}
+
+/// The headset's first row: save, bring the sculpture in front of the head, save and quit.
+fn headset_ui(ui: &mut egui::Ui, view: &PanelView, commands: &mut Vec<PanelCommand>) {
+    ui.horizontal(|ui| {
+        let save = match view.unsaved {
+            0 => "Save".to_owned(),
+            n => format!("Save ({n})"),
+        };
+        for (label, command, hint) in [
+            (save.as_str(), PanelCommand::Save, view.save_to.as_str()),
+            ("Recentre", PanelCommand::RecentreHead, "the sculpture in front of the head"),
+            ("Quit", PanelCommand::Quit, "save the sculpt and end the session"),
+        ] {
+            if ui.button(label).on_hover_text(hint).clicked() {
+                commands.push(command);
+            }
+        }
+    });
+    ui.separator();
 }
 
 /// The sculpts recovered at start, each opened by a click, until dismissed.
@@ -947,6 +1011,7 @@ mod tests {
 
     fn view() -> PanelView {
         PanelView {
+            headset: false,
             shapes: vec!["sphere", "box"],
             shape: Some(0),
             actions: vec!["add", "remove", "paint"],
@@ -1009,10 +1074,15 @@ mod tests {
 
     /// Runs frames until the panel has laid out, then clicks at `at` (points = pixels here).
     fn click(panel: &mut Panel, view: &PanelView, at: [f32; 2]) -> Vec<PanelCommand> {
+        click_in(panel, view, (800, TALL), at)
+    }
+
+    /// [`click`] on a panel laid out in an image of `extent` pixels, at the pixel `at`.
+    fn click_in(panel: &mut Panel, view: &PanelView, extent: (u32, u32), at: [f32; 2]) -> Vec<PanelCommand> {
         let mut t = 0.0;
         let mut frame = |panel: &mut Panel| {
             t += 1.0 / 60.0;
-            panel.run(view, (800, TALL), t).0
+            panel.run(view, extent, t).0
         };
         frame(panel);
         panel.pointer(PointerEvent::Moved(at));
@@ -1042,6 +1112,51 @@ mod tests {
     /// Where a click gives `wanted`, in a sweep.
     fn find(swept: &[(PanelCommand, [f32; 2])], wanted: &PanelCommand) -> Option<[f32; 2]> {
         swept.iter().find(|(c, _)| c == wanted).map(|(_, at)| *at)
+    }
+
+    #[test]
+    fn the_headset_panel_fills_its_image_saves_recentres_and_quits_from_its_first_row_without_the_desks_sections(
+    ) {
+        let view = PanelView { headset: true, ..view() };
+        let (_, paint) = Panel::headset().run(&view, HEADSET_PANEL_PX, 0.0);
+        let paint = paint.expect("shown");
+        assert_eq!(paint.extent_px, HEADSET_PANEL_PX);
+        let right = paint.vertices.iter().map(|v| v.position_px[0]).fold(0.0, f32::max);
+        assert!((right - HEADSET_PANEL_PX.0 as f32).abs() <= 1.0, "the panel spans its image: {right}");
+        let mut found: Vec<(PanelCommand, [f32; 2])> = Vec::new();
+        for y in (4..HEADSET_PANEL_PX.1).step_by(8) {
+            for x in (24..HEADSET_PANEL_PX.0).step_by(80) {
+                let at = [x as f32, y as f32];
+                for command in click_in(&mut Panel::headset(), &view, HEADSET_PANEL_PX, at) {
+                    if !found.iter().any(|(c, _)| *c == command) {
+                        found.push((command, at));
+                    }
+                }
+            }
+        }
+        for wanted in [PanelCommand::Save, PanelCommand::RecentreHead, PanelCommand::Quit] {
+            let at = find(&found, &wanted).unwrap_or_else(|| panic!("{wanted:?} in {found:?}"));
+            assert!(at[1] < 64.0, "{wanted:?} is on the first row: {at:?}");
+        }
+        let at = |c: &PanelCommand| find(&found, c).unwrap()[0];
+        assert!(at(&PanelCommand::Save) < at(&PanelCommand::RecentreHead));
+        assert!(at(&PanelCommand::RecentreHead) < at(&PanelCommand::Quit));
+        // The tool, the history and the parts are there; the desk's view and devices are not.
+        for wanted in [
+            PanelCommand::Shape(1),
+            PanelCommand::Action(2),
+            PanelCommand::Undo(2),
+            PanelCommand::ActivePart(1),
+        ] {
+            assert!(find(&found, &wanted).is_some(), "{wanted:?} in {found:?}");
+        }
+        assert!(
+            !found.iter().any(|(c, _)| matches!(
+                c,
+                PanelCommand::DisplayMode(_) | PanelCommand::DeviceTarget(..) | PanelCommand::SwapEyes(_)
+            )),
+            "{found:?}"
+        );
     }
 
     #[test]

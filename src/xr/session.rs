@@ -70,6 +70,8 @@ pub enum Held {
     Tool(usize),
     /// `frame.controllers[i]`.
     Controller(usize),
+    /// The panel, on its surface (`frame.panel`'s placement).
+    Panel,
 }
 
 /// Moves the glyphs of `frame` that a hand holds by that hand's motion from `read` (the grips
@@ -88,12 +90,13 @@ pub fn carry_held(
         let (Some(from), Some(to)) = (read[hand], late[hand]) else { continue };
         let motion = to_scene * to.to_matrix() * from.to_matrix().inverse() * to_room;
         for g in glyphs {
-            let glyph = match *g {
-                Held::Tool(i) => frame.tools.get_mut(i),
-                Held::Controller(i) => frame.controllers.get_mut(i),
+            let model = match *g {
+                Held::Tool(i) => frame.tools.get_mut(i).map(|g| &mut g.model),
+                Held::Controller(i) => frame.controllers.get_mut(i).map(|g| &mut g.model),
+                Held::Panel => frame.panel.as_mut().and_then(|p| p.placement.as_mut()),
             };
-            if let Some(glyph) = glyph {
-                glyph.model = motion * glyph.model;
+            if let Some(model) = model {
+                *model = motion * *model;
             }
         }
     }
