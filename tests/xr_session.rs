@@ -660,16 +660,20 @@ fn sigterm_in_the_headset_saves_closes_the_session_and_exits_143() {
 
 /// The panel in the headset: the left hand holds its palette up in front of the head, the
 /// right hand presses the palette's panel button (the eighth, 12.25 cm to the right of the
-/// left grip, 12.5 cm ahead of it, 3 cm above it), then points its aim at the panel's middle
-/// from below and to the right. Captured at frame 10 at 512 × 512 per eye over 50°, about the
-/// panel's share of a headset's view at its recommended resolution.
-fn panel_script() -> String {
+/// left grip, 12.5 cm ahead of it, 3 cm above it), then points its aim at the panel's pixel
+/// `px` from below and to the right, and pulls the trigger at frame 8 where `click`. Captured
+/// at frame 10 at 512 × 512 per eye over 50°, about the panel's share of a headset's view at
+/// its recommended resolution.
+fn panel_script(px: [f32; 2], click: bool) -> String {
     let grip = Vec3::new(-0.03, 1.153, -0.214);
     let button = grip + Vec3::new(0.1225, 0.03, -0.125);
-    // The panel's pixel (256, 300): its lower edge 6 cm above and 11 cm ahead of the grip,
-    // then 0.187 m up the board, which leans back by 0.35 rad.
-    let lean = 0.35_f32;
-    let target = grip + Vec3::new(0.0, 0.06, -0.11) + 0.187 * Vec3::new(0.0, lean.cos(), -lean.sin());
+    // The panel (512 × 832 pixels, 0.18 m wide): its lower edge 6 cm above and 11 cm ahead of
+    // the grip, the board leaning back by 0.35 rad.
+    let (lean, m_per_px) = (0.35_f32, 0.18 / 512.0);
+    let up = (832.0 - px[1]) * m_per_px;
+    let target = grip
+        + Vec3::new((px[0] - 256.0) * m_per_px, 0.06, -0.11)
+        + up * Vec3::new(0.0, lean.cos(), -lean.sin());
     let from = Vec3::new(0.12, 1.25, -0.12);
     let turn = Quat::from_rotation_arc(Vec3::NEG_Z, (target - from).normalize());
     let pose = |p: Vec3, q: Quat| {
@@ -682,6 +686,7 @@ fn panel_script() -> String {
     let on_button = pose(button, Quat::IDENTITY);
     let aiming = pose(from, turn);
     let left = pose(grip, Quat::IDENTITY);
+    let trigger = if click { 1.0 } else { 0.0 };
     format!(
         r#"
 display_hz = 90.0
@@ -707,6 +712,12 @@ right = {{ trigger = 0.0 }}
 [[key]]
 frame = 6
 right = {{ grip = {aiming}, aim = {aiming}, trigger = 0.0 }}
+[[key]]
+frame = 8
+right = {{ trigger = {trigger} }}
+[[key]]
+frame = 9
+right = {{ trigger = 0.0 }}
 "#
     )
 }
@@ -715,7 +726,7 @@ right = {{ grip = {aiming}, aim = {aiming}, trigger = 0.0 }}
 fn the_headset_panel_shows_on_the_palette_with_the_hands_ray_on_it() {
     let dir = case_dir("xr-panel");
     let manifest = common::xr::test_runtime_manifest(&dir);
-    let out = run_xr(&dir, &manifest, &panel_script(), &["--frames", "12"], &[]);
+    let out = run_xr(&dir, &manifest, &panel_script([256.0, 300.0], false), &["--frames", "12"], &[]);
     succeeded(&dir, &out);
     no_violations(&log(&dir));
     for eye in ["left", "right"] {
@@ -723,6 +734,23 @@ fn the_headset_panel_shows_on_the_palette_with_the_hands_ray_on_it() {
         let captured = image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgba8();
         check_against_golden("xr-panel", eye, &captured);
     }
+}
+
+#[test]
+fn the_headset_panels_quit_saves_and_ends_the_session() {
+    let dir = case_dir("xr-panel-quit");
+    let manifest = common::xr::test_runtime_manifest(&dir);
+    // The first row's Quit, 264 pixels from the panel's left edge.
+    let out = run_xr(&dir, &manifest, &panel_script([264.0, 16.0], true), &["--frames", "60"], &[]);
+    let said = succeeded(&dir, &out);
+    let log = log(&dir);
+    let states: Vec<&str> = kind(&log, "state").iter().filter_map(|s| s["state"].as_str()).collect();
+    assert!(states.ends_with(&["STOPPING", "IDLE", "EXITING"]), "{states:?}");
+    let frames = kind(&log, "end_frame").len();
+    assert!(frames < 20, "the session ended soon after the click at frame 8: {frames} frames");
+    assert!(said.contains("saved the sculpt to"), "{said}");
+    assert!(argile::app::load_sculpt(&dir.join("sculpt.argile")).is_ok());
+    nothing_to_recover(&dir);
 }
 
 #[test]
