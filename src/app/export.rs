@@ -1,15 +1,17 @@
 //! `argile export`: a scene's final clay as a mesh file.
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::Arc;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 
 use super::playback::Playback;
 use super::sculpt::{is_sculpt, load_sculpt, with_lattice_applied};
 use crate::field::Field;
 use crate::io::write_atomically;
 use crate::mesh::export::{write_mesh, write_parts, ExportFormat, PartMesh};
-use crate::mesh::{mesh_all, weld, WeldedMesh};
+use crate::mesh::{mesh_all, weld, MeshDiff, SurfaceMeshes, WeldedMesh};
 use crate::scene::Scene;
 
 /// What an export wrote.
@@ -210,10 +212,174 @@ fn write_with_progress(
 ) -> Result<u64> {
     let bar = if progress { indicatif::ProgressBar::new(1000) } else { indicatif::ProgressBar::hidden() };
     bar.set_message(format!("writing {}", out.display()));
-    write_atomically(out, overwrite, |w| {
-        write(w, &mut |f| bar.set_position((f * 1000.0) as u64))
-            .with_context(|| format!("cannot write {}", out.display()))
-    })?;
+    let bytes = write_reporting(out, overwrite, &mut |f| bar.set_position((f * 1000.0) as u64), write)?;
     bar.finish_and_clear();
+    Ok(bytes)
+}
+
+/// Writes `out` atomically with `write`, which tells `report` how far it is (0 to 1); returns
+/// the bytes written.
+fn write_reporting(
+    out: &Path,
+    overwrite: bool,
+    report: &mut dyn FnMut(f32),
+    write: impl FnOnce(&mut dyn std::io::Write, &mut dyn FnMut(f32)) -> std::io::Result<()>,
+) -> Result<u64> {
+    write_atomically(out, overwrite, |w| {
+        write(w, report).with_context(|| format!("cannot write {}", out.display()))
+    })?;
     Ok(std::fs::metadata(out).map(|m| m.len()).unwrap_or(0))
+}
+
+/// The share of an export's progress that welding takes; writing takes the rest.
+const WELD_SHARE: f32 = 0.2;
+
+/// An export of the surface as it stood when it started, welded and written on a thread of its
+/// own so that the frames go on; its progress can be read while it runs. Dropped, it waits for
+/// the file to be written.
+#[derive(Debug)]
+pub struct ExportJob {
+    path: PathBuf,
+    triangles: usize,
+    /// Thousandths done.
+    progress: Arc<AtomicU32>,
+    thread: Option<std::thread::JoinHandle<Result<ExportSummary>>>,
+}
+
+impl ExportJob {
+    /// Starts writing `surface` to `path` (replacing it), in the format its extension names.
+    /// `Err` says why it cannot start: an extension the export does not know, or no surface.
+    pub fn start(surface: SurfaceMeshes, path: &Path) -> Result<Self, String> {
+        let Some(format) = ExportFormat::of_path(path) else {
+            return Err(format!(
+                "{}: not an extension the export knows (obj, ply, stl, glb)",
+                path.display()
+            ));
+        };
+        let triangles = surface.triangle_count();
+        if triangles == 0 {
+            return Err(format!("the clay has no surface: nothing to export to {}", path.display()));
+        }
+        let progress = Arc::new(AtomicU32::new(0));
+        let (out, done) = (path.to_path_buf(), progress.clone());
+        let thread = std::thread::Builder::new()
+            .name("argile-export".into())
+            .spawn(move || {
+                let set = |f: f32| done.store((f.clamp(0.0, 1.0) * 1000.0) as u32, Ordering::Relaxed);
+                let mesh = surface.weld();
+                drop(surface);
+                set(WELD_SHARE);
+                let bytes = write_reporting(
+                    &out,
+                    true,
+                    &mut |f| set(WELD_SHARE + (1.0 - WELD_SHARE) * f),
+                    |w, p| write_mesh(format, &mesh, w, p),
+                )?;
+                set(1.0);
+                Ok(ExportSummary {
+                    path: out,
+                    vertices: mesh.positions.len(),
+                    triangles: mesh.triangle_count(),
+                    bytes,
+                })
+            })
+            .map_err(|e| format!("cannot start writing {}: {e}", path.display()))?;
+        Ok(Self { path: path.to_path_buf(), triangles, progress, thread: Some(thread) })
+    }
+
+    /// The file it writes.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// How far it is, 0 to 1.
+    pub fn progress(&self) -> f32 {
+        self.progress.load(Ordering::Relaxed) as f32 / 1000.0
+    }
+
+    /// What it wrote (or why not) once it has finished; `None` while it runs.
+    pub fn finished(&mut self) -> Option<Result<ExportSummary>> {
+        if !self.thread.as_ref().is_some_and(|t| t.is_finished()) {
+            return None;
+        }
+        self.thread.take().map(Self::joined)
+    }
+
+    fn joined(thread: std::thread::JoinHandle<Result<ExportSummary>>) -> Result<ExportSummary> {
+        thread.join().unwrap_or_else(|_| Err(anyhow!("the export thread failed")))
+    }
+}
+
+impl Drop for ExportJob {
+    fn drop(&mut self) {
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+/// A station's exports: the surface as the renderer holds it, and the export under way.
+#[derive(Debug, Default)]
+pub struct Exports {
+    surface: SurfaceMeshes,
+    job: Option<ExportJob>,
+}
+
+impl Exports {
+    /// Takes in what `diff` changes of the surface.
+    pub fn apply(&mut self, diff: &MeshDiff) {
+        self.surface.apply(diff);
+    }
+
+    /// The surface as the renderer holds it.
+    #[cfg(test)]
+    pub(crate) fn surface(&self) -> &SurfaceMeshes {
+        &self.surface
+    }
+
+    /// Starts exporting the surface as it stands to `path`; says so, or why not (one export
+    /// at a time).
+    pub fn start(&mut self, path: &Path) -> String {
+        if let Some(job) = &self.job {
+            return format!(
+                "an export to {} is under way ({:.0} %): one at a time",
+                job.path().display(),
+                100.0 * job.progress()
+            );
+        }
+        match ExportJob::start(self.surface.clone(), path) {
+            Ok(job) => {
+                let said = format!("exporting {} triangles to {}", job.triangles, path.display());
+                self.job = Some(job);
+                said
+            }
+            Err(why) => why,
+        }
+    }
+
+    /// What the export under way says now ("exporting NAME: 40 %"), if one is.
+    pub fn status(&self) -> Option<String> {
+        self.job.as_ref().map(|job| {
+            let name = job
+                .path()
+                .file_name()
+                .map_or_else(|| job.path().display().to_string(), |n| n.to_string_lossy().into());
+            format!("exporting {name}: {:.0} %", 100.0 * job.progress())
+        })
+    }
+
+    /// Once the export under way has finished, what it did.
+    pub fn poll(&mut self) -> Option<String> {
+        let done = self.job.as_mut()?.finished()?;
+        self.job = None;
+        Some(match done {
+            Ok(done) => format!(
+                "exported {} triangles ({} vertices) to {}",
+                done.triangles,
+                done.vertices,
+                done.path.display()
+            ),
+            Err(e) => format!("{e:#}"),
+        })
+    }
 }

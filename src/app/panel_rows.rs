@@ -284,23 +284,6 @@ pub(super) fn lattice_region(playback: &Playback<'_>, around: Option<(&Tool, Pos
     }
 }
 
-/// The panel's export: the surface as it stands to `path`, in the format its extension names;
-/// says what it wrote, or why not.
-pub(super) fn export_to(playback: &mut Playback<'_>, path: &std::path::Path) -> String {
-    let Some(format) = crate::mesh::export::ExportFormat::of_path(path) else {
-        return format!("{}: not an extension the export knows (obj, ply, stl, glb)", path.display());
-    };
-    match super::export::export_surface(playback.surface(), format, path, true) {
-        Ok(done) => format!(
-            "exported {} triangles ({} vertices) to {}",
-            done.triangles,
-            done.vertices,
-            path.display()
-        ),
-        Err(e) => format!("{e:#}"),
-    }
-}
-
 /// What opening the sculpt at `path` says, leaving `left` unsaved changes to `fate` (see
 /// [`Document::unsaved_fate`]).
 pub(super) fn opened_said(path: &std::path::Path, left: u64, fate: &str) -> String {

@@ -557,6 +557,8 @@ pub struct Station<'s> {
     clay_bounds: crate::math::Aabb,
     /// That surface's chunks' bounds and a few of their vertices.
     surface: crate::mesh::SurfaceSketch,
+    /// The surface as the renderer holds it, for the panel's exports, and the one under way.
+    exports: super::export::Exports,
     /// The parallax budget's verdict for what is shown now: what it was judged on, the check
     /// and warning when over budget, and the interaxial it allows in limit mode (of the
     /// head-tracked eyes when the views are head-tracked).
@@ -725,6 +727,7 @@ impl<'s> Station<'s> {
             auto_convergence: None,
             clay_bounds: crate::math::Aabb::EMPTY,
             surface: crate::mesh::SurfaceSketch::default(),
+            exports: super::export::Exports::default(),
             budget: None,
             display_mode: DisplayMode::Anaglyph,
             quad_buffer: false,
@@ -1607,6 +1610,7 @@ impl<'s> Station<'s> {
             lines
                 .insert(1, format!("part {} of {}: {}{locked}", active + 1, parts.len(), parts[active].name));
         }
+        lines.extend(self.exports.status());
         if let Some(Budgeted { over: Some((check, _)), .. }) = &self.budget {
             // Today's figures, not those of the first warning.
             // The HUD's font has no degree sign.
@@ -1977,7 +1981,7 @@ impl<'s> Station<'s> {
     /// The panel's export: the surface as it stands to `path`, in the format its extension
     /// names.
     fn export_to(&mut self, path: &Path) {
-        let said = panel_rows::export_to(&mut self.doc.playback, path);
+        let said = self.exports.start(path);
         self.messages.push(said);
     }
 
@@ -2125,6 +2129,7 @@ impl<'s> Station<'s> {
     /// changes go to `apply`.
     pub fn step(&mut self, dt_s: f32, mut apply: impl FnMut(&crate::mesh::MeshDiff)) -> crate::render::Frame {
         let started = Instant::now();
+        self.messages.extend(self.exports.poll());
         // The panel first: what its controls ask for acts in this frame.
         let view = self.panel_view();
         let extent = (self.view.output.width_px, self.view.output.height_px);
@@ -2237,6 +2242,7 @@ impl<'s> Station<'s> {
         let diff = self.mesher.remesh_dirty(self.doc.playback.surface());
         if !diff.is_empty() {
             self.surface.apply(diff);
+            self.exports.apply(diff);
             apply(diff);
             self.clay_bounds = self.surface.bounds();
         }
@@ -4434,8 +4440,17 @@ mod tests {
         let said = station.messages.last().unwrap().clone();
         assert!(said.contains("file/c.argile") && said.contains("saving still writes to"), "{said}");
         assert_eq!(station.doc.save_to(), b);
-        // Export: the surface as it stands, in the format of the extension.
+        // Export: the surface as it stands, in the format of the extension, written away from
+        // the frames, which say when it is done.
         station.panel_command(PanelCommand::Export(dir.join("b.obj")));
+        assert!(station.messages.last().unwrap().starts_with("exporting"), "{:?}", station.messages);
+        for _ in 0..2000 {
+            if station.messages.last().unwrap().starts_with("exported") {
+                break;
+            }
+            station.step(1.0 / 60.0, |_| {});
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
         assert!(station.messages.last().unwrap().starts_with("exported"), "{:?}", station.messages);
         let obj = std::fs::read_to_string(dir.join("b.obj")).unwrap();
         assert!(obj.lines().filter(|l| l.starts_with("f ")).count() > 100);

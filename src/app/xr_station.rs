@@ -225,6 +225,8 @@ pub struct XrSculptor<'s> {
     panel_paint: Option<PanelPaint>,
     /// Where the tool was last (the scene), for a lattice opened around it.
     last_tool_pose: Option<Pose>,
+    /// The surface as the renderer holds it, for the panel's exports, and the one under way.
+    exports: super::export::Exports,
 }
 
 impl<'s> XrSculptor<'s> {
@@ -267,6 +269,7 @@ impl<'s> XrSculptor<'s> {
             panel_held: false,
             panel_paint: None,
             last_tool_pose: None,
+            exports: super::export::Exports::default(),
         }
     }
 
@@ -494,7 +497,12 @@ impl<'s> XrSculptor<'s> {
             unsaved_fate: self.doc.unsaved_fate(),
             sculpt_extension: super::SCULPT_EXTENSION,
             export_formats: crate::mesh::export::ExportFormat::ALL.map(|f| f.extension()).to_vec(),
-            status: self.messages.iter().rev().take(3).rev().cloned().collect(),
+            status: self
+                .exports
+                .status()
+                .into_iter()
+                .chain(self.messages.iter().rev().take(3).rev().cloned())
+                .collect(),
             ..PanelView::default()
         };
         panel_rows::fill_tool(&mut view, &self.tool, self.action_index);
@@ -552,8 +560,7 @@ impl<'s> XrSculptor<'s> {
             }
             PanelCommand::Open(path) => self.open(&path),
             PanelCommand::Export(path) => {
-                self.end_stroke();
-                let said = panel_rows::export_to(&mut self.doc.playback, &path);
+                let said = self.exports.start(&path);
                 self.messages.push(said);
             }
             PanelCommand::Quit => self.quit = true,
@@ -795,6 +802,7 @@ impl<'s> XrSculptor<'s> {
         let started = std::time::Instant::now();
         let dt_s = input.period_s.clamp(1e-4, 0.1);
         let mut haptics = Vec::new();
+        self.messages.extend(self.exports.poll());
         let on_palette = self.palette_buttons(input, &mut haptics);
         let on_panel = self.point_at_panel(input, !on_palette, dt_s);
         if self.panel.shown() {
@@ -890,6 +898,7 @@ impl<'s> XrSculptor<'s> {
         self.doc.playback.keep_lattice();
         let diff = self.mesher.remesh_dirty(self.doc.playback.surface());
         if !diff.is_empty() {
+            self.exports.apply(diff);
             apply(diff);
         }
         self.times = (tools_ms, meshing.elapsed().as_secs_f64() * 1e3);
@@ -1431,6 +1440,46 @@ mod tests {
         }
         let out = frame(&mut s, [left, aiming(palette, [256.0, 400.0], 0.0)]);
         assert!(!s.panel_shown() && out.frame.panel.is_none() && s.panel_pointer().is_none());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn the_panels_export_writes_the_surface_as_drawn_away_from_the_frame() {
+        let scene = ball();
+        let dir = std::env::temp_dir().join(format!("argile-xr-export-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut s = XrSculptor::new(&scene, Playback::new(&scene), dir.join("ball.argile"), false);
+        // A groove, meshed frame by frame as the headset draws it.
+        let carve =
+            |x: f32, trigger: f32| HandState { grip: at(x, 1.3, -0.40), trigger, ..HandState::default() };
+        for i in 0..6 {
+            frame(&mut s, [HandState::default(), carve(-0.02 + 0.008 * i as f32, 1.0)]);
+        }
+        frame(&mut s, [HandState::default(), carve(0.03, 0.0)]);
+        // What the export holds is what the whole clay meshes to, chunk for chunk.
+        let whole = crate::app::welded_surface(s.doc.playback.surface());
+        assert_eq!(s.exports.surface().weld(), whole);
+        let out = dir.join("ball.ply");
+        let _ = std::fs::remove_file(&out);
+        s.panel_command(PanelCommand::Export(out.clone()), None);
+        assert!(s.messages.last().unwrap().starts_with("exporting"), "{:?}", s.messages);
+        s.panel_command(PanelCommand::Export(dir.join("again.obj")), None);
+        assert!(s.messages.last().unwrap().contains("one at a time"), "{:?}", s.messages);
+        let mut said = None;
+        for _ in 0..2000 {
+            frame(&mut s, [HandState::default(), HandState::default()]);
+            if let Some(m) = s.messages.iter().find(|m| m.starts_with("exported")) {
+                said = Some(m.clone());
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
+        let said = said.expect("the export finished");
+        assert!(said.contains(&format!("{} triangles", whole.triangle_count())), "{said}");
+        assert!(std::fs::metadata(&out).unwrap().len() > 0);
+        // A name the export does not know is refused with the file's name.
+        s.panel_command(PanelCommand::Export(dir.join("ball.xyz")), None);
+        assert!(s.messages.last().unwrap().contains("ball.xyz"), "{:?}", s.messages);
         let _ = std::fs::remove_dir_all(&dir);
     }
 

@@ -74,4 +74,4 @@ pub use coarse::{levels_around, march_coarse, mesh_level, CoarseScratch, MAX_MES
 pub use march::{march_brick, Block, MarchScratch, Neighbourhood, BLOCK, BLOCK_VOLUME};
 pub use mesher::{gather_block, mesh_all, mesh_brick, meshable_bricks, remesh, remesh_dirty, Mesher};
 pub use types::*;
-pub use weld::{weld, WeldedMesh};
+pub use weld::{weld, SurfaceMeshes, WeldedMesh};

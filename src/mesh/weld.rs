@@ -5,9 +5,43 @@
 //! tolerance to choose and no vertex merged that should not be.
 
 use std::collections::HashMap;
+use std::sync::Arc;
 
-use super::types::ChunkMesh;
+use super::types::{ChunkKey, ChunkMesh, MeshDiff};
 use crate::math::{Aabb, Vec3};
+
+/// The surface's triangles chunk by chunk, kept up to date from the diffs the renderer
+/// applies. Each chunk is shared, so a copy of the whole costs a pointer per chunk: an export
+/// takes one and welds and writes it away from the frame, while the clay goes on changing.
+#[derive(Clone, Debug, Default)]
+pub struct SurfaceMeshes {
+    chunks: HashMap<ChunkKey, Arc<ChunkMesh>>,
+}
+
+impl SurfaceMeshes {
+    /// Takes in what `diff` changes.
+    pub fn apply(&mut self, diff: &MeshDiff) {
+        for key in &diff.removed {
+            self.chunks.remove(key);
+        }
+        for (key, chunk) in &diff.upserted {
+            self.chunks.insert(*key, Arc::new(chunk.clone()));
+        }
+    }
+
+    /// Triangles in all chunks.
+    pub fn triangle_count(&self) -> usize {
+        self.chunks.values().map(|c| c.triangle_count()).sum()
+    }
+
+    /// The chunks welded into one mesh, in key order (as [`weld`] of a whole field's chunks
+    /// sorted by key: the same clay gives the same mesh).
+    pub fn weld(&self) -> WeldedMesh {
+        let mut keys: Vec<&ChunkKey> = self.chunks.keys().collect();
+        keys.sort_unstable_by_key(|k| k.to_array());
+        weld(keys.into_iter().map(|k| self.chunks[k].as_ref()))
+    }
+}
 
 /// An indexed triangle mesh: per-vertex position (metres), unit normal and linear RGBA colour;
 /// three indices per triangle, counter-clockwise seen from outside.
