@@ -16,6 +16,8 @@ mod sculpt_bytes;
 use sculpt_bytes::{join, split};
 
 const SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/tests/toothpaste.toml");
+/// A scene with clay on the finest level beside clay on coarser ones.
+const LEVELS_SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/tests/levels-meet.toml");
 
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("argile-sculpt-{name}-{}", std::process::id()));
@@ -200,6 +202,27 @@ fn convert_moves_sculpts_between_versions() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("format version 9 cannot be written"));
     let out = argile(&["convert", FIXTURE_V1, v4.to_str().unwrap()]);
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("pass --force"));
+
+    // Clay on coarser levels is refused by versions 1 and 2 (they store the finest level
+    // alone; refined, its surface would move), with a sentence that names the file and says
+    // what to write instead; version 3 stores it as it is.
+    for version in ["1", "2"] {
+        let old = dir.join(format!("levels-v{version}.argile"));
+        let out = argile(&["convert", LEVELS_SCENE, old.to_str().unwrap(), "--format-version", version]);
+        let said = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && !old.exists(), "{said}");
+        assert!(
+            said.contains("levels-meet.toml")
+                && said.contains("coarser levels")
+                && said.contains("version 3 or later"),
+            "{said}"
+        );
+    }
+    let v3 = dir.join("levels-v3.argile");
+    assert!(argile(&["convert", LEVELS_SCENE, v3.to_str().unwrap(), "--format-version", "3"])
+        .status
+        .success());
+    assert!(load_sculpt(&v3).unwrap().field.has_levels_above(0));
 
     // A scene converts to its clay at the end of its timeline, as `argile save` stores it.
     let (converted, saved) = (dir.join("scene.argile"), dir.join("saved.argile"));

@@ -154,9 +154,15 @@ pub fn open_sculpt(path: &Path) -> Result<(Scene, Sculpt)> {
     Ok((scene, sculpt))
 }
 
+/// The coarsest level of `field` that holds clay, if a level coarser than the finest does.
+fn coarsest_level(field: &crate::field::Field) -> Option<usize> {
+    (1..crate::field::LEVELS).rev().find(|&level| field.level_keys(level).next().is_some())
+}
+
 /// Rewrites the sculpt file `input` (any version this build reads) as `options` say, to `out`
 /// (atomically; an existing file only when `overwrite`). `input` may also be a scene file,
-/// whose clay at the end of its timeline is stored, with the scene's text.
+/// whose clay at the end of its timeline is stored, with the scene's text. Versions 1 and 2
+/// are refused for clay on coarser levels than the finest (they would move its surface).
 pub fn convert_sculpt(
     input: &Path,
     out: &Path,
@@ -188,6 +194,16 @@ pub fn convert_sculpt(
         bail!(
             "{} holds a lattice left open; format version {} cannot store one (versions from 6 do): \
              open it in the station and apply the lattice (Enter) or put the clay back (Backspace) first",
+            input.display(),
+            options.version
+        );
+    }
+    if let Some(level) = (options.version < 3).then(|| coarsest_level(&sculpt.field)).flatten() {
+        // Versions 1 and 2 store the finest level alone: the coarse clay would go in refined,
+        // read between its samples, and its surface would move by up to a coarse voxel.
+        let voxel_mm = sculpt.field.level_transform(level).voxel_size_m * 1000.0;
+        bail!(
+            "{} holds clay on coarser levels than the finest (down to level {level}, {voxel_mm:.1} mm voxels);              format version {} stores the finest level alone, and refining the coarse clay into it would move              its surface by up to {voxel_mm:.1} mm: write format version 3 or later",
             input.display(),
             options.version
         );
