@@ -214,3 +214,42 @@ fn a_scene_without_clay_is_refused() {
     assert!(!dir.join("x.stl").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The shortest distance between two vertices of `mesh`, found through a grid of cells `cell`
+/// wide (pairs farther apart than `cell` are not looked at: the answer is then at least `cell`).
+fn closest_vertices(mesh: &WeldedMesh, cell: f32) -> f32 {
+    let key = |p: [f32; 3]| p.map(|c| (c / cell).floor() as i64);
+    let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+    for (i, p) in mesh.positions.iter().enumerate() {
+        grid.entry(key(*p)).or_default().push(i);
+    }
+    let mut closest = f32::INFINITY;
+    for (i, p) in mesh.positions.iter().enumerate() {
+        let k = key(*p);
+        for d in 0..27 {
+            let at = [k[0] + d % 3 - 1, k[1] + d / 3 % 3 - 1, k[2] + d / 9 - 1];
+            for &j in grid.get(&at).into_iter().flatten() {
+                if j > i {
+                    closest = closest.min(Vec3::from(*p).distance(Vec3::from(mesh.positions[j])));
+                }
+            }
+        }
+    }
+    closest
+}
+
+/// A slicer or CAD tool welds vertices closer than its tolerance. Exports keep every two
+/// vertices more than a thousandth of the finest voxel apart (1 µm at 1 mm voxels), so a weld
+/// at up to that tolerance merges nothing and the mesh stays closed and manifold: the default
+/// scene, coarse clay beside fine, a carved channel.
+#[test]
+fn exported_vertices_stay_a_thousandth_of_a_voxel_apart_so_a_weld_at_that_tolerance_changes_nothing() {
+    for name in ["scenes/default.toml", "scenes/tests/levels-meet.toml", "scenes/tests/carved-sphere.toml"] {
+        let scene = Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(name)).unwrap();
+        let field = argile::app::final_field(&scene);
+        let voxel = field.transform().voxel_size_m;
+        let mesh = argile::app::welded_surface(&field);
+        let closest = closest_vertices(&mesh, 0.002 * voxel);
+        assert!(closest > 0.001 * voxel, "{name}: two vertices {:.2e} voxel apart", closest / voxel);
+    }
+}

@@ -289,13 +289,23 @@ fn edge_vertex<const AXIS: usize>(
     Vertex { position: position.to_array(), normal: normal.to_array(), colour }
 }
 
+/// How far a crossing is kept from either end of its edge, as a fraction of the edge.
+///
+/// Two vertices nearest each other lie on two edges meeting at one sample, each this far from
+/// it: `√2 ·` [`CROSSING_MARGIN`] of a voxel apart, 0.0014 voxel. A slicer or CAD tool that
+/// welds the export at up to a thousandth of a voxel (1 µm at 1 mm voxels) then merges no
+/// vertex, and the mesh stays closed and manifold; the surface moves by at most 1/1024 voxel
+/// where a sample lies on it or nearly (under a micrometre at 1 mm voxels).
+pub const CROSSING_MARGIN: f32 = 1.0 / 1024.0;
+
 /// Where the surface crosses an edge whose ends hold `va` and `vb`, as a fraction of the edge
-/// from the `va` end. Kept off the ends so that a sample lying exactly on the iso-level (tool
-/// values are multiples of 1/64) does not put the vertices of several edges at one point:
-/// positions then stay distinct and a mesh welded by position keeps its topology.
+/// from the `va` end. Kept [`CROSSING_MARGIN`] off the ends, so that a sample lying on or
+/// near the iso-level (tool values are multiples of 1/64) does not put the vertices of several
+/// edges at one point or nearly so: positions stay distinct and a mesh welded by position, or
+/// within a thousandth of a voxel, keeps its topology.
 #[inline]
 pub(super) fn crossing(iso: f32, va: f32, vb: f32) -> f32 {
-    ((iso - va) / (vb - va)).clamp(1e-4, 1.0 - 1e-4)
+    ((iso - va) / (vb - va)).clamp(CROSSING_MARGIN, 1.0 - CROSSING_MARGIN)
 }
 
 /// World position of the crossing at fraction `t` of the edge of `length` finest voxels from

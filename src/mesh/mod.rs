@@ -71,7 +71,7 @@ mod weld;
 
 pub use cases::{case_table, CORNER_OFFSETS, EDGES};
 pub use coarse::{levels_around, march_coarse, mesh_level, CoarseScratch, MAX_MESH_LEVEL};
-pub use march::{march_brick, Block, MarchScratch, Neighbourhood, BLOCK, BLOCK_VOLUME};
+pub use march::{march_brick, Block, MarchScratch, Neighbourhood, BLOCK, BLOCK_VOLUME, CROSSING_MARGIN};
 pub use mesher::{gather_block, mesh_all, mesh_brick, meshable_bricks, remesh, remesh_dirty, Mesher};
 pub use types::*;
 pub use weld::{weld, SurfaceMeshes, WeldedMesh};
