@@ -27,8 +27,8 @@ pub struct ExportSummary {
     pub bytes: u64,
 }
 
-/// `scene`'s surface at the end of its timeline (after its last key and capture): its clay,
-/// or the composition of its parts.
+/// `scene`'s surface at the end of its timeline (after its last key and capture, its tools
+/// let go: see [`Playback::let_go`]): its clay, or the composition of its parts.
 pub fn final_field(scene: &Scene) -> Field {
     played_to_end(Playback::new(scene))
 }
@@ -36,6 +36,7 @@ pub fn final_field(scene: &Scene) -> Field {
 /// The clay of `playback` at the end of its scene's timeline.
 fn played_to_end(mut playback: Playback<'_>) -> Field {
     playback.advance_to(playback.scene().end_s(), |_| {});
+    playback.let_go();
     playback.into_surface()
 }
 
@@ -164,7 +165,7 @@ fn export_parts(
         let scene = Scene::load(input)?;
         let mut playback = Playback::build(&scene)?;
         playback.advance_to(scene.end_s(), |_| {});
-        playback.close_steps();
+        playback.let_go();
         let parts = playback.assembly().parts().to_vec();
         let (first, _, others) = playback.into_parts();
         (parts, std::iter::once(first).chain(others).collect())

@@ -399,6 +399,17 @@ impl<'s> Playback<'s> {
         self.journal();
     }
 
+    /// The tools let go: a push in progress ends as it does when its tool stops (the motion
+    /// not yet passed on is, the crumbs the tools held are eaten back into the clay, the
+    /// excess is settled into the field), then the steps close. The clay "at the end of the
+    /// timeline" is the clay once its tools let go.
+    pub fn let_go(&mut self) {
+        if let Some(push) = self.push.take() {
+            push.clay.finish(&mut self.field);
+        }
+        self.close_steps();
+    }
+
     /// The clay's matter: the field's mass, plus what a push in progress holds beyond the
     /// densities of 1 the field can show (the excess its conservation layer still carries).
     pub fn matter(&self) -> f64 {

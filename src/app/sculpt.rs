@@ -67,6 +67,7 @@ pub fn save_scene_sculpt(
             playback.time_s()
         );
     }
+    playback.let_go();
     let session = playback.finish_autosave();
     let tools = playback.stored_tools();
     let (field, layouts, others) = playback.into_parts();
@@ -186,6 +187,7 @@ pub fn convert_sculpt(
         let scene = Scene::parse(&text, &input.display().to_string(), input.parent())?;
         let mut playback = Playback::build(&scene)?;
         playback.advance_to(scene.end_s(), |_| {});
+        playback.let_go();
         let tools = playback.stored_tools();
         let (field, parts, others) = playback.into_parts();
         Sculpt { field, scene_toml: Some(text), tools, view: None, parts, others, lattice: None }
