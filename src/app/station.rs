@@ -31,7 +31,12 @@ use winit::window::{Fullscreen, Window, WindowId};
 use super::monitor::{frame_sequential_notice, pick_monitor, Monitor};
 
 mod calibrating;
+mod desk_controls;
 mod lattice;
+mod stereo_view;
+
+use desk_controls::DeskControls;
+use stereo_view::StereoView;
 
 pub use calibrating::AdjustTarget;
 
@@ -509,33 +514,12 @@ pub struct Station<'s> {
     view: Scene,
     /// The sculpt: its clay, history, file and autosave session.
     doc: Document<'s>,
-    bindings: KeyBindings,
-    mouse: MouseNavigator,
-    /// The 6-DoF devices' state (SpaceMice through `mailbox`, gamepads): the desk tool's pose
-    /// is its `Target::Tool` pose.
-    desk: DeskInput,
-    mailbox: Option<Arc<Mailbox>>,
-    /// A device's stroke button is down.
-    device_apply: bool,
-    /// A device's clutch button is down.
-    device_clutch: bool,
-    /// The 3D cursor's clutch (relative) mode, from the first time the clutch is lifted in
-    /// cursor mode until the mouse mode changes or the view is reset; absent: the tool is
-    /// placed under the pointer.
-    cursor_clutch: Option<Clutch>,
-    /// Where the targets start (and `reset-view` puts them back).
-    home: TargetPoses,
-    /// The trackball's turn for a mouse that drives another target than the scene, world
-    /// frame, until the next [`Station::devices`].
-    mouse_turn: Quat,
-    /// Contact feedback for the pads (`None` before the first frame, whose contact is taken
-    /// silently: a tool that starts in the clay does not tap), and the rumble it asked for last.
-    feedback: Option<ContactFeedback>,
-    rumble: Option<Rumble>,
+    /// The desk's controls: keys, mouse, 3D cursor and clutch, SpaceMice, pads, rumble.
+    controls: DeskControls,
+    /// The stereo view: calibration, head, convergence, parallax budget, display mode.
+    stereo: StereoView,
     /// Seconds since the station started (the devices' filters run on it).
     clock_s: f64,
-    modifiers: Modifiers,
-    held: HashSet<KeyCode>,
     desk_tool: Tool,
     /// The most voxels across the desk tool's size on the level it edits, where its scene
     /// tool sets none (`None`: the finest level whatever its size).
@@ -544,35 +528,12 @@ pub struct Station<'s> {
     tool_index: usize,
     action_index: usize,
     stroke: Option<Stroke>,
-    convergence_factor: f32,
-    lights_follow_viewer: bool,
-    /// The display, its screen and the viewer.
-    calibration: ScreenCalibration,
-    /// Where the viewer's head is, for head-tracked views: opentrack, else the scene's
-    /// scripted head, else none (the scene's camera rig).
-    head: Option<OpentrackHead>,
-    /// Keeps the desk tool at zero parallax while on.
-    auto_convergence: Option<AutoConvergence>,
     /// The clay's bounds: those of the surface the renderer draws, updated as it changes.
     clay_bounds: crate::math::Aabb,
     /// That surface's chunks' bounds and a few of their vertices.
     surface: crate::mesh::SurfaceSketch,
     /// The surface as the renderer holds it, for the panel's exports, and the one under way.
     exports: super::export::Exports,
-    /// The parallax budget's verdict for what is shown now: what it was judged on, the check
-    /// and warning when over budget, and the interaxial it allows in limit mode (of the
-    /// head-tracked eyes when the views are head-tracked).
-    budget: Option<Budgeted>,
-    /// The distance between the eyes of head-tracked views, physical metres: the calibrated
-    /// viewer's, until the interaxial keys or the budget's limit change it.
-    tracked_interaxial_m: f32,
-    /// Seconds since the views became head-tracked (they ease in from the untracked views).
-    tracked_for_s: Option<f32>,
-    /// Each eye gets the other's image.
-    swap_eyes: bool,
-    /// Whether the floating window masks the pictures' edges, and the strips it masks now
-    /// (eased towards the measured ones).
-    floating_window: (bool, FloatingWindow),
     /// The symmetry the desk tool and the scene's hands act through.
     symmetry: SymmetrySwitch,
     /// The region the desk tool carries, copies or bends, and the tool's pose when it grabbed
@@ -584,23 +545,11 @@ pub struct Station<'s> {
     part_moving: Option<crate::parts::Placement>,
     /// Seconds the active part's box is still drawn (after it was picked or moved).
     part_shown_s: f32,
-    /// The interlace parity (a frame-sequential display's phase) is the calibration's flipped.
-    parity_flipped: bool,
-    /// Frames the window has shown (a frame-sequential display alternates eyes by it).
-    frames_shown: u64,
     /// Whether the window fills its monitor, and a change the window has yet to make.
     fullscreen: bool,
     fullscreen_asked: Option<bool>,
     /// The monitor's resolution as the window system gives it (when the calibration does not).
     monitor_px: Option<(u32, u32)>,
-    /// How the window shows the stereo pair.
-    display_mode: DisplayMode,
-    /// Whether the window's surface can show quad-buffer stereo.
-    quad_buffer: bool,
-    /// The window's top-left corner on the screen, pixels (interlace parity follows it).
-    window_origin: (i32, i32),
-    /// Where the pointer was last seen, window pixels.
-    pointer_px: Vec2,
     window_px: (u32, u32),
     /// Where the open key looks for sculpts, and the sculpt it will open at the next press
     /// despite unsaved work (the user was warned).
@@ -627,8 +576,6 @@ pub struct Station<'s> {
     redo_names: Vec<String>,
     /// The screen calibration being adjusted on its test pattern (`argile calibrate --adjust`).
     adjusting: Option<calibrating::Adjusting>,
-    /// The gamepads connected, by name (the panel lists them).
-    gamepad_names: Vec<String>,
 }
 
 impl<'s> Station<'s> {
@@ -687,52 +634,57 @@ impl<'s> Station<'s> {
             scene,
             view: scene.clone(),
             doc: Document::new(playback, save_to),
-            bindings,
-            mouse,
-            desk,
-            mailbox: None,
-            device_apply: false,
-            device_clutch: false,
-            cursor_clutch: None,
-            home,
-            mouse_turn: Quat::IDENTITY,
-            feedback: None,
-            rumble: None,
+            controls: DeskControls {
+                bindings,
+                mouse,
+                desk,
+                mailbox: None,
+                device_apply: false,
+                device_clutch: false,
+                cursor_clutch: None,
+                home,
+                mouse_turn: Quat::IDENTITY,
+                feedback: None,
+                rumble: None,
+                modifiers: Modifiers::default(),
+                held: HashSet::new(),
+                pointer_px: Vec2::ZERO,
+                gamepad_names: Vec::new(),
+            },
+            stereo: StereoView {
+                convergence_factor: scene.rig.convergence_m / distance.max(1e-6),
+                lights_follow_viewer: false,
+                calibration,
+                tracked_interaxial_m: calibration.ipd_m,
+                tracked_for_s: None,
+                swap_eyes: scene.display.swap_eyes,
+                floating_window: (scene.display.floating_window, FloatingWindow::NONE),
+                parity_flipped: false,
+                frames_shown: 0,
+                head: None,
+                auto_convergence: None,
+                budget: None,
+                display_mode: DisplayMode::Anaglyph,
+                quad_buffer: false,
+                window_origin: (0, 0),
+            },
             clock_s: 0.0,
-            modifiers: Modifiers::default(),
-            held: HashSet::new(),
             desk_tool,
             hand_samples: Some(HAND_SIZE_SAMPLES),
             tool_index: 0,
             action_index,
             stroke: None,
-            convergence_factor: scene.rig.convergence_m / distance.max(1e-6),
-            lights_follow_viewer: false,
-            calibration,
-            tracked_interaxial_m: calibration.ipd_m,
             monitor_px: None,
-            tracked_for_s: None,
-            swap_eyes: scene.display.swap_eyes,
-            floating_window: (scene.display.floating_window, FloatingWindow::NONE),
             symmetry: SymmetrySwitch::new(scene.symmetry),
             region_drag: None,
             part_base: scene.parts[0].placement,
             part_moving: None,
             part_shown_s: 0.0,
-            parity_flipped: false,
-            frames_shown: 0,
             fullscreen: false,
             fullscreen_asked: None,
-            head: None,
-            auto_convergence: None,
             clay_bounds: crate::math::Aabb::EMPTY,
             surface: crate::mesh::SurfaceSketch::default(),
             exports: super::export::Exports::default(),
-            budget: None,
-            display_mode: DisplayMode::Anaglyph,
-            quad_buffer: false,
-            window_origin: (0, 0),
-            pointer_px: Vec2::ZERO,
             window_px,
             open_dir,
             confirm_open: None,
@@ -750,9 +702,8 @@ impl<'s> Station<'s> {
             step_names: Vec::new(),
             redo_names: Vec::new(),
             adjusting: None,
-            gamepad_names: Vec::new(),
         };
-        station.set_calibration(station.calibration);
+        station.set_calibration(station.stereo.calibration);
         station.resize(window_px);
         station
     }
@@ -772,9 +723,9 @@ impl<'s> Station<'s> {
     /// Uses `calibration` for the display, the screen and the viewer: its display mode unless
     /// the scene names one, and its interlace parity.
     pub fn set_calibration(&mut self, calibration: ScreenCalibration) {
-        self.calibration = calibration;
-        self.tracked_interaxial_m = calibration.ipd_m;
-        self.display_mode =
+        self.stereo.calibration = calibration;
+        self.stereo.tracked_interaxial_m = calibration.ipd_m;
+        self.stereo.display_mode =
             self.scene.display.mode.or(calibration.display.mode).unwrap_or(DisplayMode::Anaglyph);
         self.fit_views();
     }
@@ -783,23 +734,25 @@ impl<'s> Station<'s> {
     /// calibration and the mouse settings (the gamepads' mapping goes to [`Gamepads`]). A mouse
     /// that drives the tool starts as its 3D cursor.
     pub fn set_input_settings(&mut self, settings: &InputSettings) {
-        self.desk.mapping = settings.mapping;
-        self.desk.calibration = settings.spacemouse.0;
+        self.controls.desk.mapping = settings.mapping;
+        self.controls.desk.calibration = settings.spacemouse.0;
         let mouse = settings.mouse.0;
-        self.mouse.settings = mouse;
-        self.mouse.distance_m = self.mouse.distance_m.clamp(mouse.min_distance_m, mouse.max_distance_m);
+        self.controls.mouse.settings = mouse;
+        self.controls.mouse.distance_m =
+            self.controls.mouse.distance_m.clamp(mouse.min_distance_m, mouse.max_distance_m);
         if settings.mapping.target(DeviceClass::Mouse) == Target::Tool {
-            self.mouse.mode = MouseMode::Cursor;
+            self.controls.mouse.mode = MouseMode::Cursor;
         }
     }
 
     /// Device family `class` drives `target` from now on; a mouse set to the tool becomes its
     /// 3D cursor, one set to the scene turns it again.
     fn set_device_target(&mut self, class: DeviceClass, target: Target) {
-        self.desk.mapping.set(class, target);
+        self.controls.desk.mapping.set(class, target);
         if class == DeviceClass::Mouse {
-            self.mouse.mode = if target == Target::Tool { MouseMode::Cursor } else { MouseMode::Scene };
-            self.cursor_clutch = None;
+            self.controls.mouse.mode =
+                if target == Target::Tool { MouseMode::Cursor } else { MouseMode::Scene };
+            self.controls.cursor_clutch = None;
         }
         self.messages.push(format!(
             "the {} drives the {} now",
@@ -810,7 +763,7 @@ impl<'s> Station<'s> {
 
     /// The names of the gamepads connected now (the window's gamepad library lists them).
     pub fn set_gamepad_names(&mut self, names: Vec<String>) {
-        self.gamepad_names = names;
+        self.controls.gamepad_names = names;
     }
 
     /// The 3D cursor's clutch (Galyean–Hughes §2.2.2) after a mouse event that moved the tool
@@ -819,21 +772,21 @@ impl<'s> Station<'s> {
     /// pointer's motion from where it is, scaled by the mouse's clutch gain, instead of jumping
     /// under the pointer.
     fn clutch_cursor(&mut self, tool_before: Vec3, placed: bool) {
-        if self.mouse.mode != MouseMode::Cursor {
+        if self.controls.mouse.mode != MouseMode::Cursor {
             return;
         }
-        let held = self.device_clutch || self.holding(StationAction::Clutch);
-        let gains = ClutchGains { translation: self.mouse.settings.clutch_gain, rotation: 1.0 };
+        let held = self.controls.device_clutch || self.holding(StationAction::Clutch);
+        let gains = ClutchGains { translation: self.controls.mouse.settings.clutch_gain, rotation: 1.0 };
         let at = |position_m: Vec3| Pose { position_m, rotation: Quat::IDENTITY };
-        let clutch = match &mut self.cursor_clutch {
+        let clutch = match &mut self.controls.cursor_clutch {
             Some(c) => c,
-            None if held => self.cursor_clutch.insert(Clutch::new(at(tool_before), gains)),
+            None if held => self.controls.cursor_clutch.insert(Clutch::new(at(tool_before), gains)),
             None => return,
         };
         if !placed {
             // Not a pointer sample: the tool stays where the event put it.
-            if clutch.tool().position_m != self.mouse.tool_position_m {
-                clutch.set_tool(at(self.mouse.tool_position_m));
+            if clutch.tool().position_m != self.controls.mouse.tool_position_m {
+                clutch.set_tool(at(self.controls.mouse.tool_position_m));
             }
             return;
         }
@@ -842,13 +795,14 @@ impl<'s> Station<'s> {
             clutch.set_tool(at(tool_before));
         }
         clutch.set_gains(gains);
-        self.mouse.tool_position_m = clutch.update(at(self.mouse.tool_position_m), held).position_m;
+        self.controls.mouse.tool_position_m =
+            clutch.update(at(self.controls.mouse.tool_position_m), held).position_m;
     }
 
     /// The rumble contact feedback asked for since the last call, if any (see
     /// [`ContactFeedback`]): the window plays it on the pads that have force feedback.
     pub fn take_rumble(&mut self) -> Option<Rumble> {
-        self.rumble.take()
+        self.controls.rumble.take()
     }
 
     /// The clay.
@@ -880,22 +834,22 @@ impl<'s> Station<'s> {
     /// The frame's views take their aspect from the output size: each eye's part of the window
     /// in the display mode; the mouse reads the pointer in that eye's picture.
     fn fit_views(&mut self) {
-        let (w, h) = self.display_mode.eye_size_for_output(self.window_px);
+        let (w, h) = self.stereo.display_mode.eye_size_for_output(self.window_px);
         self.view.output.width_px = w.max(1);
         self.view.output.height_px = h.max(1);
-        let (_, picture) = self.display_mode.pointer_in_eye(Vec2::ZERO, self.window_px);
-        self.mouse.resize(picture);
+        let (_, picture) = self.stereo.display_mode.pointer_in_eye(Vec2::ZERO, self.window_px);
+        self.controls.mouse.resize(picture);
     }
 
     /// The modifiers held now.
     pub fn set_modifiers(&mut self, modifiers: Modifiers) {
-        self.modifiers = modifiers;
+        self.controls.modifiers = modifiers;
     }
 
     /// A key went down or up.
     pub fn key(&mut self, key: KeyCode, pressed: bool) {
         if !pressed {
-            self.held.remove(&key);
+            self.controls.held.remove(&key);
         }
         if self.panel.wants_keyboard() {
             // A text field of the panel has the keyboard: keys edit it, none is a binding.
@@ -907,11 +861,14 @@ impl<'s> Station<'s> {
         if !pressed {
             return;
         }
-        if !self.held.insert(key) {
+        if !self.controls.held.insert(key) {
             return; // auto-repeat
         }
-        if let Some(action) =
-            self.bindings.action(key, self.modifiers).or_else(|| self.adjusting_step_key(key))
+        if let Some(action) = self
+            .controls
+            .bindings
+            .action(key, self.controls.modifiers)
+            .or_else(|| self.adjusting_step_key(key))
         {
             self.act(action);
         }
@@ -927,12 +884,12 @@ impl<'s> Station<'s> {
     /// A mouse event, in window pixels: read in the picture of the eye the pointer is over.
     pub fn mouse(&mut self, event: MouseEvent) {
         if let MouseEvent::Move(at) = event {
-            self.pointer_px = at;
+            self.controls.pointer_px = at;
         }
         if self.panel_takes(event) {
             return;
         }
-        let in_eye = |p: Vec2| self.display_mode.pointer_in_eye(p, self.window_px).0;
+        let in_eye = |p: Vec2| self.stereo.display_mode.pointer_in_eye(p, self.window_px).0;
         let event = match event {
             MouseEvent::Press(button, at) => MouseEvent::Press(button, in_eye(at)),
             MouseEvent::Move(at) => MouseEvent::Move(in_eye(at)),
@@ -942,47 +899,47 @@ impl<'s> Station<'s> {
         let views = self.view.rig.views(aspect);
         let eye = &views.eyes[0];
         let inverse = (eye.projection * eye.view).inverse();
-        let before = self.mouse.scene_rotation;
-        let tool_before = self.mouse.tool_position_m;
-        self.mouse.handle(event, &inverse, self.view.rig.forward());
+        let before = self.controls.mouse.scene_rotation;
+        let tool_before = self.controls.mouse.tool_position_m;
+        self.controls.mouse.handle(event, &inverse, self.view.rig.forward());
         let placed = match event {
             MouseEvent::Press(MouseButton::Left, _) => true,
-            MouseEvent::Move(_) => self.mouse.left_held(),
+            MouseEvent::Move(_) => self.controls.mouse.left_held(),
             _ => false,
         };
         self.clutch_cursor(tool_before, placed);
-        if self.mouse.mode == MouseMode::Scene
-            && self.desk.mapping.target(DeviceClass::Mouse) != Target::Scene
+        if self.controls.mouse.mode == MouseMode::Scene
+            && self.controls.desk.mapping.target(DeviceClass::Mouse) != Target::Scene
         {
             // The trackball turns the mouse's own target instead: its turn, from the view's
             // frame to the world's, goes to the desk with the other devices' motion.
-            let turn = self.mouse.scene_rotation * before.inverse();
-            self.mouse.scene_rotation = before;
+            let turn = self.controls.mouse.scene_rotation * before.inverse();
+            self.controls.mouse.scene_rotation = before;
             let view = Quat::from_mat4(&self.view.rig.centre_view().inverse());
-            self.mouse_turn = (view * turn * view.inverse() * self.mouse_turn).normalize();
+            self.controls.mouse_turn = (view * turn * view.inverse() * self.controls.mouse_turn).normalize();
         }
-        self.desk.poses.get_mut(Target::Tool).position_m = self.mouse.tool_position_m;
+        self.controls.desk.poses.get_mut(Target::Tool).position_m = self.controls.mouse.tool_position_m;
     }
 
     /// Where the pointer was last seen, window pixels.
     pub fn pointer_px(&self) -> Vec2 {
-        self.pointer_px
+        self.controls.pointer_px
     }
 
     /// Tracks the viewer's head with `head` (opentrack): the views become head-tracked
     /// through the screen calibration's screen.
     pub fn attach_head(&mut self, head: OpentrackHead) {
-        self.head = Some(head);
+        self.stereo.head = Some(head);
     }
 
     /// The screen calibration in use.
     fn screen_calibration(&self) -> ScreenCalibration {
-        self.calibration
+        self.stereo.calibration
     }
 
     /// Reads SpaceMouse events and states from `mailbox` (filled by a reader thread).
     pub fn attach_spacemice(&mut self, mailbox: Arc<Mailbox>) {
-        self.mailbox = Some(mailbox);
+        self.controls.mailbox = Some(mailbox);
     }
 
     /// One frame of the 6-DoF devices: drains the SpaceMice, integrates their motion and the
@@ -991,19 +948,19 @@ impl<'s> Station<'s> {
     pub fn devices(&mut self, dt_s: f32, gamepads: &[GamepadMotion], mut actions: Vec<ActionEvent>) {
         self.clock_s += f64::from(dt_s);
         let view_rotation = Quat::from_mat4(&self.view.rig.centre_view().inverse());
-        let mouse_turn = std::mem::replace(&mut self.mouse_turn, Quat::IDENTITY);
+        let mouse_turn = std::mem::replace(&mut self.controls.mouse_turn, Quat::IDENTITY);
         let input = FrameInput { t_s: self.clock_s, dt_s, view_rotation, gamepads, mouse_turn };
         let first_new = actions.len();
-        self.desk.update(self.mailbox.as_deref(), &input, &mut actions);
+        self.controls.desk.update(self.controls.mailbox.as_deref(), &input, &mut actions);
         for (i, a) in actions.iter().enumerate() {
             // The desk already applied its own devices' actions to itself; the gamepads' go
             // through it here (a gamepad's CycleTarget switches the gamepad's target).
             if i < first_new {
-                self.desk.apply_action(*a);
+                self.controls.desk.apply_action(*a);
             }
             let station_action = match a.action {
                 InputAction::Stroke => {
-                    self.device_apply = a.pressed;
+                    self.controls.device_apply = a.pressed;
                     None
                 }
                 InputAction::Undo => Some(StationAction::Undo),
@@ -1011,7 +968,7 @@ impl<'s> Station<'s> {
                 InputAction::ResetView => Some(StationAction::ResetView),
                 InputAction::NextTool => Some(StationAction::NextTool),
                 InputAction::Clutch => {
-                    self.device_clutch = a.pressed;
+                    self.controls.device_clutch = a.pressed;
                     None
                 }
                 InputAction::CycleTarget | InputAction::None => None,
@@ -1020,7 +977,7 @@ impl<'s> Station<'s> {
                 self.act(action);
             }
         }
-        self.mouse.tool_position_m = self.desk.poses.get(Target::Tool).position_m;
+        self.controls.mouse.tool_position_m = self.controls.desk.poses.get(Target::Tool).position_m;
     }
 
     /// A scripted event.
@@ -1028,11 +985,11 @@ impl<'s> Station<'s> {
         match *event {
             ScriptEvent::Text(ref text) => self.text(text),
             ScriptEvent::Press(chord) => {
-                let saved = self.modifiers;
-                self.modifiers = chord.modifiers;
+                let saved = self.controls.modifiers;
+                self.controls.modifiers = chord.modifiers;
                 self.key(chord.key, true);
                 self.key(chord.key, false);
-                self.modifiers = saved;
+                self.controls.modifiers = saved;
             }
             ScriptEvent::Hold(key) => self.key(key, true),
             ScriptEvent::Release(key) => self.key(key, false),
@@ -1115,15 +1072,17 @@ impl<'s> Station<'s> {
             StationAction::InteraxialWider => self.step_interaxial(STEREO_STEP),
             StationAction::InteraxialNarrower => self.step_interaxial(1.0 / STEREO_STEP),
             StationAction::ToggleMouseMode => {
-                self.cursor_clutch = None;
-                self.mouse.mode = match self.mouse.mode {
+                self.controls.cursor_clutch = None;
+                self.controls.mouse.mode = match self.controls.mouse.mode {
                     MouseMode::Scene => MouseMode::Cursor,
                     MouseMode::Cursor => MouseMode::Scene,
                 }
             }
-            StationAction::ToggleLights => self.lights_follow_viewer = !self.lights_follow_viewer,
+            StationAction::ToggleLights => {
+                self.stereo.lights_follow_viewer = !self.stereo.lights_follow_viewer
+            }
             StationAction::ToggleAutoConvergence => {
-                self.auto_convergence = match self.auto_convergence {
+                self.stereo.auto_convergence = match self.stereo.auto_convergence {
                     Some(_) => None,
                     None => Some(AutoConvergence::new(
                         self.view.rig.convergence_m,
@@ -1133,15 +1092,15 @@ impl<'s> Station<'s> {
                 };
             }
             StationAction::SwapEyes => {
-                self.swap_eyes = !self.swap_eyes;
-                self.messages.push(match self.swap_eyes {
+                self.stereo.swap_eyes = !self.stereo.swap_eyes;
+                self.messages.push(match self.stereo.swap_eyes {
                     true => "eyes swapped: the left eye's image goes to the right eye".to_owned(),
                     false => "eyes as rendered: the left eye's image goes to the left eye".to_owned(),
                 });
             }
             StationAction::ToggleFloatingWindow => {
-                self.floating_window.0 = !self.floating_window.0;
-                self.messages.push(match self.floating_window.0 {
+                self.stereo.floating_window.0 = !self.stereo.floating_window.0;
+                self.messages.push(match self.stereo.floating_window.0 {
                     true => "floating window: the side edges are masked where clay in front of the screen touches them"
                         .to_owned(),
                     false => "floating window off: the pictures are shown whole".to_owned(),
@@ -1153,7 +1112,7 @@ impl<'s> Station<'s> {
                 let images = self.doc.playback.images().to_vec();
                 let (tool, pose, images) = self.doc.playback.in_active_part(
                     self.desk_tool.clone(),
-                    self.desk.poses.get(Target::Tool),
+                    self.controls.desk.poses.get(Target::Tool),
                     &images,
                 );
                 let region = Region::of_tool(&tool, pose);
@@ -1190,11 +1149,11 @@ impl<'s> Station<'s> {
                 self.messages.push(format!("symmetry {}", symmetry.describe()));
             }
             StationAction::FlipParity => {
-                self.parity_flipped = !self.parity_flipped;
-                self.messages.push(match self.display_mode {
+                self.stereo.parity_flipped = !self.stereo.parity_flipped;
+                self.messages.push(match self.stereo.display_mode {
                     DisplayMode::FrameSequential => format!(
                         "frame-sequential phase {}: the frames that showed the right eye show the left",
-                        self.display_phase().name()
+                        self.stereo.display_phase().name()
                     ),
                     _ => format!(
                         "interlace parity {}: the other rows (columns) carry the left eye",
@@ -1203,7 +1162,7 @@ impl<'s> Station<'s> {
                 });
             }
             StationAction::RecentreHead => {
-                let said = match self.head.as_mut().map(OpentrackHead::recentre) {
+                let said = match self.stereo.head.as_mut().map(OpentrackHead::recentre) {
                     Some(true) => "head tracking: recentred, your head is now the centred head",
                     Some(false) => "head tracking: nothing received from the tracker yet to recentre on",
                     None => "head tracking is off (--opentrack ADDR turns it on)",
@@ -1213,20 +1172,20 @@ impl<'s> Station<'s> {
             }
             StationAction::ResetView => {
                 let distance = (self.scene.rig.eye_m - self.scene.rig.target_m).length();
-                self.mouse.scene_rotation = Quat::IDENTITY;
-                self.mouse.distance_m = distance;
-                self.mouse.tool_position_m = self.scene.rig.target_m;
-                self.desk.poses = self.home;
-                self.cursor_clutch = None;
+                self.controls.mouse.scene_rotation = Quat::IDENTITY;
+                self.controls.mouse.distance_m = distance;
+                self.controls.mouse.tool_position_m = self.scene.rig.target_m;
+                self.controls.desk.poses = self.controls.home;
+                self.controls.cursor_clutch = None;
                 self.view.rig = self.scene.rig;
-                self.convergence_factor = self.scene.rig.convergence_m / distance.max(1e-6);
+                self.stereo.convergence_factor = self.scene.rig.convergence_m / distance.max(1e-6);
             }
             StationAction::NextDisplayMode => {
                 let modes = DisplayMode::ALL;
-                let at = modes.iter().position(|m| *m == self.display_mode).unwrap_or(0);
-                let usable = |m: &DisplayMode| self.quad_buffer || m.layers() == 1;
+                let at = modes.iter().position(|m| *m == self.stereo.display_mode).unwrap_or(0);
+                let usable = |m: &DisplayMode| self.stereo.quad_buffer || m.layers() == 1;
                 if let Some(next) = (1..=modes.len()).map(|i| modes[(at + i) % modes.len()]).find(usable) {
-                    self.display_mode = next;
+                    self.stereo.display_mode = next;
                     self.fit_views();
                 }
             }
@@ -1272,7 +1231,7 @@ impl<'s> Station<'s> {
         self.end_desk_strokes();
         let part = self.doc.playback.set_active_part(next);
         // The device driving the part starts from home over the part as it is.
-        *self.desk.poses.get_mut(Target::Part) = self.home.get(Target::Part);
+        *self.controls.desk.poses.get_mut(Target::Part) = self.controls.home.get(Target::Part);
         self.part_base = self.doc.playback.assembly().parts()[part].placement;
         self.part_moving = None;
         self.part_shown_s = PART_SHOWN_S;
@@ -1291,11 +1250,11 @@ impl<'s> Station<'s> {
         if !self.panel.shown() {
             return false;
         }
-        let in_eye = |p: Vec2| self.display_mode.pointer_in_eye(p, self.window_px).0.to_array();
+        let in_eye = |p: Vec2| self.stereo.display_mode.pointer_in_eye(p, self.window_px).0.to_array();
         match event {
             MouseEvent::Move(at) => {
                 self.panel.pointer(PointerEvent::Moved(in_eye(at)));
-                self.panel_press || (self.panel.wants_pointer() && !self.mouse.left_held())
+                self.panel_press || (self.panel.wants_pointer() && !self.controls.mouse.left_held())
             }
             MouseEvent::Press(button, at) => {
                 self.panel.pointer(PointerEvent::Moved(in_eye(at)));
@@ -1328,7 +1287,7 @@ impl<'s> Station<'s> {
         let history = self.doc.playback.assembly().history_len(self.doc.playback.field());
         let (undo_list, redo_list) = panel_rows::history_rows(history, &self.step_names, &self.redo_names);
         let modes: Vec<DisplayMode> =
-            DisplayMode::ALL.iter().copied().filter(|m| self.quad_buffer || m.layers() == 1).collect();
+            DisplayMode::ALL.iter().copied().filter(|m| self.stereo.quad_buffer || m.layers() == 1).collect();
         let mut status = self.hud_lines();
         status.extend(self.messages.iter().rev().take(3).rev().cloned());
         let assembly = self.doc.playback.assembly();
@@ -1337,19 +1296,21 @@ impl<'s> Station<'s> {
         let stereo = StereoRow {
             convergence_m: rig.convergence_m,
             convergence_range_m: self.convergence_range(),
-            auto_convergence: self.auto_convergence.is_some(),
+            auto_convergence: self.stereo.auto_convergence.is_some(),
             interaxial_mm: self.interaxial_in_use_m() * 1000.0,
             max_interaxial_mm: StereoRig::MAX_INTERAXIAL_M * 1000.0,
-            disparity: self.budget.as_ref().and_then(|b| b.readout).map(|(check, bound_deg)| Disparity {
-                nearest_deg: check.nearest_deg,
-                farthest_deg: check.farthest_deg,
-                bound_deg,
-                exceeded: check.exceeded,
+            disparity: self.stereo.budget.as_ref().and_then(|b| b.readout).map(|(check, bound_deg)| {
+                Disparity {
+                    nearest_deg: check.nearest_deg,
+                    farthest_deg: check.farthest_deg,
+                    bound_deg,
+                    exceeded: check.exceeded,
+                }
             }),
-            lights_follow_viewer: self.lights_follow_viewer,
-            swap_eyes: self.swap_eyes,
-            floating_window: self.floating_window.0,
-            head: self.head.as_ref().map(|h| !h.lost()),
+            lights_follow_viewer: self.stereo.lights_follow_viewer,
+            swap_eyes: self.stereo.swap_eyes,
+            floating_window: self.stereo.floating_window.0,
+            head: self.stereo.head.as_ref().map(|h| !h.lost()),
         };
         let mut view = PanelView {
             level_samples: self.acting_tool().level_samples,
@@ -1362,16 +1323,16 @@ impl<'s> Station<'s> {
                 .iter()
                 .map(|&class| DeviceRow {
                     family: class.name(),
-                    target: self.desk.mapping.target(class).index(),
+                    target: self.controls.desk.mapping.target(class).index(),
                     connected: match class {
-                        DeviceClass::SpaceMouse => self.desk.spacemouse_names(),
-                        DeviceClass::Gamepad => self.gamepad_names.clone(),
+                        DeviceClass::SpaceMouse => self.controls.desk.spacemouse_names(),
+                        DeviceClass::Gamepad => self.controls.gamepad_names.clone(),
                         DeviceClass::Mouse => vec!["the system pointer".to_owned()],
                     },
                 })
                 .collect(),
             targets: Target::ALL.iter().map(|t| t.name()).collect(),
-            head_tracker: self.head.as_ref().map(|h| {
+            head_tracker: self.stereo.head.as_ref().map(|h| {
                 format!(
                     "head tracker: opentrack on UDP {}, {}",
                     h.receiver().local_addr(),
@@ -1381,7 +1342,7 @@ impl<'s> Station<'s> {
             stereo,
             undo: undo_list,
             redo: redo_list,
-            display_mode: modes.iter().position(|m| *m == self.display_mode).unwrap_or(0),
+            display_mode: modes.iter().position(|m| *m == self.stereo.display_mode).unwrap_or(0),
             display_modes: modes.iter().map(|m| m.name()).collect(),
             save_to: self.doc.save_to().display().to_string(),
             save_name: self
@@ -1437,13 +1398,14 @@ impl<'s> Station<'s> {
             PanelCommand::ToggleSymmetry => self.act(StationAction::ToggleSymmetry),
             PanelCommand::NextSymmetry => self.act(StationAction::NextSymmetry),
             PanelCommand::ConvergenceM(m) => {
-                if m.is_finite() && self.auto_convergence.is_none() {
+                if m.is_finite() && self.stereo.auto_convergence.is_none() {
                     let (lo, hi) = self.convergence_range();
-                    self.convergence_factor = m.clamp(lo, hi) / self.mouse.distance_m.max(1e-6);
+                    self.stereo.convergence_factor =
+                        m.clamp(lo, hi) / self.controls.mouse.distance_m.max(1e-6);
                 }
             }
             PanelCommand::AutoConvergence(on) => {
-                if on != self.auto_convergence.is_some() {
+                if on != self.stereo.auto_convergence.is_some() {
                     self.act(StationAction::ToggleAutoConvergence);
                 }
             }
@@ -1451,19 +1413,19 @@ impl<'s> Station<'s> {
                 if mm.is_finite() {
                     let m = (mm * 1e-3).clamp(0.0, StereoRig::MAX_INTERAXIAL_M);
                     match self.tracked() {
-                        true => self.tracked_interaxial_m = m,
+                        true => self.stereo.tracked_interaxial_m = m,
                         false => self.view.rig.interaxial_m = m,
                     }
                 }
             }
-            PanelCommand::LightsFollowViewer(on) => self.lights_follow_viewer = on,
+            PanelCommand::LightsFollowViewer(on) => self.stereo.lights_follow_viewer = on,
             PanelCommand::SwapEyes(on) => {
-                if on != self.swap_eyes {
+                if on != self.stereo.swap_eyes {
                     self.act(StationAction::SwapEyes);
                 }
             }
             PanelCommand::FloatingWindow(on) => {
-                if on != self.floating_window.0 {
+                if on != self.stereo.floating_window.0 {
                     self.act(StationAction::ToggleFloatingWindow);
                 }
             }
@@ -1471,10 +1433,13 @@ impl<'s> Station<'s> {
             PanelCommand::Undo(n) => (0..n).for_each(|_| self.act(StationAction::Undo)),
             PanelCommand::Redo(n) => (0..n).for_each(|_| self.act(StationAction::Redo)),
             PanelCommand::DisplayMode(i) => {
-                let usable =
-                    DisplayMode::ALL.iter().copied().filter(|m| self.quad_buffer || m.layers() == 1).nth(i);
+                let usable = DisplayMode::ALL
+                    .iter()
+                    .copied()
+                    .filter(|m| self.stereo.quad_buffer || m.layers() == 1)
+                    .nth(i);
                 if let Some(mode) = usable {
-                    self.display_mode = mode;
+                    self.stereo.display_mode = mode;
                     self.fit_views();
                 }
             }
@@ -1531,10 +1496,10 @@ impl<'s> Station<'s> {
     /// at either end.
     fn step_convergence(&mut self, factor: f32) {
         let (lo, hi) = self.convergence_range();
-        let distance = self.mouse.distance_m.max(1e-6);
-        let wanted = self.convergence_factor * factor * distance;
+        let distance = self.controls.mouse.distance_m.max(1e-6);
+        let wanted = self.stereo.convergence_factor * factor * distance;
         let kept = wanted.clamp(lo, hi);
-        self.convergence_factor = kept / distance;
+        self.stereo.convergence_factor = kept / distance;
         if kept != wanted {
             let end =
                 if kept == lo { "nearest, twice the near plane" } else { "farthest, half the far plane" };
@@ -1545,8 +1510,11 @@ impl<'s> Station<'s> {
     /// Scales the interaxial distance in use (the head-tracked eyes' while tracked) by
     /// `factor`, up to [`StereoRig::MAX_INTERAXIAL_M`]; says so at the end.
     fn step_interaxial(&mut self, factor: f32) {
-        let interaxial =
-            if self.tracked() { &mut self.tracked_interaxial_m } else { &mut self.view.rig.interaxial_m };
+        let interaxial = if self.tracked() {
+            &mut self.stereo.tracked_interaxial_m
+        } else {
+            &mut self.view.rig.interaxial_m
+        };
         let wanted = *interaxial * factor;
         *interaxial = wanted.min(StereoRig::MAX_INTERAXIAL_M);
         if wanted > StereoRig::MAX_INTERAXIAL_M {
@@ -1568,7 +1536,7 @@ impl<'s> Station<'s> {
             return lines;
         }
         let rig = &self.view.rig;
-        let mouse = match self.mouse.mode {
+        let mouse = match self.controls.mouse.mode {
             MouseMode::Scene => "turns",
             MouseMode::Cursor => "places tool",
         };
@@ -1588,16 +1556,16 @@ impl<'s> Station<'s> {
             ),
             format!(
                 "{}: convergence {:.2} m, eyes {:.0} mm{}",
-                self.display_mode,
+                self.stereo.display_mode,
                 rig.convergence_m,
                 self.interaxial_in_use_m() * 1000.0,
-                if self.floating_window.0 { ", floating window" } else { "" },
+                if self.stereo.floating_window.0 { ", floating window" } else { "" },
             ),
             format!(
                 "{:.1} ms/frame, mouse {mouse}{}{}",
                 self.frame_ms,
-                if self.auto_convergence.is_some() { ", auto-convergence" } else { "" },
-                match &self.head {
+                if self.stereo.auto_convergence.is_some() { ", auto-convergence" } else { "" },
+                match &self.stereo.head {
                     Some(h) if h.lost() => ", head lost",
                     Some(_) => ", head tracked",
                     None => "",
@@ -1611,7 +1579,7 @@ impl<'s> Station<'s> {
                 .insert(1, format!("part {} of {}: {}{locked}", active + 1, parts.len(), parts[active].name));
         }
         lines.extend(self.exports.status());
-        if let Some(Budgeted { over: Some((check, _)), .. }) = &self.budget {
+        if let Some(Budgeted { over: Some((check, _)), .. }) = &self.stereo.budget {
             // Today's figures, not those of the first warning.
             // The HUD's font has no degree sign.
             lines.push(format!(
@@ -1625,28 +1593,13 @@ impl<'s> Station<'s> {
     /// The display mode and, for interlaced modes, the parity in window pixels (the
     /// calibration's parity is the screen's; a window on an odd row or column flips it).
     pub fn display(&self) -> (DisplayMode, Parity) {
-        let screen = self.display_phase();
-        let parity = match self.display_mode {
-            DisplayMode::ColumnInterlaced => screen.for_origin(self.window_origin.0),
-            DisplayMode::FrameSequential => screen.for_frame(self.frames_shown),
-            _ => screen.for_origin(self.window_origin.1),
-        };
-        (self.display_mode, parity)
-    }
-
-    /// The display's parity in screen rows (columns), or a frame-sequential display's phase:
-    /// the calibration's, flipped by P.
-    fn display_phase(&self) -> Parity {
-        match self.parity_flipped {
-            true => self.calibration.display.parity.flipped(),
-            false => self.calibration.display.parity,
-        }
+        self.stereo.display()
     }
 
     /// Counts a frame the window has shown: a frame-sequential display shows the other eye in
     /// the next.
     pub fn frame_shown(&mut self) {
-        self.frames_shown += 1;
+        self.stereo.frames_shown += 1;
     }
 
     /// Chooses the display mode for a surface of `max_layers` image layers on `device`:
@@ -1658,29 +1611,29 @@ impl<'s> Station<'s> {
         device: &str,
         max_layers: u32,
     ) -> Result<Option<String>> {
-        self.quad_buffer = max_layers >= 2;
+        self.stereo.quad_buffer = max_layers >= 2;
         let choice = choose_mode(wanted, self.scene.display.fallback, device, max_layers)
             .map_err(|e| anyhow::anyhow!("{e}"))?;
-        self.display_mode = choice.mode;
+        self.stereo.display_mode = choice.mode;
         self.fit_views();
         Ok(choice.notice)
     }
 
     /// The window moved to `origin` (its top-left corner on the screen, pixels).
     pub fn set_window_origin(&mut self, origin: (i32, i32)) {
-        self.window_origin = origin;
+        self.stereo.window_origin = origin;
     }
 
     /// Whether the views are head-tracked (opentrack, or the scene's scripted head).
     fn tracked(&self) -> bool {
-        self.head.is_some() || self.scene.head.is_some() || self.adjusting.is_some()
+        self.stereo.head.is_some() || self.scene.head.is_some() || self.adjusting.is_some()
     }
 
     /// The distance between the eyes of the views shown: the head-tracked eyes' while
     /// tracked (physical metres), else the rig's.
     fn interaxial_in_use_m(&self) -> f32 {
         if self.tracked() {
-            self.tracked_interaxial_m
+            self.stereo.tracked_interaxial_m
         } else {
             self.view.rig.interaxial_m
         }
@@ -1689,14 +1642,14 @@ impl<'s> Station<'s> {
     /// The rig of head-tracked views, while tracked: the scene's convergence plane on the
     /// calibrated screen, the eyes [`Station::tracked_interaxial_m`] apart.
     fn tracked_rig(&self) -> Option<HeadTrackedRig> {
-        let c = &self.calibration;
+        let c = &self.stereo.calibration;
         let rig = &self.view.rig;
         self.tracked().then(|| HeadTrackedRig {
             screen: c.screen,
             placement: self
                 .adjusting_placement()
                 .unwrap_or_else(|| Placement::from_rig(&c.screen, c.default_eye_m, rig)),
-            interaxial_m: self.tracked_interaxial_m,
+            interaxial_m: self.stereo.tracked_interaxial_m,
             near_m: rig.near_m,
             far_m: rig.far_m,
         })
@@ -1705,14 +1658,19 @@ impl<'s> Station<'s> {
     /// The window's eyes' pictures as seen on the calibrated screen, whose resolution the
     /// calibration gives, else the window system.
     fn seen_window(&self) -> super::comfort::Seen {
-        let screen_px = self.calibration.resolution_px.or(self.monitor_px);
-        super::comfort::Seen::window(self.calibration, self.display_mode, self.window_px, screen_px)
+        let screen_px = self.stereo.calibration.resolution_px.or(self.monitor_px);
+        super::comfort::Seen::window(
+            self.stereo.calibration,
+            self.stereo.display_mode,
+            self.window_px,
+            screen_px,
+        )
     }
 
     /// How the parallax budget sees the window: each eye's picture on the calibrated screen.
     pub fn describe_picture(&self) -> String {
         let seen = self.seen_window();
-        let from = match (self.calibration.resolution_px, self.monitor_px) {
+        let from = match (self.stereo.calibration.resolution_px, self.monitor_px) {
             (Some((w, h)), _) => format!("a {w}x{h} screen, as the calibration says"),
             (None, Some((w, h))) => format!("a {w}x{h} monitor, as the window system says"),
             (None, None) => "a screen of unknown resolution: fitted to it".to_owned(),
@@ -1721,17 +1679,17 @@ impl<'s> Station<'s> {
             "parallax budget: each eye's picture is {:.0} mm wide on the {:.0} mm screen ({} pixels of {from}), \
              seen from {:.2} m, within ±{:.2}°",
             seen.picture_width_m * 1000.0,
-            self.calibration.screen.width_m() * 1000.0,
-            self.display_mode.eye_size_for_output(self.window_px).0,
-            self.calibration.viewing_distance_m(),
-            self.calibration.budget.max_disparity_deg
+            self.stereo.calibration.screen.width_m() * 1000.0,
+            self.stereo.display_mode.eye_size_for_output(self.window_px).0,
+            self.stereo.calibration.viewing_distance_m(),
+            self.stereo.calibration.budget.max_disparity_deg
         )
     }
 
     /// Why head-tracked views look different from the camera rig's: the screen, seen from the
     /// default eye, spans its own field of view, which the scene's camera may not.
     fn tracking_notice(&self) -> String {
-        let c = &self.calibration;
+        let c = &self.stereo.calibration;
         let screen_fov = 2.0 * (0.5 * c.screen.height_m() / c.viewing_distance_m()).atan().to_degrees();
         let scene_fov = self.view.rig.fov_y_deg;
         let grows = (0.5 * scene_fov.to_radians()).tan() / (0.5 * screen_fov.to_radians()).tan();
@@ -1760,10 +1718,10 @@ impl<'s> Station<'s> {
         let key: BudgetKey = (
             [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z],
             rig.eye_m.to_array(),
-            [rig.convergence_m, rig.interaxial_m, self.tracked_interaxial_m],
-            (self.window_px, self.display_mode, self.tracked()),
+            [rig.convergence_m, rig.interaxial_m, self.stereo.tracked_interaxial_m],
+            (self.window_px, self.stereo.display_mode, self.tracked()),
         );
-        if self.budget.as_ref().is_some_and(|b| b.key == key) {
+        if self.stereo.budget.as_ref().is_some_and(|b| b.key == key) {
             return;
         }
         let seen = super::comfort::Seen { tracked: self.tracked_rig(), ..self.seen_window() };
@@ -1774,11 +1732,11 @@ impl<'s> Station<'s> {
         let allowed = verdict.as_ref().filter(|v| v.limit).map(|v| v.check.allowed_interaxial_m / v.scale);
         let warning = verdict.map(|v| (v.check, v.warning));
         if let Some((_, w)) = &warning {
-            if self.budget.as_ref().is_none_or(|b| b.over.is_none()) {
+            if self.stereo.budget.as_ref().is_none_or(|b| b.over.is_none()) {
                 self.messages.push(w.clone());
             }
         }
-        self.budget = Some(Budgeted { key, over: warning, allowed, readout });
+        self.stereo.budget = Some(Budgeted { key, over: warning, allowed, readout });
     }
 
     /// Where the last [`Station::step`] spent its time.
@@ -1833,48 +1791,48 @@ impl<'s> Station<'s> {
     /// The view as a sculpt stores it: the camera's turn and distance, the scene's pose, the
     /// stereo settings and the display mode.
     pub fn stored_view(&self) -> StoredView {
-        let scene = self.desk.poses.get(Target::Scene);
+        let scene = self.controls.desk.poses.get(Target::Scene);
         StoredView {
-            turn: self.mouse.scene_rotation.to_array(),
-            distance_m: self.mouse.distance_m,
+            turn: self.controls.mouse.scene_rotation.to_array(),
+            distance_m: self.controls.mouse.distance_m,
             scene_position_m: scene.position_m.to_array(),
             scene_rotation: scene.rotation.to_array(),
-            convergence_factor: self.convergence_factor,
+            convergence_factor: self.stereo.convergence_factor,
             interaxial_m: self.view.rig.interaxial_m,
-            lights_follow_viewer: self.lights_follow_viewer,
-            auto_convergence: self.auto_convergence.is_some(),
-            display_mode: self.display_mode.name().to_owned(),
+            lights_follow_viewer: self.stereo.lights_follow_viewer,
+            auto_convergence: self.stereo.auto_convergence.is_some(),
+            display_mode: self.stereo.display_mode.name().to_owned(),
         }
     }
 
     /// Puts the view a sculpt stored (see [`Station::stored_view`]) in place; a display mode
     /// this window cannot show is left as it is, and said.
     pub fn apply_view(&mut self, view: &StoredView) {
-        self.mouse.scene_rotation = Quat::from_array(view.turn).normalize();
-        self.mouse.distance_m = view.distance_m;
-        *self.desk.poses.get_mut(Target::Scene) = crate::math::Pose {
+        self.controls.mouse.scene_rotation = Quat::from_array(view.turn).normalize();
+        self.controls.mouse.distance_m = view.distance_m;
+        *self.controls.desk.poses.get_mut(Target::Scene) = crate::math::Pose {
             position_m: Vec3::from_array(view.scene_position_m),
             rotation: Quat::from_array(view.scene_rotation).normalize(),
         };
-        self.convergence_factor = view.convergence_factor;
+        self.stereo.convergence_factor = view.convergence_factor;
         self.view.rig.interaxial_m = view.interaxial_m;
-        self.lights_follow_viewer = view.lights_follow_viewer;
-        self.auto_convergence = view.auto_convergence.then(|| {
+        self.stereo.lights_follow_viewer = view.lights_follow_viewer;
+        self.stereo.auto_convergence = view.auto_convergence.then(|| {
             AutoConvergence::new(
-                self.mouse.distance_m * self.convergence_factor,
+                self.controls.mouse.distance_m * self.stereo.convergence_factor,
                 AutoConvergence::DEFAULT_TIME_CONSTANT_S,
                 (self.view.rig.near_m * 2.0, self.view.rig.far_m * 0.5),
             )
         });
         match view.display_mode.parse::<DisplayMode>() {
-            Ok(mode) if self.quad_buffer || mode.layers() == 1 => {
-                self.display_mode = mode;
+            Ok(mode) if self.stereo.quad_buffer || mode.layers() == 1 => {
+                self.stereo.display_mode = mode;
                 self.fit_views();
             }
             _ => self.messages.push(format!(
                 "the sculpt was shown in the {} display mode, which this window cannot show; it stays {}",
                 view.display_mode,
-                self.display_mode.name()
+                self.stereo.display_mode.name()
             )),
         }
     }
@@ -1926,7 +1884,7 @@ impl<'s> Station<'s> {
         let active = self.doc.playback.assembly().active();
         self.part_base = self.doc.playback.assembly().parts()[active].placement;
         self.part_moving = None;
-        *self.desk.poses.get_mut(Target::Part) = self.home.get(Target::Part);
+        *self.controls.desk.poses.get_mut(Target::Part) = self.controls.home.get(Target::Part);
         self.clay_bounds = crate::math::Aabb::EMPTY;
         self.recent.remember(path);
         self.recovered.retain(|(p, _)| p != path);
@@ -2102,7 +2060,7 @@ impl<'s> Station<'s> {
     /// and moved as far as the device has moved that target from home. Once it stops, the
     /// autosave session keeps where it is.
     fn drive_active_part(&mut self) {
-        let (pose, home) = (self.desk.poses.get(Target::Part), self.home.get(Target::Part));
+        let (pose, home) = (self.controls.desk.poses.get(Target::Part), self.controls.home.get(Target::Part));
         let base = self.part_base;
         let turn = (pose.rotation * home.rotation.inverse()).normalize();
         let placement = crate::parts::Placement {
@@ -2122,7 +2080,7 @@ impl<'s> Station<'s> {
     }
 
     fn holding(&self, action: StationAction) -> bool {
-        self.held.iter().any(|&k| self.bindings.held_action(k) == Some(action))
+        self.controls.held.iter().any(|&k| self.controls.bindings.held_action(k) == Some(action))
     }
 
     /// Runs the tools and the field for `dt_s` seconds and returns the frame to draw; mesh
@@ -2143,18 +2101,18 @@ impl<'s> Station<'s> {
         let (lo, hi) = self.convergence_range();
         let rig = &mut self.view.rig;
         let base = self.scene.rig;
-        let scene_pose = self.desk.poses.get(Target::Scene);
-        let rotation = (self.mouse.scene_rotation * scene_pose.rotation).inverse();
-        let offset = (base.eye_m - base.target_m).normalize_or(Vec3::Z) * self.mouse.distance_m;
+        let scene_pose = self.controls.desk.poses.get(Target::Scene);
+        let rotation = (self.controls.mouse.scene_rotation * scene_pose.rotation).inverse();
+        let offset = (base.eye_m - base.target_m).normalize_or(Vec3::Z) * self.controls.mouse.distance_m;
         rig.eye_m = base.target_m + rotation * offset;
         rig.up = rotation * base.up;
         // Zooming moves the plane with the clay, within the same range as the keys.
-        rig.convergence_m = (self.mouse.distance_m * self.convergence_factor).clamp(lo, hi);
-        if let Some(auto) = &mut self.auto_convergence {
+        rig.convergence_m = (self.controls.mouse.distance_m * self.stereo.convergence_factor).clamp(lo, hi);
+        if let Some(auto) = &mut self.stereo.auto_convergence {
             // The desk tool's depth along the view, smoothly.
-            let depth = (self.mouse.tool_position_m - rig.eye_m).dot(rig.forward());
+            let depth = (self.controls.mouse.tool_position_m - rig.eye_m).dot(rig.forward());
             rig.convergence_m = auto.update(depth, dt_s);
-            self.convergence_factor = rig.convergence_m / self.mouse.distance_m.max(1e-6);
+            self.stereo.convergence_factor = rig.convergence_m / self.controls.mouse.distance_m.max(1e-6);
         }
 
         let step = POINTER_SPEED_M_PER_S * dt_s;
@@ -2168,11 +2126,11 @@ impl<'s> Station<'s> {
             (StationAction::PointerToward, -forward),
         ] {
             if self.holding(action) {
-                self.mouse.tool_position_m += direction * step;
+                self.controls.mouse.tool_position_m += direction * step;
             }
         }
-        let tool = self.desk.poses.get_mut(Target::Tool);
-        tool.position_m = self.mouse.tool_position_m;
+        let tool = self.controls.desk.poses.get_mut(Target::Tool);
+        tool.position_m = self.controls.mouse.tool_position_m;
         let pose = *tool;
 
         let tools_started = Instant::now();
@@ -2183,7 +2141,7 @@ impl<'s> Station<'s> {
         self.doc.playback.advance_to(t, |_| {});
         // While a calibration is adjusted, the pattern is not sculpted.
         let mut applying =
-            (self.holding(StationAction::Apply) || self.device_apply) && self.adjusting.is_none();
+            (self.holding(StationAction::Apply) || self.controls.device_apply) && self.adjusting.is_none();
         self.drive_active_part();
         // The desk tool acts on the active part, in its frame.
         let images = self.doc.playback.images().to_vec();
@@ -2249,10 +2207,10 @@ impl<'s> Station<'s> {
         self.times.mesh_ms = ms_since(mesh_started);
 
         self.judge_parallax();
-        if let Some(Budgeted { allowed: Some(allowed), .. }) = self.budget {
+        if let Some(Budgeted { allowed: Some(allowed), .. }) = self.stereo.budget {
             // Limit mode: this frame's eyes no farther apart than the budget allows.
             if self.tracked() {
-                self.tracked_interaxial_m = self.tracked_interaxial_m.min(allowed);
+                self.stereo.tracked_interaxial_m = self.stereo.tracked_interaxial_m.min(allowed);
             } else {
                 self.view.rig.interaxial_m = self.view.rig.interaxial_m.min(allowed);
             }
@@ -2269,7 +2227,7 @@ impl<'s> Station<'s> {
                     .map(|r| tool_glyph(&r.shape, r.frame.pose, r.frame.scale, super::frame::REGION_COLOUR)),
             );
         }
-        if self.lights_follow_viewer {
+        if self.stereo.lights_follow_viewer {
             // The scene's lights, carried along with the viewer's turn about the target.
             let pivot = self.scene.rig.target_m;
             for light in &mut frame.lights {
@@ -2279,10 +2237,10 @@ impl<'s> Station<'s> {
                 }
             }
         }
-        let head_pose = match (&mut self.head, &self.scene.head) {
+        let head_pose = match (&mut self.stereo.head, &self.scene.head) {
             (Some(tracker), _) => Some(tracker.pose()),
             // The pattern is seen from the default eye of the calibration as it stands.
-            (None, _) if self.adjusting.is_some() => Some(self.calibration.default_head()),
+            (None, _) if self.adjusting.is_some() => Some(self.stereo.calibration.default_head()),
             (None, Some(path)) => Some(path.pose_at(self.doc.playback.time_s())),
             (None, None) => None,
         };
@@ -2290,7 +2248,7 @@ impl<'s> Station<'s> {
             // Fish-tank views: the scene's convergence plane on the calibrated screen, seen from
             // the tracked eyes; eased in from the camera rig's views as tracking starts.
             let views = tracked.views(&head);
-            let since = match self.tracked_for_s {
+            let since = match self.stereo.tracked_for_s {
                 None => {
                     if self.adjusting.is_none() {
                         self.messages.push(self.tracking_notice());
@@ -2299,8 +2257,8 @@ impl<'s> Station<'s> {
                 }
                 Some(t) => t + dt_s,
             };
-            self.tracked_for_s = Some(since);
-            let ease = self.calibration.tracker.ease_s;
+            self.stereo.tracked_for_s = Some(since);
+            let ease = self.stereo.calibration.tracker.ease_s;
             // A calibration's pattern is seen from the calibrated eye at once.
             frame.views = match ease > 0.0 && since < ease && self.adjusting.is_none() {
                 true => {
@@ -2310,19 +2268,19 @@ impl<'s> Station<'s> {
                 false => views,
             };
         } else {
-            self.tracked_for_s = None;
+            self.stereo.tracked_for_s = None;
         }
         // The floating window, measured on the views as the eyes see them and carried with
         // the pictures when they are swapped.
-        let measured = match self.floating_window.0 && self.display_mode != DisplayMode::Mono {
+        let measured = match self.stereo.floating_window.0 && self.stereo.display_mode != DisplayMode::Mono {
             true => FloatingWindow::measure(&frame.views, self.surface.points()),
             false => FloatingWindow::NONE,
         };
-        let window = self.floating_window.1.eased(measured, dt_s);
+        let window = self.stereo.floating_window.1.eased(measured, dt_s);
         // Strips under a hundredth of a pixel are none (the easing never quite reaches 0).
-        self.floating_window.1 = if window.widest() < 1e-5 { FloatingWindow::NONE } else { window };
-        frame.floating_window = self.floating_window.1;
-        if self.swap_eyes {
+        self.stereo.floating_window.1 = if window.widest() < 1e-5 { FloatingWindow::NONE } else { window };
+        frame.floating_window = self.stereo.floating_window.1;
+        if self.stereo.swap_eyes {
             frame.views.eyes.swap(0, 1);
             frame.floating_window = frame.floating_window.swapped();
         }
@@ -2347,8 +2305,8 @@ impl<'s> Station<'s> {
         if self.part_shown_s > 0.0 {
             frame.tools.extend(super::frame::part_glyph(&self.doc.playback, super::frame::PART_COLOUR));
         }
-        let second = self.desk.poses.get(Target::SecondTool);
-        if second != self.home.get(Target::SecondTool) {
+        let second = self.controls.desk.poses.get(Target::SecondTool);
+        if second != self.controls.home.get(Target::SecondTool) {
             // The second tool, once a device has moved it: the desk tool's shape and size, in blue.
             frame.tools.push(tool_glyph(&tool.shape, second, tool.scale, Vec4::new(0.3, 0.5, 1.0, 0.35)));
         }
@@ -2358,7 +2316,8 @@ impl<'s> Station<'s> {
     /// The key light (the scene's first), turned and moved as far as the devices driving the
     /// light have moved its target from home; as the scene has it while they have not.
     fn place_key_light(&self, lights: &mut [Light]) {
-        let (light, home) = (self.desk.poses.get(Target::Light), self.home.get(Target::Light));
+        let (light, home) =
+            (self.controls.desk.poses.get(Target::Light), self.controls.home.get(Target::Light));
         if light == home {
             return;
         }
@@ -2376,9 +2335,9 @@ impl<'s> Station<'s> {
     /// Contact feedback for the pads: the tool the gamepads drive (the desk tool at `tool`, or
     /// the second tool) against the clay this frame.
     fn feel_contact(&mut self, tool: Pose, dt_s: f32) {
-        let driven = match self.desk.mapping.target(DeviceClass::Gamepad) {
+        let driven = match self.controls.desk.mapping.target(DeviceClass::Gamepad) {
             Target::Tool => Some((tool, self.stroke.is_some())),
-            Target::SecondTool => Some((self.desk.poses.get(Target::SecondTool), false)),
+            Target::SecondTool => Some((self.controls.desk.poses.get(Target::SecondTool), false)),
             Target::Scene | Target::Light | Target::Part => None,
         };
         let contact = driven.map_or(Contact::default(), |(pose, stroking)| {
@@ -2386,13 +2345,13 @@ impl<'s> Station<'s> {
                 contact_under(self.doc.playback.surface_now(), pose, self.desk_tool.half_extents_m());
             Contact { touching, density, stroking }
         });
-        let feedback = self.feedback.get_or_insert_with(|| {
+        let feedback = self.controls.feedback.get_or_insert_with(|| {
             let mut silent = ContactFeedback::default();
             let _ = silent.update(Contact { stroking: false, ..contact }, 0.0);
             silent
         });
         if let Some(r) = feedback.update(contact, dt_s) {
-            self.rumble = Some(r);
+            self.controls.rumble = Some(r);
         }
     }
 }
@@ -2641,7 +2600,7 @@ impl WindowApp<'_, '_> {
             self.window_px,
         )?;
         tracing::info!("station window on {}", renderer.device_name());
-        let wanted = self.options.display_mode.unwrap_or(self.station.display_mode);
+        let wanted = self.options.display_mode.unwrap_or(self.station.stereo.display_mode);
         let layers = renderer.window_max_layers()?.unwrap_or(1);
         if let Some(notice) = self.station.set_surface(wanted, renderer.device_name(), layers)? {
             println!("{notice}");
@@ -3006,7 +2965,7 @@ mod tests {
         let mut station = Station::new(&scene, KeyBindings::shipped(), (960, 540), "unused.argile".into());
         station.set_panel_shown(true);
         station.step(SCRIPTED_STEP_S, |_| {});
-        let turn = station.mouse.scene_rotation;
+        let turn = station.controls.mouse.scene_rotation;
         let drag = |from: Vec2| ScriptEvent::Drag {
             button: MouseButton::Left,
             from_px: from,
@@ -3015,17 +2974,17 @@ mod tests {
         };
         station.script(&drag(Vec2::new(60.0, 400.0)));
         station.step(SCRIPTED_STEP_S, |_| {});
-        assert_eq!(station.mouse.scene_rotation, turn, "a drag on the panel leaves the view");
+        assert_eq!(station.controls.mouse.scene_rotation, turn, "a drag on the panel leaves the view");
         station.script(&drag(Vec2::new(600.0, 300.0)));
         station.step(SCRIPTED_STEP_S, |_| {});
-        assert_ne!(station.mouse.scene_rotation, turn, "a drag on the scene turns it");
+        assert_ne!(station.controls.mouse.scene_rotation, turn, "a drag on the scene turns it");
         // F1 hides it: the whole window is the view's again.
         station.key(KeyCode::F1, true);
         station.key(KeyCode::F1, false);
-        let turn = station.mouse.scene_rotation;
+        let turn = station.controls.mouse.scene_rotation;
         station.script(&drag(Vec2::new(60.0, 400.0)));
         station.step(SCRIPTED_STEP_S, |_| {});
-        assert_ne!(station.mouse.scene_rotation, turn, "hidden, the panel takes nothing");
+        assert_ne!(station.controls.mouse.scene_rotation, turn, "hidden, the panel takes nothing");
     }
 
     #[test]
@@ -3035,7 +2994,7 @@ mod tests {
         station.set_panel_shown(true);
         sculpt_for(&mut station, 3);
         let one = station.field().clone();
-        station.mouse.tool_position_m += Vec3::new(0.05, 0.0, 0.0);
+        station.controls.mouse.tool_position_m += Vec3::new(0.05, 0.0, 0.0);
         sculpt_for(&mut station, 3);
         let view = station.panel_view();
         assert_eq!(view.undo.len(), 2, "{:?}", view.undo);
@@ -3055,7 +3014,7 @@ mod tests {
         assert_eq!(station.panel_view().undo.len(), 2, "both redone");
         // A new stroke after an undo: nothing to redo any more.
         station.panel_command(PanelCommand::Undo(1));
-        station.mouse.tool_position_m -= Vec3::new(0.0, 0.05, 0.0);
+        station.controls.mouse.tool_position_m -= Vec3::new(0.0, 0.05, 0.0);
         sculpt_for(&mut station, 2);
         let view = station.panel_view();
         assert_eq!((view.undo.len(), view.redo.len()), (2, 0));
@@ -3145,13 +3104,13 @@ mod tests {
         let place = |mode: DisplayMode, at: Vec2| {
             let mut station =
                 Station::new(&scene, KeyBindings::shipped(), (480, 200), PathBuf::from("u.argile"));
-            station.display_mode = mode;
+            station.stereo.display_mode = mode;
             station.fit_views();
             station.act(StationAction::ToggleMouseMode);
             station.mouse(MouseEvent::Move(at));
             station.mouse(MouseEvent::Press(MouseButton::Left, station.pointer_px()));
             station.mouse(MouseEvent::Release(MouseButton::Left));
-            station.mouse.tool_position_m
+            station.controls.mouse.tool_position_m
         };
         // Pixel (280, 120) of each eye's 480 × 200 picture, off its centre.
         let mono = place(DisplayMode::Mono, Vec2::new(280.0, 120.0));
@@ -3199,9 +3158,9 @@ mod tests {
         );
         station.act(StationAction::SwapEyes);
         // Mono shows one picture whole; turned off, the strips slide away.
-        station.display_mode = DisplayMode::Mono;
+        station.stereo.display_mode = DisplayMode::Mono;
         assert_eq!(frames(&mut station, 120), FloatingWindow::NONE);
-        station.display_mode = DisplayMode::Anaglyph;
+        station.stereo.display_mode = DisplayMode::Anaglyph;
         frames(&mut station, 60);
         station.panel_command(PanelCommand::FloatingWindow(false));
         assert!(!station.panel_view().stereo.floating_window);
@@ -3312,7 +3271,7 @@ mod tests {
         assert!(station.messages.iter().any(|m| m == "symmetry mirror x"), "{:?}", station.messages);
         assert!(station.hud_lines()[0].ends_with(", mirror x"), "{:?}", station.hud_lines());
         // A stroke to the right of the plane x = 0 through the scene's centre.
-        station.mouse.tool_position_m = Vec3::new(0.06, 0.0, 0.0);
+        station.controls.mouse.tool_position_m = Vec3::new(0.06, 0.0, 0.0);
         let frame = station.step(SCRIPTED_STEP_S, |_| {});
         assert!(frame.tools.len() >= 3, "the tool, its mirror image and the plane are drawn");
         sculpt_for(&mut station, 3);
@@ -3343,7 +3302,7 @@ mod tests {
     fn the_region_keys_carry_copy_bend_and_inflate_the_clay_under_the_tool_each_one_undo_step() {
         let scene = ball_scene();
         let mut station = small_station(&scene);
-        station.mouse.tool_position_m = Vec3::ZERO;
+        station.controls.mouse.tool_position_m = Vec3::ZERO;
         sculpt_for(&mut station, 2);
         let ball = station.doc.playback.field().clone();
         let mass = ball.mass();
@@ -3354,11 +3313,11 @@ mod tests {
         assert!(at(&station, Vec3::ZERO) > 0.9);
         // G held: the ball's region is carried 8 cm along X with the tool.
         let carry = |station: &mut Station<'_>, key: KeyCode| {
-            station.mouse.tool_position_m = Vec3::ZERO;
+            station.controls.mouse.tool_position_m = Vec3::ZERO;
             station.key(key, true);
             station.step(SCRIPTED_STEP_S, |_| {});
             for x in [0.03, 0.06, 0.08] {
-                station.mouse.tool_position_m = Vec3::new(x, 0.0, 0.0);
+                station.controls.mouse.tool_position_m = Vec3::new(x, 0.0, 0.0);
                 let frame = station.step(SCRIPTED_STEP_S, |_| {});
                 assert!(!frame.tools.is_empty(), "the carried region is drawn");
             }
@@ -3377,7 +3336,7 @@ mod tests {
         station.act(StationAction::Undo);
         assert!(station.doc.playback.field().same_samples(&ball));
         // I and Shift+I: the surface within the tool grows, then shrinks.
-        station.mouse.tool_position_m = Vec3::new(0.03, 0.0, 0.0);
+        station.controls.mouse.tool_position_m = Vec3::new(0.03, 0.0, 0.0);
         station.step(SCRIPTED_STEP_S, |_| {});
         station.act(StationAction::InflateRegion);
         assert!(station.doc.playback.field().mass() > mass, "inflated");
@@ -3389,10 +3348,10 @@ mod tests {
         }
         assert!(station.doc.playback.field().same_samples(&ball), "one undo step each");
         // B held at the ball's edge: the clay there follows the tool out.
-        station.mouse.tool_position_m = Vec3::new(0.03, 0.0, 0.0);
+        station.controls.mouse.tool_position_m = Vec3::new(0.03, 0.0, 0.0);
         station.key(KeyCode::KeyB, true);
         station.step(SCRIPTED_STEP_S, |_| {});
-        station.mouse.tool_position_m = Vec3::new(0.05, 0.0, 0.0);
+        station.controls.mouse.tool_position_m = Vec3::new(0.05, 0.0, 0.0);
         station.step(SCRIPTED_STEP_S, |_| {});
         station.key(KeyCode::KeyB, false);
         station.step(SCRIPTED_STEP_S, |_| {});
@@ -3404,16 +3363,16 @@ mod tests {
     fn the_lattice_keys_open_shape_apply_and_put_back_a_lattice_each_one_undo_step() {
         let scene = ball_scene();
         let mut station = small_station(&scene);
-        station.mouse.tool_position_m = Vec3::ZERO;
+        station.controls.mouse.tool_position_m = Vec3::ZERO;
         sculpt_for(&mut station, 2);
         let ball = station.doc.playback.field().clone();
         let (mass, steps) = (ball.mass(), station.doc.playback.field().history_stats().undo_in_memory);
         let press = |station: &mut Station<'_>, chord: &str| {
             let chord = Chord::parse(chord).unwrap();
-            station.modifiers = chord.modifiers;
+            station.controls.modifiers = chord.modifiers;
             station.key(chord.key, true);
             station.key(chord.key, false);
-            station.modifiers = Modifiers::default();
+            station.controls.modifiers = Modifiers::default();
             station.step(SCRIPTED_STEP_S, |_| {})
         };
         // Shift+F: a lattice over the whole ball, drawn, the clay untouched.
@@ -3423,7 +3382,7 @@ mod tests {
         assert!(frame.tools.len() > 64, "its 64 controls, their lines and the picked one are drawn");
         assert!(station.doc.playback.field().same_samples(&ball));
         // The tool picks the control nearest it; R three times swells the clay there.
-        station.mouse.tool_position_m = Vec3::splat(0.012);
+        station.controls.mouse.tool_position_m = Vec3::splat(0.012);
         station.step(SCRIPTED_STEP_S, |_| {});
         let picked = station.doc.playback.held_lattice().unwrap().picked();
         assert!(picked.iter().all(|&i| i == 2), "the interior control nearest the tool: {picked:?}");
@@ -3462,13 +3421,13 @@ mod tests {
         station.act(StationAction::Undo);
         // F around the tool, D held drags the picked control 1 cm out, Backspace puts it all
         // back and leaves no step.
-        station.mouse.tool_position_m = Vec3::new(0.02, 0.0, 0.0);
+        station.controls.mouse.tool_position_m = Vec3::new(0.02, 0.0, 0.0);
         press(&mut station, "KeyF");
         let spec = *station.doc.playback.held_lattice().unwrap().lattice().spec();
         assert!((spec.region.size().x - 0.12).abs() < 1e-4, "twice the tool's size about it: {spec:?}");
         station.key(KeyCode::KeyD, true);
         station.step(SCRIPTED_STEP_S, |_| {});
-        station.mouse.tool_position_m = Vec3::new(0.03, 0.0, 0.0);
+        station.controls.mouse.tool_position_m = Vec3::new(0.03, 0.0, 0.0);
         station.step(SCRIPTED_STEP_S, |_| {});
         station.key(KeyCode::KeyD, false);
         station.step(SCRIPTED_STEP_S, |_| {});
@@ -3491,14 +3450,14 @@ mod tests {
         use crate::spline::SplineKind;
         let scene = ball_scene();
         let mut station = small_station(&scene);
-        station.mouse.tool_position_m = Vec3::ZERO;
+        station.controls.mouse.tool_position_m = Vec3::ZERO;
         sculpt_for(&mut station, 2);
         let ball = station.doc.playback.field().clone();
         let chord = Chord::parse("Ctrl+KeyF").unwrap();
-        station.modifiers = chord.modifiers;
+        station.controls.modifiers = chord.modifiers;
         station.key(chord.key, true);
         station.key(chord.key, false);
-        station.modifiers = Modifiers::default();
+        station.controls.modifiers = Modifiers::default();
         assert_eq!(
             station.doc.playback.lattice_form().kind,
             SplineKind::Bezier,
@@ -3560,12 +3519,12 @@ mod tests {
         let path = dir.join("open-lattice.argile");
         let scene = ball_scene();
         let mut station = Station::new(&scene, KeyBindings::shipped(), (64, 64), path.clone());
-        station.mouse.tool_position_m = Vec3::ZERO;
+        station.controls.mouse.tool_position_m = Vec3::ZERO;
         sculpt_for(&mut station, 2);
         let ball = station.doc.playback.field().clone();
         let steps = ball_steps(&station);
         station.act(StationAction::OpenPartLattice);
-        station.mouse.tool_position_m = Vec3::splat(0.012);
+        station.controls.mouse.tool_position_m = Vec3::splat(0.012);
         station.step(SCRIPTED_STEP_S, |_| {});
         for _ in 0..3 {
             station.act(StationAction::RaiseValue);
@@ -3667,12 +3626,12 @@ mod tests {
         let scene = Scene::default_scene();
         let mut station =
             Station::new(&scene, KeyBindings::shipped(), (64, 64), PathBuf::from("unused.argile"));
-        let start = station.mouse.tool_position_m;
+        let start = station.controls.mouse.tool_position_m;
         station.key(KeyCode::ArrowRight, true);
         for _ in 0..60 {
             station.step(SCRIPTED_STEP_S, |_| {});
         }
-        let moved = station.mouse.tool_position_m - start;
+        let moved = station.controls.mouse.tool_position_m - start;
         let right = station.view.rig.right();
         assert!((moved - right * POINTER_SPEED_M_PER_S).length() < 1e-4, "a second of ArrowRight: {moved}");
         let before = station.view.rig.eye_m.distance(station.view.rig.target_m);
@@ -3681,7 +3640,7 @@ mod tests {
         let after = station.view.rig.eye_m.distance(station.view.rig.target_m);
         assert!(after < before, "wheel away zooms in: {before} → {after}");
         assert!(
-            (station.view.rig.convergence_m / after - station.convergence_factor).abs() < 1e-5,
+            (station.view.rig.convergence_m / after - station.stereo.convergence_factor).abs() < 1e-5,
             "the zero-parallax plane follows the zoom"
         );
     }
@@ -3699,7 +3658,7 @@ mod tests {
             id,
             info: DeviceInfo { path: "test".into(), name: "SpaceMouse".into() },
         });
-        let start = station.desk.poses.get(Target::Tool).position_m;
+        let start = station.controls.desk.poses.get(Target::Tool).position_m;
         // Half deflection to the right, button 1 (stroke) held.
         let state = SpaceMouseState { axes: RawAxes([175, 0, 0, 0, 0, 0]), buttons: 1, ..Default::default() };
         mailbox.push_event(ReaderEvent::Buttons {
@@ -3712,9 +3671,12 @@ mod tests {
             station.devices(SCRIPTED_STEP_S, &[], Vec::new());
             station.step(SCRIPTED_STEP_S, |_| {});
         }
-        let moved = station.desk.poses.get(Target::Tool).position_m - start;
+        let moved = station.controls.desk.poses.get(Target::Tool).position_m - start;
         assert!(moved.dot(station.view.rig.right()) > 0.01, "the tool went right: {moved}");
-        assert_eq!(station.mouse.tool_position_m, station.desk.poses.get(Target::Tool).position_m);
+        assert_eq!(
+            station.controls.mouse.tool_position_m,
+            station.controls.desk.poses.get(Target::Tool).position_m
+        );
         assert!(station.doc.playback.field().mass() > 0.0, "the stroke button sculpts");
         mailbox.push_event(ReaderEvent::Buttons {
             id,
@@ -3812,7 +3774,7 @@ mod tests {
         assert!(station.hud_lines()[2].contains("head tracked"));
 
         // Auto-convergence: the tool 10 cm nearer than the target; the plane follows, smoothly.
-        station.mouse.tool_position_m = station.view.rig.target_m - station.view.rig.forward() * 0.1;
+        station.controls.mouse.tool_position_m = station.view.rig.target_m - station.view.rig.forward() * 0.1;
         station.key(KeyCode::KeyC, true);
         station.key(KeyCode::KeyC, false);
         let before = station.view.rig.convergence_m;
@@ -3821,7 +3783,8 @@ mod tests {
         for _ in 0..120 {
             station.step(SCRIPTED_STEP_S, |_| {});
         }
-        let depth = (station.mouse.tool_position_m - station.view.rig.eye_m).dot(station.view.rig.forward());
+        let depth =
+            (station.controls.mouse.tool_position_m - station.view.rig.eye_m).dot(station.view.rig.forward());
         assert!(first < before && first > depth, "one step moves part of the way: {before} → {first}");
         assert!((station.view.rig.convergence_m - depth).abs() < 1e-3, "two seconds later it is there");
     }
@@ -3872,7 +3835,7 @@ mod tests {
             })
         };
         assert!(close(&first, &untracked), "the first frame is the camera's view");
-        let frames = (station.calibration.tracker.ease_s / SCRIPTED_STEP_S).ceil() as usize + 1;
+        let frames = (station.stereo.calibration.tracker.ease_s / SCRIPTED_STEP_S).ceil() as usize + 1;
         let mut last = first;
         let mut steps = Vec::new();
         for _ in 0..frames {
@@ -3936,7 +3899,7 @@ mod tests {
             station.step(SCRIPTED_STEP_S, |_| {});
         }
         assert!(over(&station).is_none(), "{:?}", station.hud_lines());
-        assert!(station.tracked_interaxial_m < 0.063 * 0.7, "{}", station.tracked_interaxial_m);
+        assert!(station.stereo.tracked_interaxial_m < 0.063 * 0.7, "{}", station.stereo.tracked_interaxial_m);
     }
 
     #[test]
@@ -4075,7 +4038,7 @@ mod tests {
         }
         assert!(part_box(&station.step(SCRIPTED_STEP_S, |_| {})).is_none(), "gone after a while");
         // A stroke at the right ball's top (world): clay of the right part, in its frame.
-        station.mouse.tool_position_m = Vec3::new(0.08, 0.02, 0.0);
+        station.controls.mouse.tool_position_m = Vec3::new(0.08, 0.02, 0.0);
         sculpt_for(&mut station, 2);
         assert!(station.doc.playback.field().same_samples(&left), "the left part is untouched");
         let grown = &station.doc.playback.assembly().others()[0];
@@ -4134,7 +4097,7 @@ mod tests {
             station.step(SCRIPTED_STEP_S, |_| {});
             let (touching, density) = contact_under(
                 station.field(),
-                station.desk.poses.get(Target::Tool),
+                station.controls.desk.poses.get(Target::Tool),
                 station.desk_tool.half_extents_m(),
             );
             felt.push((station.take_rumble(), touching, density));
@@ -4166,8 +4129,8 @@ mod tests {
         // A gamepad that turns the scene feels nothing, whatever the desk tool touches.
         let mut station = small_station(&scene);
         gamepad_drives(&mut station, Target::Scene);
-        station.desk.poses.get_mut(Target::Tool).position_m = Vec3::new(0.12, 0.0, 0.0);
-        station.mouse.tool_position_m = Vec3::new(0.12, 0.0, 0.0);
+        station.controls.desk.poses.get_mut(Target::Tool).position_m = Vec3::new(0.12, 0.0, 0.0);
+        station.controls.mouse.tool_position_m = Vec3::new(0.12, 0.0, 0.0);
         station.devices(SCRIPTED_STEP_S, &[], stroke(true));
         station.step(SCRIPTED_STEP_S, |_| {});
         assert_eq!(station.take_rumble(), None);
@@ -4176,13 +4139,13 @@ mod tests {
         // comes back after leaving.
         let mut station = small_station(&scene);
         gamepad_drives(&mut station, Target::Tool);
-        station.desk.poses.get_mut(Target::Tool).position_m = Vec3::new(0.12, 0.0, 0.0);
-        station.mouse.tool_position_m = Vec3::new(0.12, 0.0, 0.0);
+        station.controls.desk.poses.get_mut(Target::Tool).position_m = Vec3::new(0.12, 0.0, 0.0);
+        station.controls.mouse.tool_position_m = Vec3::new(0.12, 0.0, 0.0);
         station.step(SCRIPTED_STEP_S, |_| {});
         assert_eq!(station.take_rumble(), None, "no tap at start");
-        station.mouse.tool_position_m = Vec3::ZERO;
+        station.controls.mouse.tool_position_m = Vec3::ZERO;
         station.step(SCRIPTED_STEP_S, |_| {});
-        station.mouse.tool_position_m = Vec3::new(0.12, 0.0, 0.0);
+        station.controls.mouse.tool_position_m = Vec3::new(0.12, 0.0, 0.0);
         station.step(SCRIPTED_STEP_S, |_| {});
         assert_eq!(station.take_rumble(), Some(ContactFeedback::TAP));
     }
@@ -4242,10 +4205,10 @@ mod tests {
 
         // A mouse set to drive the tool starts as its 3D cursor.
         let mut station = small_station(&scene);
-        assert_eq!(station.mouse.mode, MouseMode::Scene);
+        assert_eq!(station.controls.mouse.mode, MouseMode::Scene);
         settings.mapping.set(DeviceClass::Mouse, Target::Tool);
         station.set_input_settings(&settings);
-        assert_eq!(station.mouse.mode, MouseMode::Cursor);
+        assert_eq!(station.controls.mouse.mode, MouseMode::Cursor);
     }
 
     #[test]
@@ -4276,12 +4239,16 @@ mod tests {
         station.devices(SCRIPTED_STEP_S, &[], Vec::new());
         station.step(SCRIPTED_STEP_S, |_| {});
         assert!(station.stroke.is_none() && !station.doc.playback.field().in_stroke(), "the stroke ended");
-        let at = station.desk.poses.get(Target::Tool).position_m;
+        let at = station.controls.desk.poses.get(Target::Tool).position_m;
         for _ in 0..5 {
             station.devices(SCRIPTED_STEP_S, &[], Vec::new());
             station.step(SCRIPTED_STEP_S, |_| {});
         }
-        assert_eq!(station.desk.poses.get(Target::Tool).position_m, at, "a lost device moves nothing");
+        assert_eq!(
+            station.controls.desk.poses.get(Target::Tool).position_m,
+            at,
+            "a lost device moves nothing"
+        );
         assert_eq!(station.doc.playback.field().mass(), mass, "nor sculpts");
         // Plugged back (a new id): it drives the tool again.
         mailbox.push_event(ReaderEvent::Connected { id: DeviceId(2), info });
@@ -4290,7 +4257,7 @@ mod tests {
             station.devices(SCRIPTED_STEP_S, &[], Vec::new());
             station.step(SCRIPTED_STEP_S, |_| {});
         }
-        assert!((station.desk.poses.get(Target::Tool).position_m - at).length() > 0.005);
+        assert!((station.controls.desk.poses.get(Target::Tool).position_m - at).length() > 0.005);
         assert!(station.stroke.is_none());
     }
 
@@ -4315,14 +4282,14 @@ mod tests {
         // The mouse set to the tool becomes its 3D cursor, and back to the scene turns it.
         let (mouse, tool, scene_target) = (2, Target::Tool.index(), Target::Scene.index());
         station.panel_command(PanelCommand::DeviceTarget(mouse, tool));
-        assert_eq!(station.desk.mapping.target(DeviceClass::Mouse), Target::Tool);
-        assert_eq!(station.mouse.mode, MouseMode::Cursor);
+        assert_eq!(station.controls.desk.mapping.target(DeviceClass::Mouse), Target::Tool);
+        assert_eq!(station.controls.mouse.mode, MouseMode::Cursor);
         assert_eq!(station.messages.last().unwrap(), "the mouse drives the tool now");
         station.panel_command(PanelCommand::DeviceTarget(mouse, scene_target));
-        assert_eq!(station.mouse.mode, MouseMode::Scene);
+        assert_eq!(station.controls.mouse.mode, MouseMode::Scene);
         // The SpaceMouse set to the light moves the light, not the tool.
         station.panel_command(PanelCommand::DeviceTarget(0, Target::Light.index()));
-        assert_eq!(station.desk.mapping.target(DeviceClass::SpaceMouse), Target::Light);
+        assert_eq!(station.controls.desk.mapping.target(DeviceClass::SpaceMouse), Target::Light);
         assert_eq!(station.panel_view().devices[0].target, Target::Light.index());
         // Unplugged, it is listed no more.
         mailbox.push_event(ReaderEvent::Lost { id: DeviceId(1), released: 0, reason: "unplugged".into() });
@@ -4331,7 +4298,7 @@ mod tests {
         // Out of range indices change nothing.
         station.panel_command(PanelCommand::DeviceTarget(7, 0));
         station.panel_command(PanelCommand::DeviceTarget(0, 99));
-        assert_eq!(station.desk.mapping.target(DeviceClass::SpaceMouse), Target::Light);
+        assert_eq!(station.controls.desk.mapping.target(DeviceClass::SpaceMouse), Target::Light);
     }
 
     #[test]
@@ -4350,7 +4317,7 @@ mod tests {
         maker.set_scene_toml(Some(text.to_owned()));
         let made = maker.desk_tool.shape.clone();
         // The view changed: turned, stereo keys, lights, the next display mode.
-        maker.mouse.scene_rotation = Quat::from_rotation_y(0.7) * Quat::from_rotation_x(-0.2);
+        maker.controls.mouse.scene_rotation = Quat::from_rotation_y(0.7) * Quat::from_rotation_x(-0.2);
         for action in [
             StationAction::InteraxialWider,
             StationAction::ConvergenceNearer,
@@ -4458,7 +4425,7 @@ mod tests {
         assert!(station.messages.last().unwrap().contains("not an extension"));
         assert!(!dir.join("b.xyz").exists());
         // More clay, then open the saved sculpt: the panel said what becomes of the stroke.
-        station.mouse.tool_position_m += Vec3::new(0.05, 0.0, 0.0);
+        station.controls.mouse.tool_position_m += Vec3::new(0.05, 0.0, 0.0);
         sculpt_for(&mut station, 3);
         assert!(station.field().mass() > mass);
         station.set_recovered(vec![(b.clone(), "3 stroke(s) of ball".into())]);
@@ -4629,7 +4596,7 @@ mod tests {
                 to_px: Vec2::new(to, 32.0),
                 steps: 4,
             });
-            station.mouse.tool_position_m
+            station.controls.mouse.tool_position_m
         };
         let cursor = |station: &mut Station<'_>| {
             station.key(KeyCode::Tab, true);

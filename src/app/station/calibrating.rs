@@ -101,14 +101,14 @@ impl Station<'_> {
 
     /// Whether the calibration shown differs from what its file says.
     pub fn adjustments_unwritten(&self) -> bool {
-        self.adjusting.as_ref().is_some_and(|a| !same_adjustables(&a.written, &self.calibration))
+        self.adjusting.as_ref().is_some_and(|a| !same_adjustables(&a.written, &self.stereo.calibration))
     }
 
     /// What a user leaving with changes not written needs to know: where they would have
     /// gone and the values, to write by hand.
     pub fn unwritten_adjustments(&self) -> Option<String> {
         let a = self.adjusting.as_ref().filter(|_| self.adjustments_unwritten())?;
-        let c = &self.calibration;
+        let c = &self.stereo.calibration;
         let e = c.default_eye_m;
         Some(format!(
             "the adjustments were not written to {}: [screen] width_m = {:.5}, height_m = {:.5}; \
@@ -126,7 +126,7 @@ impl Station<'_> {
     /// The keys while adjusting, as they are bound.
     fn adjusting_keys(&self) -> String {
         let keys = |a: StationAction| {
-            let chords = self.bindings.chords(a);
+            let chords = self.controls.bindings.chords(a);
             chords.first().map_or_else(|| format!("({} unbound)", a.name()), ToString::to_string)
         };
         format!(
@@ -149,7 +149,7 @@ impl Station<'_> {
     pub(super) fn act_adjusting(&mut self, action: StationAction) -> bool {
         let Some(a) = &self.adjusting else { return false };
         let (file, written, quit_warned) = (a.file.clone(), a.written, a.quit_warned);
-        let ten = if self.modifiers.shift { 10.0 } else { 1.0 };
+        let ten = if self.controls.modifiers.shift { 10.0 } else { 1.0 };
         let adjustment = match action {
             StationAction::PointerLeft => Adjustment::Width(-WIDTH_STEP_M * ten),
             StationAction::PointerRight => Adjustment::Width(WIDTH_STEP_M * ten),
@@ -158,7 +158,7 @@ impl Station<'_> {
             StationAction::InteraxialNarrower => Adjustment::Ipd(-IPD_STEP_M),
             StationAction::InteraxialWider => Adjustment::Ipd(IPD_STEP_M),
             StationAction::Save | StationAction::ApplyLattice => {
-                let said = match write_calibration(&file, &written, &self.calibration) {
+                let said = match write_calibration(&file, &written, &self.stereo.calibration) {
                     Ok(back) => {
                         let file = file.display().to_string();
                         self.show_calibration(back);
@@ -179,7 +179,8 @@ impl Station<'_> {
             }
             StationAction::Quit => {
                 if self.adjustments_unwritten() && !quit_warned {
-                    let save = self.bindings.chords(StationAction::Save).first().map(ToString::to_string);
+                    let save =
+                        self.controls.bindings.chords(StationAction::Save).first().map(ToString::to_string);
                     self.messages.push(format!(
                         "the adjustments are not written to {}: {} writes them; quit again to leave without",
                         file.display(),
@@ -206,7 +207,7 @@ impl Station<'_> {
                 return true;
             }
         };
-        let now = adjusted(&self.calibration, adjustment);
+        let now = adjusted(&self.stereo.calibration, adjustment);
         self.show_calibration(now);
         if let Some(a) = &mut self.adjusting {
             a.quit_warned = false;
@@ -218,7 +219,7 @@ impl Station<'_> {
     /// times the step.
     pub(super) fn adjusting_step_key(&self, key: winit::keyboard::KeyCode) -> Option<StationAction> {
         self.adjusting.as_ref()?;
-        self.bindings.held_action(key).filter(|a| {
+        self.controls.bindings.held_action(key).filter(|a| {
             matches!(
                 a,
                 StationAction::PointerLeft
@@ -231,13 +232,13 @@ impl Station<'_> {
 
     /// Shows the pattern through `calibration` (its display settings as they are).
     fn show_calibration(&mut self, calibration: ScreenCalibration) {
-        self.calibration = calibration;
-        self.tracked_interaxial_m = calibration.ipd_m;
+        self.stereo.calibration = calibration;
+        self.stereo.tracked_interaxial_m = calibration.ipd_m;
     }
 
     /// Where the pattern's world sits in screen space while adjusting.
     pub(super) fn adjusting_placement(&self) -> Option<Placement> {
-        self.adjusting.as_ref().map(|a| a.placement(&self.calibration))
+        self.adjusting.as_ref().map(|a| a.placement(&self.stereo.calibration))
     }
 
     /// The marks over the pattern for the pictures as they are seen now.
@@ -254,7 +255,7 @@ impl Station<'_> {
     /// must show with it, and the keys.
     pub(super) fn adjusting_hud(&self) -> Option<Vec<String>> {
         let a = self.adjusting.as_ref()?;
-        let c = &self.calibration;
+        let c = &self.stereo.calibration;
         let (w, h) = (c.screen.width_m(), c.screen.height_m());
         let d = c.viewing_distance_m();
         let s = w / a.pattern.screen.width_m();
@@ -288,8 +289,8 @@ impl Station<'_> {
             ),
             format!(
                 "{}{}: the L for the left eye only, the R for the right only",
-                self.display_mode,
-                if self.swap_eyes { ", eyes swapped" } else { "" }
+                self.stereo.display_mode,
+                if self.stereo.swap_eyes { ", eyes swapped" } else { "" }
             ),
         ])
     }
@@ -351,7 +352,7 @@ mod tests {
         station.set_modifiers(Modifiers::default());
         press(&mut station, KeyCode::PageUp);
         press(&mut station, KeyCode::Equal);
-        let c = station.calibration;
+        let c = station.stereo.calibration;
         assert!((c.screen.width_m() - (w0 + 0.011)).abs() < 1e-6, "{}", c.screen.width_m());
         assert!((c.screen.aspect() - shipped.screen.aspect()).abs() < 1e-5);
         assert!((c.screen.centre_m() - shipped.screen.centre_m()).length() < 1e-6);
@@ -400,7 +401,7 @@ mod tests {
         let text = std::fs::read_to_string(&file).unwrap();
         assert!(!text.contains("tracker") && !text.contains("centre_m"), "{text}");
         let back = ScreenCalibration::load(&file).unwrap();
-        assert!(same_adjustables(&back, &station.calibration), "{text}");
+        assert!(same_adjustables(&back, &station.stereo.calibration), "{text}");
         assert!(station.unwritten_adjustments().is_none());
         assert!(!station.hud_lines().join("\n").contains("not written"));
 
@@ -409,7 +410,7 @@ mod tests {
         press(&mut station, KeyCode::Minus);
         assert!(station.adjustments_unwritten());
         press(&mut station, KeyCode::Backspace);
-        assert!(same_adjustables(&station.calibration, &back));
+        assert!(same_adjustables(&station.stereo.calibration, &back));
         press(&mut station, KeyCode::Escape);
         assert!(station.wants_quit(), "nothing unwritten: quit quits");
         let _ = std::fs::remove_dir_all(&dir);
@@ -427,7 +428,7 @@ mod tests {
         assert!(station.doc.playback.held_lattice().is_none(), "no lattice opens on the pattern");
         assert!(station.messages.last().unwrap().starts_with("calibrating: ArrowLeft/ArrowRight"));
         press(&mut station, KeyCode::KeyE);
-        assert!(station.swap_eyes, "E swaps the eyes");
+        assert!(station.stereo.swap_eyes, "E swaps the eyes");
         assert!(station.hud_lines().iter().any(|l| l.contains("eyes swapped")));
     }
 }

@@ -52,7 +52,7 @@ impl Station<'_> {
     /// Opens a lattice over the clay around the desk tool, or over the active part's whole
     /// clay; says what it did.
     fn open_lattice(&mut self, whole_part: bool) -> String {
-        let around = (!whole_part).then(|| (&self.desk_tool, self.desk.poses.get(Target::Tool)));
+        let around = (!whole_part).then(|| (&self.desk_tool, self.controls.desk.poses.get(Target::Tool)));
         let region = match lattice_region(&self.doc.playback, around) {
             Ok(region) => region,
             Err(why) => return why,
