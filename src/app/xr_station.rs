@@ -1444,6 +1444,34 @@ mod tests {
     }
 
     #[test]
+    fn the_panels_save_as_and_open_move_the_sculpt_between_files() {
+        let scene = ball();
+        let dir = std::env::temp_dir().join(format!("argile-xr-open-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let front = Vec3::new(0.0, 0.0, 0.045);
+        let mut s = XrSculptor::new(&scene, Playback::new(&scene), dir.join("a.argile"), false);
+        let carve = HandState { grip: at(0.0, 1.3, -0.40), trigger: 1.0, ..HandState::default() };
+        frame(&mut s, [HandState::default(), carve]);
+        frame(&mut s, [HandState::default(), HandState { trigger: 0.0, ..carve }]);
+        assert!(density(&s, front) < 0.5, "carved");
+        let b = dir.join("b.argile");
+        s.panel_command(PanelCommand::SaveAs(b.clone()), None);
+        assert_eq!(s.doc.save_to(), b, "saving writes there from now on");
+        // Another headset session opens it from its panel: the carved clay, saved back to it.
+        let mut t = XrSculptor::new(&scene, Playback::new(&scene), dir.join("c.argile"), false);
+        assert!(density(&t, front) > 0.5);
+        t.panel_command(PanelCommand::Open(b.clone()), None);
+        assert!(t.messages.last().unwrap().starts_with("opened"), "{:?}", t.messages);
+        assert!(density(&t, front) < 0.5, "the opened sculpt's clay");
+        assert_eq!(t.doc.save_to(), b);
+        // A file that is not there changes nothing, and the message names it.
+        t.panel_command(PanelCommand::Open(dir.join("missing.argile")), None);
+        assert!(t.messages.last().unwrap().contains("missing.argile"), "{:?}", t.messages);
+        assert_eq!(t.doc.save_to(), b);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
     fn the_panels_export_writes_the_surface_as_drawn_away_from_the_frame() {
         let scene = ball();
         let dir = std::env::temp_dir().join(format!("argile-xr-export-{}", std::process::id()));
