@@ -292,3 +292,15 @@ pub(super) fn opened_said(path: &std::path::Path, left: u64, fate: &str) -> Stri
         n => format!("opened {} ({n} unsaved change(s) left behind: {fate})", path.display()),
     }
 }
+
+/// What a save as says: where it saved, where saving writes from now on; or why not, and
+/// where saving still writes (`save_to`, the document's after the attempt).
+pub(super) fn saved_as_said(
+    saved: &anyhow::Result<super::document::Saved>,
+    save_to: &std::path::Path,
+) -> String {
+    match saved {
+        Ok(saved) => format!("saved the sculpt to {}, where saving writes from now on", saved.path.display()),
+        Err(e) => format!("{e:#}; saving still writes to {}", save_to.display()),
+    }
+}

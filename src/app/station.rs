@@ -1921,19 +1921,12 @@ impl<'s> Station<'s> {
     /// The panel's save as: the sculpt to `path`, where saving writes from then on.
     fn save_as(&mut self, path: &Path) {
         let view = self.stored_view();
-        let before = self.doc.save_to().to_path_buf();
-        match self.doc.save_as(path, Some(&view)) {
-            Ok(saved) => {
-                self.recent.remember(&saved.path);
-                self.messages.push(format!(
-                    "saved the sculpt to {}, where saving writes from now on",
-                    saved.path.display()
-                ));
-            }
-            Err(e) => {
-                self.messages.push(format!("{e:#}; saving still writes to {}", before.display()));
-            }
+        let saved = self.doc.save_as(path, Some(&view));
+        if let Ok(saved) = &saved {
+            self.recent.remember(&saved.path);
         }
+        let said = panel_rows::saved_as_said(&saved, self.doc.save_to());
+        self.messages.push(said);
     }
 
     /// The panel's export: the surface as it stands to `path`, in the format its extension

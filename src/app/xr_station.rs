@@ -53,7 +53,7 @@ use crate::io::Sculpt;
 use crate::math::{Pose, Vec3};
 use crate::mesh::{MeshDiff, Mesher};
 use crate::parts::{Symmetry, SymmetrySwitch};
-use crate::render::{Frame, PanelPaint, ToolGlyph};
+use crate::render::{Frame, ToolGlyph};
 use crate::scene::{Hand, HandState as PlaybackHand, Scene};
 use crate::tool::{Action, Stroke, Tool, ToolShape, HAND_SIZE_SAMPLES};
 use crate::ui::{Panel, PanelCommand, PanelView, PointerEvent, HEADSET_PANEL_PX};
@@ -221,8 +221,6 @@ pub struct XrSculptor<'s> {
     panel_hit: Option<([f32; 2], Vec3)>,
     /// The trigger went down on the panel and is held: the panel keeps the hand.
     panel_held: bool,
-    /// What the panel painted last (`None` while hidden).
-    panel_paint: Option<PanelPaint>,
     /// Where the tool was last (the scene), for a lattice opened around it.
     last_tool_pose: Option<Pose>,
     /// The surface as the renderer holds it, for the panel's exports, and the one under way.
@@ -267,7 +265,6 @@ impl<'s> XrSculptor<'s> {
             },
             panel_hit: None,
             panel_held: false,
-            panel_paint: None,
             last_tool_pose: None,
             exports: super::export::Exports::default(),
         }
@@ -411,7 +408,6 @@ impl<'s> XrSculptor<'s> {
                 if !shown {
                     self.panel_hit = None;
                     self.panel_held = false;
-                    self.panel_paint = None;
                 }
             }
             None => {}
@@ -548,15 +544,9 @@ impl<'s> XrSculptor<'s> {
             PanelCommand::Save => self.save_and_say(),
             PanelCommand::SaveAs(path) => {
                 self.end_stroke();
-                self.messages.push(match self.doc.save_as(&path, None) {
-                    Ok(saved) => {
-                        format!(
-                            "saved the sculpt to {}, where saving writes from now on",
-                            saved.path.display()
-                        )
-                    }
-                    Err(e) => format!("{e:#}; saving still writes to {}", self.doc.save_to().display()),
-                });
+                let saved = self.doc.save_as(&path, None);
+                let said = panel_rows::saved_as_said(&saved, self.doc.save_to());
+                self.messages.push(said);
             }
             PanelCommand::Open(path) => self.open(&path),
             PanelCommand::Export(path) => {
@@ -604,7 +594,8 @@ impl<'s> XrSculptor<'s> {
         let said = match panel_rows::lattice_region(&self.doc.playback, around) {
             Ok(region) => match self.doc.playback.open_lattice(&form.over(region)) {
                 Ok(()) => format!(
-                    "lattice open ({}): the trigger drags the control nearest the tool, the thumbstick its value",
+                    "lattice open ({}): the trigger drags the control nearest the tool, the thumbstick its \
+                     value; the lattice button applies it, undo puts the clay back",
                     form.describe()
                 ),
                 Err(e) => e,
@@ -623,23 +614,7 @@ impl<'s> XrSculptor<'s> {
             self.messages.push("lattice applied (undo takes it back)".into());
             return;
         }
-        let region = match panel_rows::lattice_region(&self.doc.playback, None) {
-            Ok(region) => region,
-            Err(why) => {
-                self.messages.push(why);
-                return;
-            }
-        };
-        self.messages.push(
-            match self.doc.playback.open_lattice(&self.doc.playback.lattice_form().over(region)) {
-                Ok(()) => {
-                    "lattice open: the trigger drags the control nearest the tool, the thumbstick its value; \
-                       the lattice button applies it, undo puts the clay back"
-                        .into()
-                }
-                Err(e) => e,
-            },
-        );
+        self.open_lattice(true);
     }
 
     /// With a lattice open, the tool hand at `pose` (the scene): the control nearest it is
@@ -805,13 +780,14 @@ impl<'s> XrSculptor<'s> {
         self.messages.extend(self.exports.poll());
         let on_palette = self.palette_buttons(input, &mut haptics);
         let on_panel = self.point_at_panel(input, !on_palette, dt_s);
+        let mut panel_paint = None;
         if self.panel.shown() {
             let view = self.panel_view();
             let (commands, paint) = self.panel.run(&view, HEADSET_PANEL_PX, f64::from(self.time_s));
             for command in commands {
                 self.panel_command(command, input.head);
             }
-            self.panel_paint = paint;
+            panel_paint = paint;
         }
         let on_palette = on_palette || on_panel;
         self.controls(input, on_panel, dt_s);
@@ -905,7 +881,7 @@ impl<'s> XrSculptor<'s> {
         let (mut frame, mut held) = self.frame(&input.hands, tool_pose.map(|pose| (pose, applying)), &tool);
         // The panel on its board in the support hand; without that hand tracked, its textures
         // still go to the renderer (each is given once) and nothing is drawn.
-        if let Some(mut paint) = self.panel_paint.take() {
+        if let Some(mut paint) = panel_paint {
             let support = 1 - self.dominant;
             match input.hands[support].grip {
                 Some(grip) => {
