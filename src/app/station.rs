@@ -36,7 +36,7 @@ mod lattice;
 mod stereo_view;
 
 use desk_controls::DeskControls;
-use stereo_view::StereoView;
+use stereo_view::{Budgeted, StereoView};
 
 pub use calibrating::AdjustTarget;
 
@@ -65,10 +65,10 @@ use crate::parts::{inflate, Motion, Region, RegionDrag, RegionOp, SymmetrySwitch
 use crate::render::{Light, Presented, Renderer, RendererDesc, ValidationLog};
 use crate::scene::ScreenCalibration;
 use crate::scene::{line_column, FileError, Scene};
-use crate::stereo::comfort::{AutoConvergence, BudgetCheck};
+use crate::stereo::comfort::AutoConvergence;
 use crate::stereo::display::{choose_mode, DisplayMode, Parity};
 use crate::stereo::floating::FloatingWindow;
-use crate::stereo::{HeadTrackedRig, Placement, StereoRig};
+use crate::stereo::{HeadTrackedRig, StereoRig};
 use crate::tool::{Action, Ellipsoid, Falloff, Solid, Stroke, Tool, ToolShape, HAND_SIZE_SAMPLES};
 use crate::ui::{DeviceRow, Disparity, Panel, PanelCommand, PanelKey, PanelView, PointerEvent, StereoRow};
 
@@ -371,10 +371,6 @@ fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
-/// What a parallax budget verdict depends on: the clay's bounds, the stereo rig (eye,
-/// convergence, interaxial, the tracked eyes' interaxial) and how the window shows it.
-type BudgetKey = ([f32; 6], [f32; 3], [f32; 3], ((u32, u32), DisplayMode, bool));
-
 /// Views `t` of the way from `a` to `b` (0 to 1): the eyes' positions moved and their
 /// orientations turned (slerp), the projections' terms blended, so that a change of view
 /// (tracking starting) is eased rather than cut.
@@ -394,20 +390,6 @@ fn blend_views(
         o.projection = x.projection * (1.0 - t) + y.projection * t;
     }
     out
-}
-
-/// The parallax budget's last verdict (see [`Station::judge_parallax`]).
-#[derive(Clone, Debug)]
-struct Budgeted {
-    /// What it was judged on.
-    key: BudgetKey,
-    /// The check and the warning, when over the budget.
-    over: Option<(BudgetCheck, String)>,
-    /// The interaxial it allows in limit mode (of the tracked eyes while tracked).
-    allowed: Option<f32>,
-    /// The check whether over or not, and the budget's bound, degrees (the panel's readout);
-    /// `None` with nothing in view.
-    readout: Option<(BudgetCheck, f32)>,
 }
 
 /// The sculpt files (`.argile`) in `dir`, newest first (by modification time, then name).
@@ -548,9 +530,6 @@ pub struct Station<'s> {
     /// Whether the window fills its monitor, and a change the window has yet to make.
     fullscreen: bool,
     fullscreen_asked: Option<bool>,
-    /// The monitor's resolution as the window system gives it (when the calibration does not).
-    monitor_px: Option<(u32, u32)>,
-    window_px: (u32, u32),
     /// Where the open key looks for sculpts, and the sculpt it will open at the next press
     /// despite unsaved work (the user was warned).
     open_dir: PathBuf,
@@ -617,7 +596,6 @@ impl<'s> Station<'s> {
         );
         mouse.tool_position_m = rig.target_m;
         let home = home_poses(rig.target_m);
-        let calibration = super::comfort::scene_calibration(scene);
         let mut desk = DeskInput::new(settings.spacemouse.0, settings.mapping, Rates::default());
         desk.poses = home;
         let desk_tool = playback
@@ -651,30 +629,13 @@ impl<'s> Station<'s> {
                 pointer_px: Vec2::ZERO,
                 gamepad_names: Vec::new(),
             },
-            stereo: StereoView {
-                convergence_factor: scene.rig.convergence_m / distance.max(1e-6),
-                lights_follow_viewer: false,
-                calibration,
-                tracked_interaxial_m: calibration.ipd_m,
-                tracked_for_s: None,
-                swap_eyes: scene.display.swap_eyes,
-                floating_window: (scene.display.floating_window, FloatingWindow::NONE),
-                parity_flipped: false,
-                frames_shown: 0,
-                head: None,
-                auto_convergence: None,
-                budget: None,
-                display_mode: DisplayMode::Anaglyph,
-                quad_buffer: false,
-                window_origin: (0, 0),
-            },
+            stereo: StereoView::new(scene, window_px),
             clock_s: 0.0,
             desk_tool,
             hand_samples: Some(HAND_SIZE_SAMPLES),
             tool_index: 0,
             action_index,
             stroke: None,
-            monitor_px: None,
             symmetry: SymmetrySwitch::new(scene.symmetry),
             region_drag: None,
             part_base: scene.parts[0].placement,
@@ -685,7 +646,6 @@ impl<'s> Station<'s> {
             clay_bounds: crate::math::Aabb::EMPTY,
             surface: crate::mesh::SurfaceSketch::default(),
             exports: super::export::Exports::default(),
-            window_px,
             open_dir,
             confirm_open: None,
             recent: RecentSculpts::default(),
@@ -827,17 +787,15 @@ impl<'s> Station<'s> {
 
     /// The window changed size.
     pub fn resize(&mut self, window_px: (u32, u32)) {
-        self.window_px = window_px;
+        self.stereo.window_px = window_px;
         self.fit_views();
     }
 
     /// The frame's views take their aspect from the output size: each eye's part of the window
     /// in the display mode; the mouse reads the pointer in that eye's picture.
     fn fit_views(&mut self) {
-        let (w, h) = self.stereo.display_mode.eye_size_for_output(self.window_px);
-        self.view.output.width_px = w.max(1);
-        self.view.output.height_px = h.max(1);
-        let (_, picture) = self.stereo.display_mode.pointer_in_eye(Vec2::ZERO, self.window_px);
+        let ((w, h), picture) = self.stereo.eye_pictures();
+        (self.view.output.width_px, self.view.output.height_px) = (w, h);
         self.controls.mouse.resize(picture);
     }
 
@@ -889,7 +847,7 @@ impl<'s> Station<'s> {
         if self.panel_takes(event) {
             return;
         }
-        let in_eye = |p: Vec2| self.stereo.display_mode.pointer_in_eye(p, self.window_px).0;
+        let in_eye = |p: Vec2| self.stereo.in_eye(p);
         let event = match event {
             MouseEvent::Press(button, at) => MouseEvent::Press(button, in_eye(at)),
             MouseEvent::Move(at) => MouseEvent::Move(in_eye(at)),
@@ -1069,8 +1027,12 @@ impl<'s> Station<'s> {
             StationAction::Smaller => self.desk_tool.scale /= SIZE_STEP,
             StationAction::ConvergenceFarther => self.step_convergence(STEREO_STEP),
             StationAction::ConvergenceNearer => self.step_convergence(1.0 / STEREO_STEP),
-            StationAction::InteraxialWider => self.step_interaxial(STEREO_STEP),
-            StationAction::InteraxialNarrower => self.step_interaxial(1.0 / STEREO_STEP),
+            StationAction::InteraxialWider => {
+                self.messages.extend(self.stereo.step_interaxial(STEREO_STEP, &mut self.view.rig))
+            }
+            StationAction::InteraxialNarrower => {
+                self.messages.extend(self.stereo.step_interaxial(1.0 / STEREO_STEP, &mut self.view.rig))
+            }
             StationAction::ToggleMouseMode => {
                 self.controls.cursor_clutch = None;
                 self.controls.mouse.mode = match self.controls.mouse.mode {
@@ -1250,7 +1212,7 @@ impl<'s> Station<'s> {
         if !self.panel.shown() {
             return false;
         }
-        let in_eye = |p: Vec2| self.stereo.display_mode.pointer_in_eye(p, self.window_px).0.to_array();
+        let in_eye = |p: Vec2| self.stereo.in_eye(p).to_array();
         match event {
             MouseEvent::Move(at) => {
                 self.panel.pointer(PointerEvent::Moved(in_eye(at)));
@@ -1295,9 +1257,9 @@ impl<'s> Station<'s> {
         let rig = &self.view.rig;
         let stereo = StereoRow {
             convergence_m: rig.convergence_m,
-            convergence_range_m: self.convergence_range(),
+            convergence_range_m: rig.convergence_range(),
             auto_convergence: self.stereo.auto_convergence.is_some(),
-            interaxial_mm: self.interaxial_in_use_m() * 1000.0,
+            interaxial_mm: self.stereo.interaxial_in_use_m(rig) * 1000.0,
             max_interaxial_mm: StereoRig::MAX_INTERAXIAL_M * 1000.0,
             disparity: self.stereo.budget.as_ref().and_then(|b| b.readout).map(|(check, bound_deg)| {
                 Disparity {
@@ -1399,9 +1361,7 @@ impl<'s> Station<'s> {
             PanelCommand::NextSymmetry => self.act(StationAction::NextSymmetry),
             PanelCommand::ConvergenceM(m) => {
                 if m.is_finite() && self.stereo.auto_convergence.is_none() {
-                    let (lo, hi) = self.convergence_range();
-                    self.stereo.convergence_factor =
-                        m.clamp(lo, hi) / self.controls.mouse.distance_m.max(1e-6);
+                    self.stereo.set_convergence(m, &self.view.rig, self.controls.mouse.distance_m);
                 }
             }
             PanelCommand::AutoConvergence(on) => {
@@ -1411,11 +1371,8 @@ impl<'s> Station<'s> {
             }
             PanelCommand::InteraxialMm(mm) => {
                 if mm.is_finite() {
-                    let m = (mm * 1e-3).clamp(0.0, StereoRig::MAX_INTERAXIAL_M);
-                    match self.tracked() {
-                        true => self.stereo.tracked_interaxial_m = m,
-                        false => self.view.rig.interaxial_m = m,
-                    }
+                    *self.stereo.interaxial_in_use(&mut self.view.rig) =
+                        (mm * 1e-3).clamp(0.0, StereoRig::MAX_INTERAXIAL_M);
                 }
             }
             PanelCommand::LightsFollowViewer(on) => self.stereo.lights_follow_viewer = on,
@@ -1485,44 +1442,10 @@ impl<'s> Station<'s> {
         )
     }
 
-    /// The convergence plane's range: from twice the near plane to half the far one, so that
-    /// the zero-parallax plane never lies where nothing is drawn.
-    fn convergence_range(&self) -> (f32, f32) {
-        let rig = &self.view.rig;
-        (rig.near_m * 2.0, (rig.far_m * 0.5).max(rig.near_m * 2.0))
-    }
-
-    /// Moves the convergence plane by `factor`, within [`Station::convergence_range`]; says so
-    /// at either end.
+    /// Moves the convergence plane by `factor` (see [`StereoView::step_convergence`]).
     fn step_convergence(&mut self, factor: f32) {
-        let (lo, hi) = self.convergence_range();
-        let distance = self.controls.mouse.distance_m.max(1e-6);
-        let wanted = self.stereo.convergence_factor * factor * distance;
-        let kept = wanted.clamp(lo, hi);
-        self.stereo.convergence_factor = kept / distance;
-        if kept != wanted {
-            let end =
-                if kept == lo { "nearest, twice the near plane" } else { "farthest, half the far plane" };
-            self.messages.push(format!("convergence {kept:.2} m: at its {end}"));
-        }
-    }
-
-    /// Scales the interaxial distance in use (the head-tracked eyes' while tracked) by
-    /// `factor`, up to [`StereoRig::MAX_INTERAXIAL_M`]; says so at the end.
-    fn step_interaxial(&mut self, factor: f32) {
-        let interaxial = if self.tracked() {
-            &mut self.stereo.tracked_interaxial_m
-        } else {
-            &mut self.view.rig.interaxial_m
-        };
-        let wanted = *interaxial * factor;
-        *interaxial = wanted.min(StereoRig::MAX_INTERAXIAL_M);
-        if wanted > StereoRig::MAX_INTERAXIAL_M {
-            self.messages.push(format!(
-                "eyes {:.0} mm apart: at the most the station allows",
-                StereoRig::MAX_INTERAXIAL_M * 1000.0
-            ));
-        }
+        let said = self.stereo.step_convergence(factor, &self.view.rig, self.controls.mouse.distance_m);
+        self.messages.extend(said);
     }
 
     /// The level the desk tool edits (its size chooses it) and its voxel size, millimetres.
@@ -1558,7 +1481,7 @@ impl<'s> Station<'s> {
                 "{}: convergence {:.2} m, eyes {:.0} mm{}",
                 self.stereo.display_mode,
                 rig.convergence_m,
-                self.interaxial_in_use_m() * 1000.0,
+                self.stereo.interaxial_in_use_m(&self.view.rig) * 1000.0,
                 if self.stereo.floating_window.0 { ", floating window" } else { "" },
             ),
             format!(
@@ -1624,119 +1547,19 @@ impl<'s> Station<'s> {
         self.stereo.window_origin = origin;
     }
 
-    /// Whether the views are head-tracked (opentrack, or the scene's scripted head).
-    fn tracked(&self) -> bool {
-        self.stereo.head.is_some() || self.scene.head.is_some() || self.adjusting.is_some()
-    }
-
-    /// The distance between the eyes of the views shown: the head-tracked eyes' while
-    /// tracked (physical metres), else the rig's.
-    fn interaxial_in_use_m(&self) -> f32 {
-        if self.tracked() {
-            self.stereo.tracked_interaxial_m
-        } else {
-            self.view.rig.interaxial_m
-        }
-    }
-
-    /// The rig of head-tracked views, while tracked: the scene's convergence plane on the
-    /// calibrated screen, the eyes [`Station::tracked_interaxial_m`] apart.
-    fn tracked_rig(&self) -> Option<HeadTrackedRig> {
-        let c = &self.stereo.calibration;
-        let rig = &self.view.rig;
-        self.tracked().then(|| HeadTrackedRig {
-            screen: c.screen,
-            placement: self
-                .adjusting_placement()
-                .unwrap_or_else(|| Placement::from_rig(&c.screen, c.default_eye_m, rig)),
-            interaxial_m: self.stereo.tracked_interaxial_m,
-            near_m: rig.near_m,
-            far_m: rig.far_m,
-        })
-    }
-
-    /// The window's eyes' pictures as seen on the calibrated screen, whose resolution the
-    /// calibration gives, else the window system.
-    fn seen_window(&self) -> super::comfort::Seen {
-        let screen_px = self.stereo.calibration.resolution_px.or(self.monitor_px);
-        super::comfort::Seen::window(
-            self.stereo.calibration,
-            self.stereo.display_mode,
-            self.window_px,
-            screen_px,
-        )
+    /// The window's monitor, as the window system gives its resolution.
+    pub fn set_monitor_px(&mut self, monitor_px: Option<(u32, u32)>) {
+        self.stereo.monitor_px = monitor_px;
     }
 
     /// How the parallax budget sees the window: each eye's picture on the calibrated screen.
     pub fn describe_picture(&self) -> String {
-        let seen = self.seen_window();
-        let from = match (self.stereo.calibration.resolution_px, self.monitor_px) {
-            (Some((w, h)), _) => format!("a {w}x{h} screen, as the calibration says"),
-            (None, Some((w, h))) => format!("a {w}x{h} monitor, as the window system says"),
-            (None, None) => "a screen of unknown resolution: fitted to it".to_owned(),
-        };
-        format!(
-            "parallax budget: each eye's picture is {:.0} mm wide on the {:.0} mm screen ({} pixels of {from}), \
-             seen from {:.2} m, within ±{:.2}°",
-            seen.picture_width_m * 1000.0,
-            self.stereo.calibration.screen.width_m() * 1000.0,
-            self.stereo.display_mode.eye_size_for_output(self.window_px).0,
-            self.stereo.calibration.viewing_distance_m(),
-            self.stereo.calibration.budget.max_disparity_deg
-        )
+        self.stereo.describe_picture()
     }
 
-    /// Why head-tracked views look different from the camera rig's: the screen, seen from the
-    /// default eye, spans its own field of view, which the scene's camera may not.
-    fn tracking_notice(&self) -> String {
-        let c = &self.stereo.calibration;
-        let screen_fov = 2.0 * (0.5 * c.screen.height_m() / c.viewing_distance_m()).atan().to_degrees();
-        let scene_fov = self.view.rig.fov_y_deg;
-        let grows = (0.5 * scene_fov.to_radians()).tan() / (0.5 * screen_fov.to_radians()).tan();
-        if (grows - 1.0).abs() < 0.02 {
-            "head tracking: the views follow your head through the calibrated screen".to_owned()
-        } else {
-            format!(
-                "head tracking: the views follow your head through the calibrated screen, which spans \
-                 {screen_fov:.1}° from the default eye where the scene's camera shows {scene_fov:.1}°: \
-                 the clay looks {grows:.2} times as large (easing in over {:.1} s)",
-                c.tracker.ease_s
-            )
-        }
-    }
-
-    /// The window's monitor, as the window system gives its resolution.
-    pub fn set_monitor_px(&mut self, monitor_px: Option<(u32, u32)>) {
-        self.monitor_px = monitor_px;
-    }
-
-    /// Checks what is shown (the clay and the stage) against the parallax budget of the screen
-    /// calibration, as the window shows it on the screen and with the views' own eyes (the
-    /// head-tracked ones while tracked), when any of that changed since the last check.
-    fn judge_parallax(&mut self) {
-        let (b, rig) = (&self.clay_bounds, &self.view.rig);
-        let key: BudgetKey = (
-            [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z],
-            rig.eye_m.to_array(),
-            [rig.convergence_m, rig.interaxial_m, self.stereo.tracked_interaxial_m],
-            (self.window_px, self.stereo.display_mode, self.tracked()),
-        );
-        if self.stereo.budget.as_ref().is_some_and(|b| b.key == key) {
-            return;
-        }
-        let seen = super::comfort::Seen { tracked: self.tracked_rig(), ..self.seen_window() };
-        let measured = super::comfort::measure_parallax(&self.view, &seen, self.clay_bounds);
-        let readout = measured.as_ref().map(|m| (m.check, seen.calibration.budget.max_disparity_deg));
-        let verdict = measured.and_then(|m| super::comfort::over_budget(&self.view, &seen, m));
-        // Limit mode narrows the eyes in use: the rig's, or the tracked eyes' (physical metres).
-        let allowed = verdict.as_ref().filter(|v| v.limit).map(|v| v.check.allowed_interaxial_m / v.scale);
-        let warning = verdict.map(|v| (v.check, v.warning));
-        if let Some((_, w)) = &warning {
-            if self.stereo.budget.as_ref().is_none_or(|b| b.over.is_none()) {
-                self.messages.push(w.clone());
-            }
-        }
-        self.stereo.budget = Some(Budgeted { key, over: warning, allowed, readout });
+    /// The head-tracked views' rig, while tracked (the pattern's placement while adjusting).
+    fn tracked_rig(&self) -> Option<HeadTrackedRig> {
+        self.stereo.tracked_rig(&self.view.rig, self.adjusting_placement())
     }
 
     /// Where the last [`Station::step`] spent its time.
@@ -2091,7 +1914,6 @@ impl<'s> Station<'s> {
         self.times.panel_ms = ms_since(started);
         let started = Instant::now();
         // The view first: the pointer moves in it.
-        let (lo, hi) = self.convergence_range();
         let rig = &mut self.view.rig;
         let base = self.scene.rig;
         let scene_pose = self.controls.desk.poses.get(Target::Scene);
@@ -2099,14 +1921,7 @@ impl<'s> Station<'s> {
         let offset = (base.eye_m - base.target_m).normalize_or(Vec3::Z) * self.controls.mouse.distance_m;
         rig.eye_m = base.target_m + rotation * offset;
         rig.up = rotation * base.up;
-        // Zooming moves the plane with the clay, within the same range as the keys.
-        rig.convergence_m = (self.controls.mouse.distance_m * self.stereo.convergence_factor).clamp(lo, hi);
-        if let Some(auto) = &mut self.stereo.auto_convergence {
-            // The desk tool's depth along the view, smoothly.
-            let depth = (self.controls.mouse.tool_position_m - rig.eye_m).dot(rig.forward());
-            rig.convergence_m = auto.update(depth, dt_s);
-            self.stereo.convergence_factor = rig.convergence_m / self.controls.mouse.distance_m.max(1e-6);
-        }
+        self.stereo.converge(rig, self.controls.mouse.distance_m, self.controls.mouse.tool_position_m, dt_s);
 
         let step = POINTER_SPEED_M_PER_S * dt_s;
         let (right, up, forward) = (rig.right(), rig.right().cross(rig.forward()), rig.forward());
@@ -2199,15 +2014,11 @@ impl<'s> Station<'s> {
         }
         self.times.mesh_ms = ms_since(mesh_started);
 
-        self.judge_parallax();
-        if let Some(Budgeted { allowed: Some(allowed), .. }) = self.stereo.budget {
-            // Limit mode: this frame's eyes no farther apart than the budget allows.
-            if self.tracked() {
-                self.stereo.tracked_interaxial_m = self.stereo.tracked_interaxial_m.min(allowed);
-            } else {
-                self.view.rig.interaxial_m = self.view.rig.interaxial_m.min(allowed);
-            }
-        }
+        let placement = self.adjusting_placement();
+        let warning = self.stereo.judge_parallax(&self.view, self.clay_bounds, placement);
+        self.messages.extend(warning);
+        // Limit mode: this frame's eyes no farther apart than the budget allows.
+        self.stereo.limit_interaxial(&mut self.view.rig);
         let mut frame = build_frame(&self.view, &self.doc.playback.hands(), true);
         frame.tools.extend(super::frame::lattice_glyphs(&self.doc.playback));
         frame.tools.extend(super::frame::symmetry_glyphs(&self.doc.playback));
@@ -2244,7 +2055,7 @@ impl<'s> Station<'s> {
             let since = match self.stereo.tracked_for_s {
                 None => {
                     if self.adjusting.is_none() {
-                        self.messages.push(self.tracking_notice());
+                        self.messages.push(self.stereo.tracking_notice(self.view.rig.fov_y_deg));
                     }
                     0.0
                 }
@@ -3050,7 +2861,11 @@ mod tests {
         assert!((station.view.rig.convergence_m - 0.9).abs() < 1e-3, "{}", station.view.rig.convergence_m);
         station.panel_command(PanelCommand::ConvergenceM(1e9));
         station.step(SCRIPTED_STEP_S, |_| {});
-        assert_eq!(station.view.rig.convergence_m, station.convergence_range().1, "held at its far end");
+        assert_eq!(
+            station.view.rig.convergence_m,
+            station.view.rig.convergence_range().1,
+            "held at its far end"
+        );
         station.panel_command(PanelCommand::InteraxialMm(40.0));
         station.step(SCRIPTED_STEP_S, |_| {});
         assert!((station.panel_view().stereo.interaxial_mm - 40.0).abs() < 1e-3);

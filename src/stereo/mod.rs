@@ -72,6 +72,12 @@ impl StereoRig {
         Mat4::look_to_rh(self.eye_m, self.forward(), self.up)
     }
 
+    /// The convergence plane's range, metres: from twice the near plane to half the far one,
+    /// so that the zero-parallax plane never lies where nothing is drawn.
+    pub fn convergence_range(&self) -> (f32, f32) {
+        (self.near_m * 2.0, (self.far_m * 0.5).max(self.near_m * 2.0))
+    }
+
     /// Width of the zero-parallax window on the convergence plane, metres.
     pub fn window_width_m(&self, aspect: f32) -> f32 {
         2.0 * self.convergence_m * (self.fov_y_deg.to_radians() * 0.5).tan() * aspect

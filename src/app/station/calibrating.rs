@@ -95,6 +95,8 @@ impl Station<'_> {
             written: target.written,
             quit_warned: false,
         });
+        // The pattern is seen from the calibrated eye: the views are head-tracked views.
+        self.stereo.tracked_without_tracker = true;
         self.set_calibration(target.calibration);
         self.messages.push(self.adjusting_keys());
     }
@@ -247,7 +249,7 @@ impl Station<'_> {
             return Vec::new();
         }
         let (w, h) = (self.view.output.width_px, self.view.output.height_px);
-        let seen = self.seen_window();
+        let seen = self.stereo.seen_window();
         eye_marks(w as f32 / h.max(1) as f32, seen.picture_width_m * 1000.0, w)
     }
 
@@ -259,7 +261,7 @@ impl Station<'_> {
         let (w, h) = (c.screen.width_m(), c.screen.height_m());
         let d = c.viewing_distance_m();
         let s = w / a.pattern.screen.width_m();
-        let picture_m = self.seen_window().picture_width_m;
+        let picture_m = self.stereo.seen_window().picture_width_m;
         let px = |m: f32| m / picture_m * self.view.output.width_px as f32;
         let balls = a.balls_in_front_m.map(|in_front| {
             let in_front = in_front * s;
