@@ -1387,6 +1387,49 @@ mod tests {
     }
 
     #[test]
+    fn names_in_scripts_the_built_in_fonts_lack_are_listed_drawn_and_opened() {
+        // The panel's fonts are built into the program (egui's), so no font file can be
+        // missing; the glyphs of a file or part name can be. Such names still list, draw (as
+        // the font's replacement glyph) and open the file they name.
+        let dir = test_folder("glyphs");
+        let names = ["頭部.argile", "🗿 statue.argile", "גוף.argile", "a\u{301}\u{200b}b.argile"];
+        for name in names {
+            std::fs::write(dir.join(name), b"x").unwrap();
+        }
+        let part =
+            PartRow { name: "腕 💪".into(), op: "union", voxel_mm: 2.0, visible: true, locked: false };
+        let view = PanelView {
+            status: vec!["opened 頭部.argile 🗿".into()],
+            parts: vec![part],
+            save_name: "頭部 🗿.argile".into(),
+            ..files_view(&dir)
+        };
+        let open = find_after(&view, &[], |p, _| p.file_task() == Some(FileTask::Open)).expect("open");
+        let mut opened = Vec::new();
+        for y in (4..TALL).step_by(6) {
+            let mut panel = Panel::new();
+            click(&mut panel, &view, open);
+            for command in click(&mut panel, &view, [60.0, y as f32]) {
+                if let PanelCommand::Open(path) = command {
+                    opened.push(path);
+                }
+            }
+        }
+        for name in names {
+            let path = dir.canonicalize().unwrap().join(name);
+            assert!(opened.contains(&path), "{name} listed and opened: {opened:?}");
+        }
+        // Drawn at the desk and in the headset (the font's textures came with the first frames).
+        for mut panel in [Panel::new(), Panel::headset()] {
+            click(&mut panel, &view, open);
+            let (_, paint) = panel.run(&view, (800, TALL), 2.0);
+            let paint = paint.expect("a frame's paint");
+            assert!(!paint.batches.is_empty() && !paint.vertices.is_empty());
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
     fn a_tiny_or_a_huge_image_never_panics() {
         for extent in [(1, 1), (2, 1), (8192, 8192), (0, 0), (1, 8192)] {
             let mut panel = Panel::new();
