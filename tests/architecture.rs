@@ -319,3 +319,95 @@ fn the_checker_catches_violations() {
     assert!(found.iter().any(|f| f.contains("field/mod.rs:4") && f.contains("unsafe")));
     assert!(found.iter().any(|f| f.contains("math.rs:1")));
 }
+
+/// The modules directly under `app` (a file `x.rs`, or a folder `x/` with `x.rs`) and the
+/// others each names in its code (`super::x`, `crate::app::x`, or `super::super::x` from a
+/// file of a folder), its tests left out.
+fn app_imports(app: &Path) -> Vec<(String, Vec<String>)> {
+    let mut modules: Vec<String> = std::fs::read_dir(app)
+        .unwrap()
+        .flatten()
+        .filter_map(|e| {
+            let name = e.file_name().into_string().ok()?;
+            let stem = name.strip_suffix(".rs").unwrap_or(&name).to_owned();
+            (stem != "mod" && (e.path().is_dir() || name.ends_with(".rs"))).then_some(stem)
+        })
+        .collect();
+    modules.sort();
+    modules.dedup();
+    modules
+        .iter()
+        .map(|m| {
+            let mut named = Vec::new();
+            for file in module_files(app, m) {
+                let depth = file.strip_prefix(app).unwrap().components().count() - 1;
+                let up = "super::".repeat(depth + 1);
+                let text = std::fs::read_to_string(&file).unwrap();
+                let code = text.split("\n#[cfg(test)]").next().unwrap();
+                for other in modules.iter().filter(|o| *o != m) {
+                    let mentioned = code.lines().any(|line| {
+                        [format!("{up}{other}::"), format!("crate::app::{other}::"), format!("{up}{other};")]
+                            .iter()
+                            .any(|path| names(line, path))
+                    });
+                    if mentioned && !named.contains(other) {
+                        named.push(other.clone());
+                    }
+                }
+            }
+            (m.clone(), named)
+        })
+        .collect()
+}
+
+/// A circle of modules naming one another, if any: the first found, as a path back to its start.
+fn circle(imports: &[(String, Vec<String>)]) -> Option<Vec<String>> {
+    fn walk(
+        at: &str,
+        imports: &[(String, Vec<String>)],
+        path: &mut Vec<String>,
+        done: &mut Vec<String>,
+    ) -> Option<Vec<String>> {
+        if let Some(i) = path.iter().position(|p| p == at) {
+            let mut found = path[i..].to_vec();
+            found.push(at.to_owned());
+            return Some(found);
+        }
+        if done.iter().any(|d| d == at) {
+            return None;
+        }
+        path.push(at.to_owned());
+        let next = imports.iter().find(|(m, _)| m == at).map(|(_, n)| n.clone()).unwrap_or_default();
+        for n in next {
+            if let Some(found) = walk(&n, imports, path, done) {
+                return Some(found);
+            }
+        }
+        path.pop();
+        done.push(at.to_owned());
+        None
+    }
+    let mut done = Vec::new();
+    imports.iter().find_map(|(m, _)| walk(m, imports, &mut Vec::new(), &mut done))
+}
+
+/// DESIGN.md: the modules of `app` depend on one another without circles (a station uses the
+/// document, the panel's rows, the playback; none of those uses a station).
+#[test]
+fn the_modules_of_app_name_one_another_in_no_circle() {
+    let app = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/app");
+    let imports = app_imports(&app);
+    let station = imports.iter().find(|(m, _)| m == "station").expect("app/station is scanned");
+    assert!(station.1.iter().any(|n| n == "document"), "the station's imports are read: {station:?}");
+    assert_eq!(circle(&imports), None, "app's modules in a circle:\n{imports:#?}");
+}
+
+#[test]
+fn the_circle_finder_finds_a_circle_and_passes_a_chain() {
+    let chain = |pairs: &[(&str, &[&str])]| -> Vec<(String, Vec<String>)> {
+        pairs.iter().map(|(m, n)| (m.to_string(), n.iter().map(|s| s.to_string()).collect())).collect()
+    };
+    assert_eq!(circle(&chain(&[("a", &["b"]), ("b", &["c"]), ("c", &[])])), None);
+    let found = circle(&chain(&[("a", &["b"]), ("b", &["c"]), ("c", &["b"])])).unwrap();
+    assert_eq!(found, ["b", "c", "b"]);
+}

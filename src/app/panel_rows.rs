@@ -6,11 +6,50 @@
 
 use super::document::Document;
 use super::playback::Playback;
-use super::station::{action_cycle, shape_cycle, shape_name};
 use crate::app::held_lattice::{PART_MARGIN, VALUE_STEP, WEIGHT_STEP};
 use crate::math::{Aabb, Pose, Vec3};
-use crate::tool::{Action, Tool, HAND_SIZE_SAMPLES};
+use crate::tool::{Action, Ellipsoid, Falloff, Solid, Tool, ToolShape, HAND_SIZE_SAMPLES};
 use crate::ui::{LatticeRow, PanelCommand, PanelView, PartRow};
+
+/// The shapes the desk tool cycles through with `next-shape`, all of size `s` (their smallest
+/// half extent), and their names.
+pub(super) fn shape_cycle(s: f32) -> [(ToolShape, &'static str); 5] {
+    [
+        (ToolShape::sphere(s), "sphere"),
+        (ToolShape::Solid(Solid::Box { half_m: Vec3::splat(s) }), "box"),
+        (ToolShape::Solid(Solid::Cylinder { radius_m: s, half_height_m: s }), "cylinder"),
+        (ToolShape::Solid(Solid::Torus { major_m: 2.0 * s, minor_m: s }), "torus"),
+        (
+            ToolShape::Ellipsoid(Ellipsoid { radii_m: Vec3::new(2.0 * s, s, s), falloff: Falloff::Wyvill }),
+            "ellipsoid",
+        ),
+    ]
+}
+
+/// The name of a tool shape for the HUD.
+pub(super) fn shape_name(shape: &ToolShape) -> &'static str {
+    match shape {
+        ToolShape::Solid(Solid::Sphere { .. }) => "sphere",
+        ToolShape::Solid(Solid::Box { .. } | Solid::RoundedBox { .. }) => "box",
+        ToolShape::Solid(Solid::Cylinder { .. }) => "cylinder",
+        ToolShape::Solid(Solid::Torus { .. }) => "torus",
+        ToolShape::Solid(Solid::Bar { .. }) => "bar",
+        ToolShape::Ellipsoid(_) => "ellipsoid",
+        ToolShape::Freeform(_) => "freeform",
+    }
+}
+
+/// The actions the desk tool cycles through with `next-action`.
+pub(super) fn action_cycle() -> [Action; 6] {
+    [
+        Action::Add,
+        Action::Remove,
+        Action::Build { rate_per_s: 2.0 },
+        Action::SoftRemove { rate_per_s: 2.0 },
+        Action::Paint,
+        Action::Smooth { centre_weight: 6.0, rate_per_s: 20.0 },
+    ]
+}
 
 /// The range of the panel's size slider, millimetres (wider when the tool already is).
 const SIZE_RANGE_MM: (f32, f32) = (1.0, 200.0);

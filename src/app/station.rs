@@ -44,7 +44,7 @@ use super::document::Document;
 use super::environment::load_environment;
 use super::frame::build_frame;
 use super::glyphs::tool_glyph;
-use super::panel_rows;
+use super::panel_rows::{self, action_cycle, shape_cycle, shape_name};
 use super::playback::Playback;
 use super::recent::RecentSculpts;
 use crate::config::{Chord, KeyBindings, Modifiers, StationAction};
@@ -69,7 +69,7 @@ use crate::stereo::comfort::AutoConvergence;
 use crate::stereo::display::{choose_mode, DisplayMode, Parity};
 use crate::stereo::floating::FloatingWindow;
 use crate::stereo::{HeadTrackedRig, StereoRig};
-use crate::tool::{Action, Ellipsoid, Falloff, Solid, Stroke, Tool, ToolShape, HAND_SIZE_SAMPLES};
+use crate::tool::{Action, Stroke, Tool, ToolShape, HAND_SIZE_SAMPLES};
 use crate::ui::{DeviceRow, Disparity, Panel, PanelCommand, PanelKey, PanelView, PointerEvent, StereoRow};
 
 /// The time step of a scripted run, seconds.
@@ -446,46 +446,6 @@ fn contact_under(field: &crate::field::Field, pose: Pose, half_extents_m: Vec3) 
         max = max.max(d);
     }
     (max >= field.iso(), sum / points.len() as f32)
-}
-
-/// The shapes the desk tool cycles through with `next-shape`, all of size `s` (their smallest
-/// half extent), and their names.
-pub(super) fn shape_cycle(s: f32) -> [(ToolShape, &'static str); 5] {
-    [
-        (ToolShape::sphere(s), "sphere"),
-        (ToolShape::Solid(Solid::Box { half_m: Vec3::splat(s) }), "box"),
-        (ToolShape::Solid(Solid::Cylinder { radius_m: s, half_height_m: s }), "cylinder"),
-        (ToolShape::Solid(Solid::Torus { major_m: 2.0 * s, minor_m: s }), "torus"),
-        (
-            ToolShape::Ellipsoid(Ellipsoid { radii_m: Vec3::new(2.0 * s, s, s), falloff: Falloff::Wyvill }),
-            "ellipsoid",
-        ),
-    ]
-}
-
-/// The name of a tool shape for the HUD.
-pub(super) fn shape_name(shape: &ToolShape) -> &'static str {
-    match shape {
-        ToolShape::Solid(Solid::Sphere { .. }) => "sphere",
-        ToolShape::Solid(Solid::Box { .. } | Solid::RoundedBox { .. }) => "box",
-        ToolShape::Solid(Solid::Cylinder { .. }) => "cylinder",
-        ToolShape::Solid(Solid::Torus { .. }) => "torus",
-        ToolShape::Solid(Solid::Bar { .. }) => "bar",
-        ToolShape::Ellipsoid(_) => "ellipsoid",
-        ToolShape::Freeform(_) => "freeform",
-    }
-}
-
-/// The actions the desk tool cycles through with `next-action`.
-pub(super) fn action_cycle() -> [Action; 6] {
-    [
-        Action::Add,
-        Action::Remove,
-        Action::Build { rate_per_s: 2.0 },
-        Action::SoftRemove { rate_per_s: 2.0 },
-        Action::Paint,
-        Action::Smooth { centre_weight: 6.0, rate_per_s: 20.0 },
-    ]
 }
 
 /// The station's state between frames, without the window and renderer.

@@ -44,9 +44,8 @@ use super::glyphs::{
     action_colour, buttons, controller_glyph, palette, panel_placement, ray_glyphs, ray_on_panel, tool_glyph,
     Button,
 };
-use super::panel_rows::{self, LatticeStep};
+use super::panel_rows::{self, action_cycle, shape_cycle, shape_name, LatticeStep};
 use super::playback::Playback;
-use super::station::{action_cycle, shape_cycle, shape_name};
 use crate::field::{Field, FieldReader};
 use crate::io::autosave::AutosaveConfig;
 use crate::io::Sculpt;
