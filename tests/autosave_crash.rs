@@ -87,14 +87,56 @@ fn reference_states(scene: &Scene) -> Vec<Field> {
 
 fn argile(state: &Path) -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_argile"));
-    c.env("XDG_STATE_HOME", state).env("RUST_LOG", "warn,argile=debug");
+    c.env("XDG_STATE_HOME", state).env("RUST_LOG", "warn,argile=trace");
     c
 }
 
-/// `argile save --autosave` of `scene`, killed after `kill_after` (if it runs that long).
-/// Returns the highest stroke count it reported on disk before the kill, and whether it ran
-/// to its end.
-fn run_and_kill(scene: &Path, state: &Path, out: &Path, kill_after: Duration) -> (u64, bool) {
+/// When a watched run is killed (if it runs that long): a time after its start, or after it
+/// says a stroke is in its journal. Kills timed from a stroke land among the strokes however
+/// fast the machine plays them.
+#[derive(Clone, Copy, Debug)]
+enum Kill {
+    After(Duration),
+    Journaled(u64, Duration),
+}
+
+/// What `argile save --autosave` says as each stroke reaches the disk.
+const ON_DISK: &str = "strokes up to ";
+
+/// What `argile save --autosave` says (at the trace level) as it appends a stroke to its journal.
+const JOURNALED: (&str, &str) = ("autosave: stroke ", " is in the journal");
+
+/// The stroke count a line of `argile save --autosave` says is on disk, if it says so.
+fn on_disk(line: &str) -> Option<u64> {
+    line.split(ON_DISK).nth(1).and_then(|r| r.split(' ').next()).map(|n| n.parse().unwrap())
+}
+
+/// The stroke a line says was appended to the journal, if it says so.
+fn journaled(line: &str) -> Option<u64> {
+    let rest = line.split(JOURNALED.0).nth(1)?;
+    rest.split_once(JOURNALED.1).map(|(n, _)| n.parse().unwrap())
+}
+
+/// What a watched run of `argile save --autosave` reported: the highest stroke count on disk
+/// before the kill and whether it ran to its end.
+struct Watched {
+    durable: u64,
+    finished: bool,
+}
+
+/// When to kill run `seed` of a session of `strokes` strokes whose clean run took `whole`:
+/// one in four at a time spread over the whole run (its start and its final save included),
+/// the others within half a millisecond of a stroke entering the journal, the strokes taken in
+/// turn.
+fn kill_time(seed: u64, whole: Duration, strokes: u64) -> Kill {
+    match seed % 4 {
+        0 => Kill::After(whole.mul_f64(1.05 * uniform(seed))),
+        _ => Kill::Journaled(1 + seed % strokes, Duration::from_secs_f64(0.0005 * uniform(seed))),
+    }
+}
+
+/// `argile save --autosave` of `scene`, killed as `kill` says.
+fn run_and_kill(scene: &Path, state: &Path, out: &Path, kill: Kill) -> Watched {
     let child = argile(state)
         .args(["save", "--autosave", "--sync-s", "0.05", "--checkpoint-s", "0.15", "--force"])
         .arg(scene)
@@ -105,18 +147,14 @@ fn run_and_kill(scene: &Path, state: &Path, out: &Path, kill_after: Duration) ->
         .spawn()
         .unwrap();
     let mut durable = 0;
-    let finished = watch_and_kill(child, kill_after, |line| {
-        if let Some(n) = line.split("strokes up to ").nth(1).and_then(|r| r.split(' ').next()) {
-            durable = durable.max(n.parse::<u64>().unwrap());
-        }
-    });
-    (durable, finished)
+    let finished = watch_and_kill(child, kill, |line| durable = durable.max(on_disk(line).unwrap_or(0)));
+    Watched { durable, finished }
 }
 
 /// Reads `child`'s standard error line by line into `seen` until it exits (it must succeed)
-/// or `kill_after` has passed, when it is killed; then reads the lines still in the pipe,
-/// which were written before the kill. Returns whether it ran to its end.
-fn watch_and_kill(mut child: std::process::Child, kill_after: Duration, mut seen: impl FnMut(&str)) -> bool {
+/// or `kill` says, when it is killed; then reads the lines still in the pipe, which were
+/// written before the kill. Returns whether it ran to its end.
+fn watch_and_kill(mut child: std::process::Child, kill: Kill, mut seen: impl FnMut(&str)) -> bool {
     let stderr = child.stderr.take().unwrap();
     let (tx, rx) = std::sync::mpsc::channel();
     let reader = std::thread::spawn(move || {
@@ -124,23 +162,40 @@ fn watch_and_kill(mut child: std::process::Child, kill_after: Duration, mut seen
             let _ = tx.send(line);
         }
     });
-    let start = Instant::now();
+    let (mut start, kill_after) = match kill {
+        Kill::After(after) => (Some(Instant::now()), after),
+        Kill::Journaled(_, after) => (None, after),
+    };
     let mut lines = Vec::new();
-    let finished = loop {
-        while let Ok(line) = rx.try_recv() {
+    let mut killed = |child: &mut std::process::Child, start: Option<Instant>| {
+        let due = start.is_some_and(|s| s.elapsed() >= kill_after);
+        if due {
+            child.kill().unwrap();
+            child.wait().unwrap();
+        }
+        due
+    };
+    let finished = 'watch: loop {
+        // Each line as it comes, so that a kill due at a line lands while the run is there.
+        while let Ok(line) = rx.recv_timeout(Duration::from_micros(200)) {
+            if let Kill::Journaled(stroke, _) = kill {
+                if start.is_none() && journaled(&line).is_some_and(|n| n >= stroke) {
+                    start = Some(Instant::now());
+                }
+            }
             seen(&line);
             lines.push(line);
+            if killed(&mut child, start) {
+                break 'watch false;
+            }
         }
         if let Some(status) = child.try_wait().unwrap() {
             assert!(status.success(), "the run failed:\n{}", lines.join("\n"));
             break true;
         }
-        if start.elapsed() >= kill_after {
-            child.kill().unwrap();
-            child.wait().unwrap();
+        if killed(&mut child, start) {
             break false;
         }
-        std::thread::sleep(Duration::from_millis(2));
     };
     reader.join().unwrap();
     rx.try_iter().for_each(|line| seen(&line));
@@ -190,10 +245,10 @@ fn sigkill_at_random_points_recovers_exactly_a_completed_stroke() {
     // A whole run: it closes its session, so nothing is left to recover.
     let state = dir.join("clean");
     let start = Instant::now();
-    let (durable, finished) =
-        run_and_kill(&scene_path, &state, &dir.join("clean.argile"), Duration::from_secs(60));
+    let clean =
+        run_and_kill(&scene_path, &state, &dir.join("clean.argile"), Kill::After(Duration::from_secs(60)));
     let whole = start.elapsed();
-    assert!(finished && durable >= 1, "the clean run reported strokes on disk");
+    assert!(clean.finished && clean.durable >= 1, "the clean run reported strokes on disk");
     assert!(recover(&state).is_none(), "a session that closed is not recovered");
     assert!(load_sculpt(&dir.join("clean.argile")).unwrap().field.same_samples(&states[STROKES]));
 
@@ -203,13 +258,12 @@ fn sigkill_at_random_points_recovers_exactly_a_completed_stroke() {
     let out = dir.join("out.argile");
     for seed in 0..kills {
         let state = dir.join(format!("seed-{seed}"));
-        // Kills spread over the whole run, its start and its final save included.
-        let kill_after = whole.mul_f64(1.05 * uniform(seed));
+        let kill = kill_time(seed, whole, STROKES as u64);
         let _ = std::fs::remove_file(&out);
-        let (durable, finished) = run_and_kill(&scene_path, &state, &out, kill_after);
+        let Watched { durable, finished, .. } = run_and_kill(&scene_path, &state, &out, kill);
         let recovered = recover(&state);
         eprintln!(
-            "seed {seed}: killed after {kill_after:?} of {whole:?}, strokes up to {durable} on disk, recovered {:?}",
+            "seed {seed}: killed {kill:?} (a run of {whole:?}), strokes up to {durable} on disk, recovered {:?}",
             recovered.as_ref().map(|r| r.1)
         );
         match recovered {
@@ -239,8 +293,8 @@ fn sigkill_at_random_points_recovers_exactly_a_completed_stroke() {
         let _ = std::fs::remove_dir_all(&state);
     }
     // A last, whole run of the same file leaves no temporary file of the killed ones.
-    let (_, finished) = run_and_kill(&scene_path, &dir.join("last"), &out, Duration::from_secs(60));
-    assert!(finished);
+    let last = run_and_kill(&scene_path, &dir.join("last"), &out, Kill::After(Duration::from_secs(60)));
+    assert!(last.finished);
     let temporaries: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
         .flatten()
@@ -431,10 +485,14 @@ fn sigkill_of_a_sculpt_of_parts_recovers_every_part_after_a_completed_stroke() {
     assert_eq!(states.len(), PART_STROKES + 1, "every stroke changes its part");
 
     let start = Instant::now();
-    let (_, finished) =
-        run_and_kill(&scene_path, &dir.join("clean"), &dir.join("clean.argile"), Duration::from_secs(60));
+    let clean = run_and_kill(
+        &scene_path,
+        &dir.join("clean"),
+        &dir.join("clean.argile"),
+        Kill::After(Duration::from_secs(60)),
+    );
     let whole = start.elapsed();
-    assert!(finished);
+    assert!(clean.finished && clean.durable >= 1, "the clean run reported strokes on disk");
     let saved = load_sculpt(&dir.join("clean.argile")).unwrap();
     assert_eq!(saved.parts.len(), 2, "the sculpt file keeps both parts");
     assert!(same_parts(&saved, &states[PART_STROKES]), "the saved parts are the played ones");
@@ -444,10 +502,15 @@ fn sigkill_of_a_sculpt_of_parts_recovers_every_part_after_a_completed_stroke() {
     let out = dir.join("out.argile");
     for seed in 0..kills {
         let state = dir.join(format!("seed-{seed}"));
-        let kill_after = whole.mul_f64(1.05 * uniform(seed + 1000));
+        let kill = kill_time(seed + 1000, whole, PART_STROKES as u64);
         let _ = std::fs::remove_file(&out);
-        let (durable, finished) = run_and_kill(&scene_path, &state, &out, kill_after);
-        match recover(&state) {
+        let Watched { durable, finished, .. } = run_and_kill(&scene_path, &state, &out, kill);
+        let recovered = recover(&state);
+        eprintln!(
+            "seed {seed}: killed {kill:?} (a run of {whole:?}), strokes up to {durable} on disk, recovered {:?}",
+            recovered.as_ref().map(|r| r.1)
+        );
+        match recovered {
             None if durable > 0 => {
                 let saved = load_sculpt(&out)
                     .unwrap_or_else(|e| panic!("seed {seed}: nothing recovered, nothing saved: {e}"));
@@ -519,7 +582,7 @@ fn run_station_and_kill(
         .spawn()
         .unwrap();
     let mut stored = 0;
-    let finished = watch_and_kill(child, kill_after, |line| {
+    let finished = watch_and_kill(child, Kill::After(kill_after), |line| {
         stored += usize::from(line.contains("the open lattice is on disk"));
     });
     (stored, finished)

@@ -661,6 +661,7 @@ impl Writer {
         let (Some(bytes), Some(journal)) = (bytes, self.journal.as_mut()) else { return };
         match journal.file.append(&bytes) {
             Ok(()) => {
+                tracing::trace!("autosave: stroke {n} is in the journal, not yet synced");
                 journal.last = n;
                 journal.unsynced = true;
                 journal.bytes += bytes.len() as u64;
