@@ -151,6 +151,25 @@ fn run_and_kill(scene: &Path, state: &Path, out: &Path, kill: Kill) -> Watched {
     Watched { durable, finished }
 }
 
+/// Run `seed` of `argile save --autosave` of `scene`, killed as `kill` says (its sculpt file
+/// `out` removed first), then recovered: what it reported and what `argile recover` found.
+fn killed_run(
+    scene: &Path,
+    state: &Path,
+    out: &Path,
+    (seed, kill): (u64, Kill),
+) -> (Watched, Option<(PathBuf, usize)>) {
+    let _ = std::fs::remove_file(out);
+    let watched = run_and_kill(scene, state, out, kill);
+    let recovered = recover(state);
+    eprintln!(
+        "seed {seed}: killed {kill:?}, strokes up to {} on disk, recovered {:?}",
+        watched.durable,
+        recovered.as_ref().map(|r| r.1)
+    );
+    (watched, recovered)
+}
+
 /// Reads `child`'s standard error line by line into `seen` until it exits (it must succeed)
 /// or `kill` says, when it is killed; then reads the lines still in the pipe, which were
 /// written before the kill. Returns whether it ran to its end.
@@ -167,7 +186,7 @@ fn watch_and_kill(mut child: std::process::Child, kill: Kill, mut seen: impl FnM
         Kill::Journaled(_, after) => (None, after),
     };
     let mut lines = Vec::new();
-    let mut killed = |child: &mut std::process::Child, start: Option<Instant>| {
+    let killed = |child: &mut std::process::Child, start: Option<Instant>| {
         let due = start.is_some_and(|s| s.elapsed() >= kill_after);
         if due {
             child.kill().unwrap();
@@ -259,13 +278,7 @@ fn sigkill_at_random_points_recovers_exactly_a_completed_stroke() {
     for seed in 0..kills {
         let state = dir.join(format!("seed-{seed}"));
         let kill = kill_time(seed, whole, STROKES as u64);
-        let _ = std::fs::remove_file(&out);
-        let Watched { durable, finished, .. } = run_and_kill(&scene_path, &state, &out, kill);
-        let recovered = recover(&state);
-        eprintln!(
-            "seed {seed}: killed {kill:?} (a run of {whole:?}), strokes up to {durable} on disk, recovered {:?}",
-            recovered.as_ref().map(|r| r.1)
-        );
+        let (Watched { durable, finished }, recovered) = killed_run(&scene_path, &state, &out, (seed, kill));
         match recovered {
             None if durable > 0 => {
                 // Killed after its clean close: the sculpt is saved, and the session closed.
@@ -503,13 +516,7 @@ fn sigkill_of_a_sculpt_of_parts_recovers_every_part_after_a_completed_stroke() {
     for seed in 0..kills {
         let state = dir.join(format!("seed-{seed}"));
         let kill = kill_time(seed + 1000, whole, PART_STROKES as u64);
-        let _ = std::fs::remove_file(&out);
-        let Watched { durable, finished, .. } = run_and_kill(&scene_path, &state, &out, kill);
-        let recovered = recover(&state);
-        eprintln!(
-            "seed {seed}: killed {kill:?} (a run of {whole:?}), strokes up to {durable} on disk, recovered {:?}",
-            recovered.as_ref().map(|r| r.1)
-        );
+        let (Watched { durable, finished }, recovered) = killed_run(&scene_path, &state, &out, (seed, kill));
         match recovered {
             None if durable > 0 => {
                 let saved = load_sculpt(&out)
