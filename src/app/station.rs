@@ -987,12 +987,8 @@ impl<'s> Station<'s> {
             StationAction::Smaller => self.desk_tool.scale /= SIZE_STEP,
             StationAction::ConvergenceFarther => self.step_convergence(STEREO_STEP),
             StationAction::ConvergenceNearer => self.step_convergence(1.0 / STEREO_STEP),
-            StationAction::InteraxialWider => {
-                self.messages.extend(self.stereo.step_interaxial(STEREO_STEP, &mut self.view.rig))
-            }
-            StationAction::InteraxialNarrower => {
-                self.messages.extend(self.stereo.step_interaxial(1.0 / STEREO_STEP, &mut self.view.rig))
-            }
+            StationAction::InteraxialWider => self.step_interaxial(STEREO_STEP),
+            StationAction::InteraxialNarrower => self.step_interaxial(1.0 / STEREO_STEP),
             StationAction::ToggleMouseMode => {
                 self.controls.cursor_clutch = None;
                 self.controls.mouse.mode = match self.controls.mouse.mode {
@@ -1405,6 +1401,12 @@ impl<'s> Station<'s> {
     /// Moves the convergence plane by `factor` (see [`StereoView::step_convergence`]).
     fn step_convergence(&mut self, factor: f32) {
         let said = self.stereo.step_convergence(factor, &self.view.rig, self.controls.mouse.distance_m);
+        self.messages.extend(said);
+    }
+
+    /// Scales the interaxial distance in use by `factor` (see [`StereoView::step_interaxial`]).
+    fn step_interaxial(&mut self, factor: f32) {
+        let said = self.stereo.step_interaxial(factor, &mut self.view.rig);
         self.messages.extend(said);
     }
 

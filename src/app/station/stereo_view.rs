@@ -287,12 +287,11 @@ impl StereoView {
         placement: Option<Placement>,
     ) -> Option<String> {
         let rig = &view.rig;
-        let (b, tracked) = (clay, self.tracked());
         let key: BudgetKey = (
-            [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z],
+            [clay.min.x, clay.min.y, clay.min.z, clay.max.x, clay.max.y, clay.max.z],
             rig.eye_m.to_array(),
             [rig.convergence_m, rig.interaxial_m, self.tracked_interaxial_m],
-            (self.window_px, self.display_mode, tracked),
+            (self.window_px, self.display_mode, self.tracked()),
         );
         if self.budget.as_ref().is_some_and(|b| b.key == key) {
             return None;
