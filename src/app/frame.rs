@@ -1,6 +1,6 @@
 //! Building the renderer's per-frame snapshot from the scene and the playback state.
 
-use super::glyphs::tool_glyph;
+use super::glyphs::{tool_glyph, REGION_RGB};
 use crate::math::{Aabb, Vec3, Vec4};
 use crate::render::{Frame, Light, Material, Stage};
 use crate::scene::{Attachment, Scene, SceneLight, SceneToolShape};
@@ -75,17 +75,30 @@ fn part_glyph_of(
 pub const PART_COLOUR: Vec4 = Vec4::new(0.35, 0.6, 1.0, 0.12);
 
 /// The colour regions being carried are drawn in: a faint warm yellow.
-pub const REGION_COLOUR: Vec4 = Vec4::new(0.95, 0.82, 0.35, 0.2);
+pub const REGION_COLOUR: Vec4 = Vec4::new(REGION_RGB[0], REGION_RGB[1], REGION_RGB[2], 0.2);
 
-/// The regions the scene's region tools are carrying now (and their images), where the hand
-/// has taken them.
+/// The regions the scene's region tools are carrying now, and the region the desk or the
+/// headset holds (placed with its part), with their images, where the hand has taken them.
 pub fn region_glyphs(playback: &super::playback::Playback<'_>) -> Vec<crate::render::ToolGlyph> {
-    playback
+    let glyph = |r: crate::parts::Region| tool_glyph(&r.shape, r.frame.pose, r.frame.scale, REGION_COLOUR);
+    let mut glyphs: Vec<_> = playback
         .moving_regions()
         .filter(|(sr, _)| sr.show)
         .flat_map(|(_, drag)| drag.carried_regions())
-        .map(|r| tool_glyph(&r.shape, r.frame.pose, r.frame.scale, REGION_COLOUR))
-        .collect()
+        .map(glyph)
+        .collect();
+    if let Some(held) = playback.held_region() {
+        let frame =
+            playback.assembly().frame_of(held.part()).map_or(crate::math::Mat4::IDENTITY, |p| p.to_matrix());
+        glyphs.extend(
+            held.drag()
+                .carried_regions()
+                .into_iter()
+                .map(glyph)
+                .map(|g| crate::render::ToolGlyph { model: frame * g.model, ..g }),
+        );
+    }
+    glyphs
 }
 
 /// The glyphs of the symmetry `playback`'s strokes act through, over the scene's initial

@@ -77,6 +77,10 @@ pub const PALETTE_BAR_RANGE_M: (f32, f32) = (0.004, 0.15);
 /// The colour and opacity of the palette's shape and size items.
 pub const PALETTE_COLOUR: Vec4 = Vec4::new(0.85, 0.85, 0.82, 0.8);
 
+/// The colour regions are drawn in while a hand carries them, the region button's, and the
+/// tool's while it is a region tool: a warm yellow.
+pub const REGION_RGB: [f32; 3] = [0.95, 0.82, 0.35];
+
 /// How far in front of the grip (along its −Z) the row of buttons is, room metres.
 pub const BUTTON_AHEAD_M: f32 = 0.125;
 /// Distance between two buttons along the grip's X axis, room metres.
@@ -176,11 +180,13 @@ pub enum Button {
     Lattice,
     /// Show the panel, or hide it.
     Panel,
+    /// Step the tool hand's region tool: move, copy, bend, inflate, deflate, then sculpting.
+    Region,
 }
 
 impl Button {
     /// The buttons in their row, from the grip's −X to its +X.
-    pub const ALL: [Button; 8] = [
+    pub const ALL: [Button; 9] = [
         Button::Symmetry,
         Button::Undo,
         Button::Redo,
@@ -189,6 +195,7 @@ impl Button {
         Button::Quit,
         Button::Lattice,
         Button::Panel,
+        Button::Region,
     ];
 
     /// What the button is called.
@@ -202,6 +209,7 @@ impl Button {
             Button::Symmetry => "symmetry",
             Button::Lattice => "lattice",
             Button::Panel => "panel",
+            Button::Region => "region",
         }
     }
 
@@ -234,6 +242,8 @@ impl Button {
             Button::Symmetry => (GlyphShape::Cylinder, [0.45, 0.7, 1.0]),
             Button::Lattice => (GlyphShape::Torus { tube: 0.2 }, [0.7, 0.45, 0.95]),
             Button::Panel => (GlyphShape::Box, [0.85, 0.87, 0.92]),
+            // The colour carried regions are drawn in.
+            Button::Region => (GlyphShape::Box, REGION_RGB),
         };
         let (size, opacity) = if pointed { (1.3 * BUTTON_RADIUS_M, 1.0) } else { (BUTTON_RADIUS_M, 0.75) };
         // The ring faces the viewer: its axis along the grip's Z.

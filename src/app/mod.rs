@@ -14,6 +14,7 @@ mod export;
 mod frame;
 mod glyphs;
 mod held_lattice;
+mod held_region;
 mod monitor;
 mod panel_rows;
 mod playback;

@@ -11,6 +11,7 @@ use std::sync::Arc;
 
 use super::assembly::{image_in_part, Assembly};
 use super::held_lattice::HeldLattice;
+use super::held_region::HeldRegion;
 use crate::clay::{window_around, Clay, ClayParams, ClayTool};
 use crate::lattice::{volume_at, Lattice, LatticeError};
 use crate::math::{Aabb, Isometry, Vec3};
@@ -61,6 +62,9 @@ pub struct Playback<'s> {
     strokes: [Option<(usize, usize, Stroke)>; 2],
     /// Whether the field's open stroke is the hands' (opened here).
     owns_stroke: bool,
+    /// The parts after the first whose open strokes the timeline opened; a stroke someone else
+    /// opened on a part (the desk's or the headset's tool, a region held) is theirs to close.
+    opened: std::collections::BTreeSet<usize>,
     /// The push the hands' push and support tools drive, while one pushes.
     push: Option<Push>,
     time_s: f32,
@@ -84,6 +88,9 @@ pub struct Playback<'s> {
     /// [`Playback::keep_lattice`] (stored once it stays the same from one frame to the next).
     lattice_kept: Option<crate::io::StoredLattice>,
     lattice_seen: Option<crate::io::StoredLattice>,
+    /// The region the desk or the headset carries: its part's stroke stays open until the
+    /// hand lets it go (one undo step).
+    held_region: Option<HeldRegion>,
 }
 
 /// Where a scene's region tool stands on the timeline.
@@ -206,6 +213,7 @@ impl<'s> Playback<'s> {
             tools,
             strokes: [None, None],
             owns_stroke: false,
+            opened: Default::default(),
             push: None,
             time_s: 0.0,
             autosave,
@@ -216,6 +224,7 @@ impl<'s> Playback<'s> {
             lattice_form: crate::lattice::LatticeForm::default(),
             images: scene.symmetry.images(),
             held: None,
+            held_region: None,
             lattice_kept: None,
             lattice_seen: None,
         };
@@ -249,9 +258,12 @@ impl<'s> Playback<'s> {
         use crate::field::BRICK_SIZE;
         self.strokes = [None, None];
         self.owns_stroke = false;
+        self.opened.clear();
         self.push = None;
-        // An open lattice resamples the clay it opened over: it ends with that clay.
+        // An open lattice resamples the clay it opened over, a held region carries it: each
+        // ends with that clay.
         self.held = None;
+        self.held_region = None;
         (self.lattice_kept, self.lattice_seen) = (None, None);
         for state in &mut self.lattices {
             if matches!(state, LatticeState::Open(..)) {
@@ -390,11 +402,13 @@ impl<'s> Playback<'s> {
     /// before taking back the newest), journaling them; a lattice held open is applied.
     pub fn close_steps(&mut self) {
         self.apply_held();
+        self.let_go_held_region();
         self.strokes = [None, None];
         if self.owns_stroke {
             self.field.end_stroke();
             self.owns_stroke = false;
         }
+        self.opened.clear();
         self.assembly.end_strokes();
         self.journal();
     }
@@ -516,7 +530,7 @@ impl<'s> Playback<'s> {
                 let field = self.assembly.field_mut(&mut self.field, part);
                 if !field.in_stroke() {
                     field.begin_stroke();
-                    self.owns_stroke |= part == 0;
+                    own(&mut self.owns_stroke, &mut self.opened, part);
                 }
                 let (tool, _, images) =
                     in_part(frame, self.tools[during.tool].clone(), Pose::default(), &self.images);
@@ -544,7 +558,7 @@ impl<'s> Playback<'s> {
             self.field.begin_stroke();
             self.owns_stroke = true;
         } else if !drawing && self.owns_stroke {
-            self.assembly.end_strokes();
+            self.end_opened_strokes();
             self.field.end_stroke();
             self.owns_stroke = false;
             if let Some(a) = &mut self.autosave {
@@ -552,10 +566,20 @@ impl<'s> Playback<'s> {
             }
         }
         if !drawing {
-            self.assembly.end_strokes();
+            self.end_opened_strokes();
             self.assembly.note_steps(&self.field);
         }
         self.time_s = t;
+    }
+
+    /// Closes the strokes the timeline opened on the parts after the first.
+    fn end_opened_strokes(&mut self) {
+        for part in std::mem::take(&mut self.opened) {
+            let field = self.assembly.field_mut(&mut self.field, part);
+            if field.in_stroke() {
+                field.end_stroke();
+            }
+        }
     }
 
     /// Journals the strokes finished on the field since the last record (a stroke drawn on
@@ -674,7 +698,7 @@ impl<'s> Playback<'s> {
             if matches!(state, LatticeState::Waiting) && t >= sl.open_s {
                 if !field.in_stroke() {
                     field.begin_stroke();
-                    self.owns_stroke |= sl.part == 0;
+                    own(&mut self.owns_stroke, &mut self.opened, sl.part);
                 }
                 *state = match Lattice::open(field, &sl.spec) {
                     Ok(l) => LatticeState::Open(Box::new(l), Aabb::EMPTY),
@@ -898,6 +922,84 @@ impl<'s> Playback<'s> {
         true
     }
 
+    /// Takes the region of `tool`'s shape at `pose` (world) from the active part's clay, and
+    /// its images under the symmetry, for `op`: held (the part's stroke open) until
+    /// [`Playback::let_go_region`], carried by [`Playback::carry_region`]. Refused, with a
+    /// sentence, while a lattice or a region is held, while a stroke is drawn on the part, on a
+    /// locked part, or when the region cannot be taken.
+    pub fn grab_region(&mut self, op: RegionOp, tool: Tool, pose: Pose) -> Result<(), String> {
+        if self.held.is_some() {
+            return Err("a lattice is open: apply it or put the clay back before a region tool acts".into());
+        }
+        if self.held_region.is_some() {
+            return Err("a region is held already: let it go first".into());
+        }
+        self.active_target()?;
+        let (tool, local, images) = self.in_active_part(tool, pose, &self.images);
+        let part = self.assembly.active();
+        let field = self.assembly.field_mut(&mut self.field, part);
+        self.held_region = Some(HeldRegion::grab(field, part, op, &tool, local, &images)?);
+        Ok(())
+    }
+
+    /// Carries the held region to where the hand is now, at `pose` (world); `None` when no
+    /// region is held.
+    pub fn carry_region(&mut self, pose: Pose) -> Option<Result<crate::parts::RegionStats, String>> {
+        let held = self.held_region.as_mut()?;
+        let local = self.assembly.frame_of(held.part()).map_or(pose, |f| f.local_pose(pose));
+        Some(held.carry(self.assembly.field_mut(&mut self.field, held.part()), local))
+    }
+
+    /// Lets the held region go where it was last carried: one undo step, journaled. Returns
+    /// whether one was held.
+    pub fn let_go_region(&mut self) -> bool {
+        let held = self.let_go_held_region();
+        if held {
+            self.journal();
+        }
+        held
+    }
+
+    /// Ends the held region's step; the caller journals it.
+    fn let_go_held_region(&mut self) -> bool {
+        let Some(held) = self.held_region.take() else { return false };
+        let part = held.part();
+        held.let_go(self.assembly.field_mut(&mut self.field, part));
+        true
+    }
+
+    /// The region the desk or the headset carries, if any.
+    pub fn held_region(&self) -> Option<&HeldRegion> {
+        self.held_region.as_ref()
+    }
+
+    /// Moves the surface of the active part's clay within the region of `tool`'s shape at
+    /// `pose` (world), and within its images, out (`distance_m` > 0) or in: one undo step,
+    /// journaled. Refused, with a sentence, as [`Playback::grab_region`] is; says so where no
+    /// surface lies within the region.
+    pub fn swell_region(&mut self, tool: Tool, pose: Pose, distance_m: f32) -> Result<(), String> {
+        let name = if distance_m > 0.0 { "inflate" } else { "deflate" };
+        if self.held.is_some() {
+            return Err("a lattice is open: apply it or put the clay back before a region tool acts".into());
+        }
+        if self.held_region.is_some() {
+            return Err("a region is held already: let it go first".into());
+        }
+        let (tool, local, images) = self.in_active_part(tool, pose, &self.images);
+        let (field, _) = self.active_target()?;
+        if field.in_stroke() {
+            return Err(format!("cannot {name} the region while a stroke is drawn"));
+        }
+        field.begin_stroke();
+        let counters = inflate(field, &crate::parts::Region::of_tool(&tool, local), distance_m, &images);
+        field.end_stroke();
+        self.journal();
+        if counters.dirtied == 0 {
+            return Err(format!("no clay surface within the tool to {name}"));
+        }
+        Ok(())
+    }
+
     /// The scene's lattices open now, with their scene entries.
     pub fn open_lattices(&self) -> impl Iterator<Item = (&'s SceneLattice, &Lattice)> + '_ {
         self.lattices.iter().zip(&self.scene.lattices).filter_map(|(state, sl)| match state {
@@ -1052,6 +1154,16 @@ impl<'s> Playback<'s> {
 
 /// A tool at `pose` (world), acting through the symmetry's `images`, as it acts on a part
 /// placed at `frame` (`None`: at rest in the world): in the part's frame and at its scale.
+/// Notes that the timeline opened the stroke on part `part`: the first part's in `first`, the
+/// others' in `others`.
+fn own(first: &mut bool, others: &mut std::collections::BTreeSet<usize>, part: usize) {
+    if part == 0 {
+        *first = true;
+    } else {
+        others.insert(part);
+    }
+}
+
 fn in_part(
     frame: Option<Placement>,
     mut tool: Tool,

@@ -44,6 +44,7 @@ use super::document::Document;
 use super::environment::load_environment;
 use super::frame::build_frame;
 use super::glyphs::tool_glyph;
+use super::held_region::{RegionTool, SWELL_STEP_M};
 use super::panel_rows::{self, action_cycle, shape_cycle, shape_name};
 use super::playback::Playback;
 use super::recent::RecentSculpts;
@@ -61,7 +62,7 @@ use crate::io::autosave::{Autosave, AutosaveConfig};
 use crate::io::StoredView;
 use crate::math::{Pose, Quat, Vec2, Vec3, Vec4};
 use crate::mesh::Mesher;
-use crate::parts::{inflate, Motion, Region, RegionDrag, RegionOp, SymmetrySwitch};
+use crate::parts::{RegionOp, SymmetrySwitch};
 use crate::render::{Light, Presented, Renderer, RendererDesc, ValidationLog};
 use crate::scene::ScreenCalibration;
 use crate::scene::{line_column, FileError, Scene};
@@ -478,9 +479,6 @@ pub struct Station<'s> {
     exports: super::export::Exports,
     /// The symmetry the desk tool and the scene's hands act through.
     symmetry: SymmetrySwitch,
-    /// The region the desk tool carries, copies or bends, and the tool's pose when it grabbed
-    /// (in the frame of the part it acts on).
-    region_drag: Option<(RegionDrag, Pose)>,
     /// The active part's placement when the device driving the `part` target was last at home,
     /// and the placement it last gave the part while moving it (kept once it stops).
     part_base: crate::parts::Placement,
@@ -597,7 +595,6 @@ impl<'s> Station<'s> {
             action_index,
             stroke: None,
             symmetry: SymmetrySwitch::new(scene.symmetry),
-            region_drag: None,
             part_base: scene.parts[0].placement,
             part_moving: None,
             part_shown_s: 0.0,
@@ -936,7 +933,6 @@ impl<'s> Station<'s> {
             StationAction::Quit => self.quit = true,
             StationAction::Undo => {
                 self.stroke = None;
-                self.region_drag = None;
                 match self.doc.playback.undo() {
                     Ok(true) => {
                         self.doc.journal();
@@ -1025,31 +1021,15 @@ impl<'s> Station<'s> {
                 });
             }
             StationAction::InflateRegion | StationAction::DeflateRegion => {
-                const STEP_M: f32 = 0.001;
-                let distance = if action == StationAction::InflateRegion { STEP_M } else { -STEP_M };
-                let images = self.doc.playback.images().to_vec();
-                let (tool, pose, images) = self.doc.playback.in_active_part(
-                    self.desk_tool.clone(),
-                    self.controls.desk.poses.get(Target::Tool),
-                    &images,
-                );
-                let region = Region::of_tool(&tool, pose);
-                let field = match self.doc.playback.active_target() {
-                    Ok((field, _)) => field,
-                    Err(why) => {
-                        self.messages.push(why);
-                        return;
+                let out = action == StationAction::InflateRegion;
+                let distance = if out { SWELL_STEP_M } else { -SWELL_STEP_M };
+                let pose = self.controls.desk.poses.get(Target::Tool);
+                match self.doc.playback.swell_region(self.desk_tool.clone(), pose, distance) {
+                    Ok(()) => {
+                        self.doc.edited();
+                        self.stepped(RegionTool::Swell { out }.name().into());
                     }
-                };
-                if !field.in_stroke() {
-                    field.begin_stroke();
-                    let c = inflate(field, &region, distance, &images);
-                    field.end_stroke();
-                    self.doc.journal();
-                    self.stepped(if distance > 0.0 { "inflate".into() } else { "deflate".into() });
-                    if c.dirtied == 0 {
-                        self.messages.push("no clay surface within the tool to inflate or deflate".into());
-                    }
+                    Err(why) => self.messages.push(why),
                 }
             }
             StationAction::NextPart | StationAction::PreviousPart => {
@@ -1650,7 +1630,6 @@ impl<'s> Station<'s> {
     pub fn open(&mut self, path: &Path) -> Result<()> {
         let opened = self.doc.open(path)?;
         self.stroke = None;
-        self.region_drag = None;
         if opened.tools_restored {
             let stored = self.doc.playback.tools().get(self.tool_index).map(|t| t.shape.clone());
             if let Some(shape @ ToolShape::Freeform(_)) = stored {
@@ -1767,10 +1746,10 @@ impl<'s> Station<'s> {
         }
     }
 
-    /// The region tools held at the desk: the region of the tool's shape grabbed when a region
-    /// key goes down, carried (or copied, or bent) with the tool each frame, one undo step
-    /// when the key comes up. Not while the tool is applied.
-    fn carry_region(&mut self, tool: &Tool, pose: Pose, applying: bool, images: &[crate::math::Isometry]) {
+    /// The region tools held at the desk: the region of the tool's shape at `pose` (world)
+    /// grabbed when a region key goes down, carried (or copied, or bent) with the tool each
+    /// frame, one undo step when the key comes up. Not while the tool is applied.
+    fn carry_region(&mut self, pose: Pose, applying: bool) {
         let held = [
             (StationAction::GrabRegion, RegionOp::Move),
             (StationAction::CopyRegion, RegionOp::Copy),
@@ -1780,39 +1759,16 @@ impl<'s> Station<'s> {
         .find(|&(a, _)| self.holding(a))
         .map(|(_, op)| op)
         .filter(|_| !applying);
-        let field = match self.doc.playback.active_target() {
-            Ok((field, _)) => field,
-            Err(why) => {
-                if held.is_some() && self.messages.last() != Some(&why) {
-                    self.messages.push(why);
-                }
-                return;
-            }
-        };
-        let failed = match (held, &mut self.region_drag) {
-            (Some(op), None) if !field.in_stroke() => {
-                match RegionDrag::start(field, Region::of_tool(tool, pose), op, images) {
-                    Ok(drag) => {
-                        field.begin_stroke();
-                        self.region_drag = Some((drag, pose));
-                        None
-                    }
-                    Err(e) => Some(format!("cannot {} the region: {e}", op.name())),
-                }
-            }
-            (Some(_), Some((drag, grab))) => drag
-                .update(field, Motion::between(*grab, pose))
-                .err()
-                .map(|e| format!("the region stops: {e}")),
-            (None, Some(_)) => {
-                self.region_drag = None;
-                field.end_stroke();
-                self.doc.journal();
-                self.step_names.push("region".into());
-                self.redo_names.clear();
+        let failed = match (held, self.doc.playback.held_region().is_some()) {
+            (Some(op), false) => self.doc.playback.grab_region(op, self.desk_tool.clone(), pose).err(),
+            (Some(_), true) => self.doc.playback.carry_region(pose).and_then(Result::err),
+            (None, true) => {
+                self.doc.playback.let_go_region();
+                self.doc.edited();
+                self.stepped("region".into());
                 None
             }
-            _ => None,
+            (None, false) => None,
         };
         if let Some(message) = failed {
             if self.messages.last() != Some(&message) {
@@ -1823,8 +1779,8 @@ impl<'s> Station<'s> {
 
     /// Ends the desk tool's stroke and region drag on the active part, each one undo step.
     fn end_desk_strokes(&mut self) {
-        let open = self.stroke.take().is_some() | self.region_drag.take().is_some();
-        if open {
+        let region = self.doc.playback.let_go_region();
+        if self.stroke.take().is_some() || region {
             if let Ok((field, _)) = self.doc.playback.active_target() {
                 field.end_stroke();
             }
@@ -1916,7 +1872,6 @@ impl<'s> Station<'s> {
         // The desk tool acts on the active part, in its frame.
         let images = self.doc.playback.images().to_vec();
         let (acting, local, images) = self.doc.playback.in_active_part(self.acting_tool(), pose, &images);
-        let (desk_tool, _, _) = self.doc.playback.in_active_part(self.desk_tool.clone(), pose, &[]);
         let lattice_open = self.doc.playback.held_lattice().is_some();
         if lattice_open {
             self.drive_lattice(local.position_m);
@@ -1957,7 +1912,7 @@ impl<'s> Station<'s> {
             }
         }
         if !lattice_open {
-            self.carry_region(&desk_tool, local, applying, &images);
+            self.carry_region(pose, applying);
         }
 
         self.times.tools_ms = ms_since(tools_started);
@@ -1985,14 +1940,6 @@ impl<'s> Station<'s> {
         frame.tools.extend(super::frame::lattice_glyphs(&self.doc.playback));
         frame.tools.extend(super::frame::symmetry_glyphs(&self.doc.playback));
         frame.tools.extend(super::frame::region_glyphs(&self.doc.playback));
-        if let Some((drag, _)) = &self.region_drag {
-            let carried = drag.carried_regions();
-            frame.tools.extend(
-                carried
-                    .iter()
-                    .map(|r| tool_glyph(&r.shape, r.frame.pose, r.frame.scale, super::frame::REGION_COLOUR)),
-            );
-        }
         if self.stereo.lights_follow_viewer {
             // The scene's lights, carried along with the viewer's turn about the target.
             let pivot = self.scene.rig.target_m;

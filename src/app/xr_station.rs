@@ -19,9 +19,15 @@
 //! - left menu: recentre the sculpture in front of the head;
 //! - left thumbstick click: symmetry on or off; X: the next symmetry (mirror X, mirror X and
 //!   Z, radial 6, a kaleidoscope); every stroke and push then acts at its images too;
-//! - the palette's buttons (symmetry, undo, redo, recentre, save, quit, lattice), in front of
-//!   the left controller: touch one with the right controller and pull the trigger. Every
-//!   profile has a trigger, so each of these is reachable on every controller.
+//! - the palette's buttons (symmetry, undo, redo, recentre, save, quit, lattice, panel,
+//!   region), in front of the left controller: touch one with the right controller and pull
+//!   the trigger. Every profile has a trigger, so each of these is reachable on every
+//!   controller.
+//! - the palette's region button steps the right hand's region tool: move, copy, bend,
+//!   inflate, deflate, then sculpting again. The tool is then drawn yellow and its shape is the
+//!   region: the trigger takes the active part's clay within it and carries it (move: leaving
+//!   empty space; copy: a copy), or bends the clay after the hand, one undo step when the
+//!   trigger comes up; each pull of inflate or deflate moves the surface within it by 1 mm.
 //! - the palette's panel button shows the panel (the desk's, less its view and devices
 //!   sections, with a first row that saves, recentres and quits) on a board standing on the
 //!   palette; a ray from the right controller's aim points at it (a dot where it meets it), the
@@ -42,8 +48,9 @@ use super::document::Document;
 use super::frame::build_frame;
 use super::glyphs::{
     action_colour, buttons, controller_glyph, palette, panel_placement, ray_glyphs, ray_on_panel, tool_glyph,
-    Button,
+    Button, REGION_RGB,
 };
+use super::held_region::{RegionTool, SWELL_STEP_M};
 use super::panel_rows::{self, action_cycle, shape_cycle, shape_name, LatticeStep};
 use super::playback::Playback;
 use crate::field::{Field, FieldReader};
@@ -224,6 +231,9 @@ pub struct XrSculptor<'s> {
     last_tool_pose: Option<Pose>,
     /// The surface as the renderer holds it, for the panel's exports, and the one under way.
     exports: super::export::Exports,
+    /// The region tool the tool hand holds instead of sculpting (the palette's region button
+    /// steps it), if any.
+    region_tool: Option<RegionTool>,
 }
 
 impl<'s> XrSculptor<'s> {
@@ -266,6 +276,7 @@ impl<'s> XrSculptor<'s> {
             panel_held: false,
             last_tool_pose: None,
             exports: super::export::Exports::default(),
+            region_tool: None,
         }
     }
 
@@ -332,6 +343,12 @@ impl<'s> XrSculptor<'s> {
 
     /// The dominant hand's tool as it acts in the scene: its room size kept whatever the
     /// sculpture's scale, soft actions at the rate the trigger's pressure sets.
+    /// The scene's push tool, when the tool hand holds it to push the virtual clay (through
+    /// the playback) rather than a region tool.
+    fn pushing_tool(&self) -> Option<usize> {
+        self.tool_index.filter(|_| self.tool.action == Action::Push && self.region_tool.is_none())
+    }
+
     fn acting_tool(&self, pressure: f32) -> Tool {
         let mut tool = self.tool.clone().by_size_unless_set(self.hand_samples);
         tool.scale /= self.placement.scale;
@@ -365,13 +382,55 @@ impl<'s> XrSculptor<'s> {
         }
     }
 
-    /// Closes the stroke in progress, journaling it.
+    /// Closes the stroke in progress, and lets a region carried go, journaling each.
     fn end_stroke(&mut self) {
         if self.stroke.take().is_some() {
             if let Ok((field, _)) = self.doc.playback.active_target() {
                 field.end_stroke();
             }
             self.doc.journal();
+        }
+        if self.doc.playback.let_go_region() {
+            self.doc.edited();
+        }
+    }
+
+    /// The region tool the tool hand holds instead of sculpting, if any.
+    pub fn region_tool(&self) -> Option<RegionTool> {
+        self.region_tool
+    }
+
+    /// The tool hand's region tool at `pose` (the scene), the trigger `pulling` it (`pulled`:
+    /// this frame): a drag takes the region of the tool's shape as the trigger goes down,
+    /// carries it with the hand and lets it go, one undo step, as the trigger comes up;
+    /// inflate and deflate move the surface within the region by one step each pull.
+    fn drive_region(&mut self, pose: Option<Pose>, pulling: bool, pulled: bool) {
+        let Some(region_tool) = self.region_tool else { return };
+        let tool = self.acting_tool(1.0);
+        let held = self.doc.playback.held_region().is_some();
+        let failed = match (region_tool, pose.filter(|_| pulling), held) {
+            (RegionTool::Drag(op), Some(pose), false) => self.doc.playback.grab_region(op, tool, pose).err(),
+            (RegionTool::Drag(_), Some(pose), true) => {
+                self.doc.playback.carry_region(pose).and_then(Result::err)
+            }
+            (RegionTool::Swell { out }, Some(pose), false) if pulled => {
+                let distance = if out { SWELL_STEP_M } else { -SWELL_STEP_M };
+                let swelled = self.doc.playback.swell_region(tool, pose, distance);
+                if swelled.is_ok() {
+                    self.doc.edited();
+                }
+                swelled.err()
+            }
+            (_, None, true) => {
+                self.end_stroke();
+                None
+            }
+            _ => None,
+        };
+        if let Some(message) = failed {
+            if self.messages.last() != Some(&message) {
+                self.messages.push(message);
+            }
         }
     }
 
@@ -401,6 +460,14 @@ impl<'s> XrSculptor<'s> {
                 self.set_symmetry(symmetry);
             }
             Some(Button::Lattice) => self.lattice_button(),
+            Some(Button::Region) => {
+                self.end_stroke();
+                self.region_tool = RegionTool::after(self.region_tool);
+                self.messages.push(match self.region_tool {
+                    Some(t) => t.describe(),
+                    None => "region tools off: the trigger sculpts again".into(),
+                });
+            }
             Some(Button::Panel) => {
                 let shown = !self.panel.shown();
                 self.panel.set_shown(shown);
@@ -795,14 +862,17 @@ impl<'s> XrSculptor<'s> {
         let tool_pose = hand.grip.map(|g| self.placement.pose_to_world(g));
         self.last_tool_pose = tool_pose.or(self.last_tool_pose);
         let lattice = self.drive_lattice(input, tool_pose, on_palette, dt_s);
-        let applying = hand.trigger >= TRIGGER_ON
+        let pulling = hand.trigger >= TRIGGER_ON
             && tool_pose.is_some()
             && self.grab.is_none()
             && !on_palette
             && !lattice;
+        let pulled = pulling && self.previous[self.dominant].trigger < TRIGGER_ON;
+        // A region tool takes the trigger from the sculpting tools.
+        let applying = pulling && self.region_tool.is_none();
         // The virtual clay: the dominant hand's push tool and the other hand's support act
         // through the playback, as the scene's scripted hands do.
-        let pushing_tool = self.tool_index.filter(|_| self.tool.action == Action::Push);
+        let pushing_tool = self.pushing_tool();
         let mut live = [None, None];
         if let (Some(tool), Some(pose)) = (pushing_tool, tool_pose) {
             live[self.dominant] = Some(PlaybackHand { tool, pose, active: applying, part: 0 });
@@ -867,6 +937,7 @@ impl<'s> XrSculptor<'s> {
                 }
             }
         }
+        self.drive_region(tool_pose, pulling, pulled);
         let tools_ms = started.elapsed().as_secs_f64() * 1e3;
         let meshing = std::time::Instant::now();
         self.doc.playback.sync_lattices();
@@ -877,7 +948,7 @@ impl<'s> XrSculptor<'s> {
             apply(diff);
         }
         self.times = (tools_ms, meshing.elapsed().as_secs_f64() * 1e3);
-        let (mut frame, mut held) = self.frame(&input.hands, tool_pose.map(|pose| (pose, applying)), &tool);
+        let (mut frame, mut held) = self.frame(&input.hands, tool_pose.map(|pose| (pose, pulling)), &tool);
         // The panel on its board in the support hand; without that hand tracked, its textures
         // still go to the renderer (each is given once) and nothing is drawn.
         if let Some(mut paint) = panel_paint {
@@ -917,11 +988,16 @@ impl XrSculptor<'_> {
         let tools = self.doc.playback.tools();
         if let Some((pose, applying)) = dominant {
             held[self.dominant].push(Held::Tool(frame.tools.len()));
-            let tool = match self.tool_index.filter(|_| self.tool.action == Action::Push) {
+            let tool = match self.pushing_tool() {
                 Some(i) => &tools[i],
                 None => acting,
             };
-            let colour = action_colour(&tool.action).extend(if applying { 0.6 } else { 0.35 });
+            // A region tool is drawn in the colour of the regions it carries.
+            let rgb = match self.region_tool {
+                Some(_) => Vec3::from(REGION_RGB),
+                None => action_colour(&tool.action),
+            };
+            let colour = rgb.extend(if applying { 0.6 } else { 0.35 });
             frame.tools.push(tool_glyph(&tool.shape, pose, tool.scale, colour));
             // Its images under the symmetry, fainter, with the planes and the axis.
             for image in self.doc.playback.images().iter().skip(1) {
@@ -931,6 +1007,7 @@ impl XrSculptor<'_> {
         }
         frame.tools.extend(super::frame::symmetry_glyphs(&self.doc.playback));
         frame.tools.extend(super::frame::lattice_glyphs(&self.doc.playback));
+        frame.tools.extend(super::frame::region_glyphs(&self.doc.playback));
         // The active part's box while the support hand carries it.
         if matches!(self.grab, Some(Grab::Part { .. })) {
             frame.tools.extend(super::frame::part_glyph(&self.doc.playback, super::frame::PART_COLOUR));
@@ -1249,6 +1326,7 @@ pub fn xr_absent(e: &anyhow::Error) -> Option<&XrError> {
 mod tests {
     use super::*;
     use crate::math::{Quat, Vec2};
+    use crate::parts::RegionOp;
 
     /// A ball of clay (radius 5 cm) at the scene's origin and a gouge; shown at the work
     /// point, so its front is at room (0, 1.3, −0.40).
@@ -1325,6 +1403,31 @@ mod tests {
             hands,
         };
         s.step(&input, |_| {})
+    }
+
+    /// Where the palette's (left) hand is held in the palette tests.
+    const PALETTE: Pose = Pose { position_m: Vec3::new(-0.1, 1.6, -0.1), rotation: Quat::IDENTITY };
+
+    /// The palette's hand at [`PALETTE`].
+    fn palette_hand() -> HandState {
+        HandState { grip: Some(PALETTE), ..HandState::default() }
+    }
+
+    /// The tool hand at `p`, its trigger pulled by `trigger`.
+    fn tool_hand(p: Vec3, trigger: f32) -> HandState {
+        HandState {
+            grip: Some(Pose { position_m: p, rotation: Quat::IDENTITY }),
+            trigger,
+            ..HandState::default()
+        }
+    }
+
+    /// The tool hand presses palette button `b` (three frames: onto it, the trigger pulled, let
+    /// go); returns the last frame.
+    fn press(s: &mut XrSculptor<'_>, b: Button) -> FrameOutput {
+        frame(s, [palette_hand(), tool_hand(b.centre(PALETTE), 0.0)]);
+        frame(s, [palette_hand(), tool_hand(b.centre(PALETTE), 1.0)]);
+        frame(s, [palette_hand(), tool_hand(b.centre(PALETTE), 0.0)])
     }
 
     fn density(s: &XrSculptor<'_>, p: Vec3) -> f32 {
@@ -1687,11 +1790,6 @@ mod tests {
             thumbstick: Vec2::new(0.0, stick),
             ..HandState::default()
         };
-        let press = |s: &mut XrSculptor<'_>, b: Button| {
-            frame(s, [left, hand(b.centre(palette), 0.0, 0.0)]);
-            frame(s, [left, hand(b.centre(palette), 1.0, 0.0)]);
-            frame(s, [left, hand(b.centre(palette), 0.0, 0.0)])
-        };
         let out = press(&mut s, Button::Lattice);
         assert!(s.doc.playback.held_lattice().is_some(), "{:?}", s.messages);
         assert!(out.frame.tools.len() > 64, "the lattice's controls and lines are drawn");
@@ -1740,6 +1838,126 @@ mod tests {
     }
 
     #[test]
+    fn the_region_button_steps_region_tools_whose_trigger_carries_copies_bends_and_swells_the_clay() {
+        let scene = ball();
+        let mut s = sculptor(&scene, false);
+        let ball = s.field().clone();
+        let steps = ball.history_stats().undo_in_memory;
+        let (left, hand) = (palette_hand(), tool_hand);
+        // The tool's centre on the ball's top, and 3 cm (room) above it.
+        let top = Vec3::new(0.0, 0.05, 0.0);
+        let room = s.placement().matrix().transform_point3(top);
+        let lift = Vec3::new(0.0, 0.03, 0.0);
+        let above = top + lift / s.placement().scale;
+        let region_glyphs = |out: &FrameOutput| {
+            out.frame.tools.iter().filter(|g| g.colour == super::super::frame::REGION_COLOUR).count()
+        };
+        // Drags: the trigger takes the region as it goes down and lets it go as it comes up.
+        let drag = |s: &mut XrSculptor<'_>| {
+            frame(s, [left, hand(room, 0.0)]);
+            frame(s, [left, hand(room, 1.0)]);
+            assert!(s.doc.playback.held_region().is_some(), "{:?}", s.messages);
+            let out = frame(s, [left, hand(room + 0.5 * lift, 1.0)]);
+            assert_eq!(region_glyphs(&out), 1, "the region is drawn where the hand carries it");
+            frame(s, [left, hand(room + lift, 1.0)]);
+            let out = frame(s, [left, hand(room + lift, 0.0)]);
+            assert!(s.doc.playback.held_region().is_none());
+            assert_eq!(region_glyphs(&out), 0);
+            assert_eq!(s.field().history_stats().undo_in_memory, steps + 1, "one undo step");
+        };
+        let undo_to_ball = |s: &mut XrSculptor<'_>| {
+            press(s, Button::Undo);
+            assert!(s.field().same_samples(&ball), "undo gives the ball back bit for bit");
+            assert_eq!(s.field().history_stats().undo_in_memory, steps);
+        };
+
+        press(&mut s, Button::Region);
+        assert_eq!(s.region_tool(), Some(RegionTool::Drag(RegionOp::Move)));
+        assert!(s.messages.last().unwrap().contains("move"), "{:?}", s.messages);
+        // The tool is drawn in the regions' colour.
+        let out = frame(&mut s, [left, hand(room, 0.0)]);
+        assert!(out.frame.tools.iter().any(|g| g.colour.truncate() == Vec3::from(REGION_RGB)));
+        drag(&mut s);
+        assert!(density(&s, above) > 0.5, "the clay is carried up: {}", density(&s, above));
+        assert!(density(&s, top - Vec3::new(0.0, 0.004, 0.0)) < 0.5, "and leaves empty space");
+        undo_to_ball(&mut s);
+
+        press(&mut s, Button::Region);
+        assert_eq!(s.region_tool(), Some(RegionTool::Drag(RegionOp::Copy)));
+        drag(&mut s);
+        assert!(density(&s, above) > 0.5, "a copy is carried up");
+        assert!(density(&s, top - Vec3::new(0.0, 0.004, 0.0)) > 0.5, "and the clay stays");
+        undo_to_ball(&mut s);
+
+        press(&mut s, Button::Region);
+        assert_eq!(s.region_tool(), Some(RegionTool::Drag(RegionOp::Bend)));
+        drag(&mut s);
+        assert!(!s.field().same_samples(&ball), "the clay is bent up");
+        assert!(density(&s, top + 0.5 * lift / s.placement().scale) > 0.5, "{:?}", s.messages);
+        undo_to_ball(&mut s);
+
+        // Swells: each pull one step of 1 mm, one undo step.
+        press(&mut s, Button::Region);
+        assert_eq!(s.region_tool(), Some(RegionTool::Swell { out: true }));
+        let mass = s.field().mass();
+        for trigger in [0.0, 1.0, 1.0, 0.0] {
+            frame(&mut s, [left, hand(room, trigger)]);
+        }
+        assert!(s.field().mass() > mass, "inflated: {mass} → {}", s.field().mass());
+        assert_eq!(s.field().history_stats().undo_in_memory, steps + 1, "one pull, one step");
+        undo_to_ball(&mut s);
+        press(&mut s, Button::Region);
+        assert_eq!(s.region_tool(), Some(RegionTool::Swell { out: false }));
+        for trigger in [0.0, 1.0, 0.0] {
+            frame(&mut s, [left, hand(room, trigger)]);
+        }
+        assert!(s.field().mass() < mass, "deflated: {mass} → {}", s.field().mass());
+        undo_to_ball(&mut s);
+        // Away from any clay, a swell says so and leaves no step.
+        for trigger in [0.0, 1.0, 0.0] {
+            frame(&mut s, [left, hand(room + Vec3::new(0.0, 0.3, 0.0), trigger)]);
+        }
+        assert!(s.messages.last().unwrap().contains("no clay surface"), "{:?}", s.messages);
+        assert_eq!(s.field().history_stats().undo_in_memory, steps);
+
+        // Pressed once more, the trigger sculpts again (the scene's gouge removes clay).
+        press(&mut s, Button::Region);
+        assert_eq!(s.region_tool(), None);
+        assert!(s.messages.last().unwrap().contains("sculpts again"));
+        for trigger in [0.0, 1.0, 1.0, 0.0] {
+            frame(&mut s, [left, hand(room, trigger)]);
+        }
+        assert!(s.field().mass() < mass, "the gouge carved");
+    }
+
+    #[test]
+    fn on_a_locked_part_the_region_tools_say_so_and_change_nothing() {
+        let scene = Scene::parse(
+            "[field]\nvoxel_size_m = 0.004\n[camera]\neye_m = [0.0, 0.0, 0.5]\ntarget_m = [0.0, 0.0, 0.0]\n\
+             [[part]]\nname = \"base\"\nlocked = true\n\
+             [[clay]]\nshape = \"sphere\"\nradius_m = 0.05\n",
+            "locked",
+            None,
+        )
+        .unwrap();
+        let mut s = sculptor(&scene, false);
+        let ball = s.field().clone();
+        let (left, hand) = (palette_hand(), tool_hand);
+        let room = s.placement().matrix().transform_point3(Vec3::new(0.0, 0.05, 0.0));
+        for region_tool in RegionTool::ALL {
+            for trigger in [0.0, 1.0, 0.0] {
+                frame(&mut s, [left, hand(Button::Region.centre(PALETTE), trigger)]);
+            }
+            assert_eq!(s.region_tool(), Some(region_tool));
+            for trigger in [0.0, 1.0, 1.0, 0.0] {
+                frame(&mut s, [left, hand(room, trigger)]);
+            }
+            assert!(s.messages.last().unwrap().contains("locked"), "{:?}", s.messages);
+            assert!(s.field().same_samples(&ball));
+        }
+    }
+
+    #[test]
     fn the_other_hand_grabs_and_both_hands_turn_move_and_scale_the_sculpture() {
         let scene = ball();
         let mut s = sculptor(&scene, false);
@@ -1759,6 +1977,56 @@ mod tests {
         let pulling = HandState { trigger: 1.0, ..grip(0.2, 1.3) };
         frame(&mut s, [grip(-0.2, 1.3), pulling]);
         assert_eq!(density(&s, Vec3::new(0.0, 0.0, 0.045)), whole);
+    }
+
+    #[test]
+    fn on_a_second_part_a_stroke_and_a_carried_region_are_each_one_undo_step_taken_back_exactly() {
+        let scene = Scene::parse(
+            "[field]\nvoxel_size_m = 0.004\n[camera]\neye_m = [0.0, 0.0, 0.5]\ntarget_m = [0.0, 0.0, 0.0]\n\
+             [[part]]\nname = \"body\"\n[[part]]\nname = \"head\"\nposition_m = [0.0, 0.02, 0.0]\nscale = 2.0\n\
+             [[clay]]\npart = \"body\"\nshape = \"sphere\"\nradius_m = 0.03\n\
+             [[clay]]\npart = \"head\"\nshape = \"sphere\"\nradius_m = 0.015\n\
+             [[tool]]\nname = \"gouge\"\nradius_m = 0.012\naction = \"remove\"\n",
+            "parts",
+            None,
+        )
+        .unwrap();
+        let mut s = sculptor(&scene, false);
+        frame(&mut s, [HandState { secondary: true, ..HandState::default() }, HandState::default()]);
+        frame(&mut s, [HandState::default(), HandState::default()]);
+        assert_eq!(s.doc.playback.assembly().active(), 1);
+        let head = || s.doc.playback.assembly().field(s.doc.playback.field(), 1).clone();
+        let (rest, steps) = (head(), head().history_stats().undo_in_memory);
+        let (left, hand) = (palette_hand(), tool_hand);
+        // The head's top (its clay is 3 cm across the world at scale 2).
+        let room = s.placement().matrix().transform_point3(Vec3::new(0.0, 0.05, 0.0));
+        let stroke = |s: &mut XrSculptor<'_>| {
+            frame(s, [left, hand(room, 0.0)]);
+            for i in 0..6 {
+                frame(s, [left, hand(room + Vec3::new(0.002 * i as f32, 0.0, 0.0), 1.0)]);
+            }
+            frame(s, [left, hand(room, 0.0)]);
+        };
+        stroke(&mut s);
+        let field = s.doc.playback.assembly().field(s.doc.playback.field(), 1);
+        assert!(!field.same_samples(&rest), "the gouge carved the head");
+        assert_eq!(field.history_stats().undo_in_memory, steps + 1, "six frames of a stroke, one step");
+        frame(&mut s, [left, hand(room, 0.0)]);
+        s.undo();
+        let field = s.doc.playback.assembly().field(s.doc.playback.field(), 1);
+        assert!(field.same_samples(&rest), "undo gives the head back bit for bit");
+        // A region carried over several frames.
+        for trigger in [0.0, 1.0, 0.0] {
+            frame(&mut s, [left, hand(Button::Region.centre(PALETTE), trigger)]);
+        }
+        assert_eq!(s.region_tool(), Some(RegionTool::Drag(RegionOp::Move)));
+        stroke(&mut s);
+        let field = s.doc.playback.assembly().field(s.doc.playback.field(), 1);
+        assert!(!field.same_samples(&rest), "the region moved: {:?}", s.messages);
+        assert_eq!(field.history_stats().undo_in_memory, steps + 1, "a drag over six frames, one step");
+        s.undo();
+        let field = s.doc.playback.assembly().field(s.doc.playback.field(), 1);
+        assert!(field.same_samples(&rest), "undo gives the head back bit for bit");
     }
 
     #[test]

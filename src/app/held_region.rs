@@ -1,0 +1,158 @@
+//! A region of a part's clay held by a hand, at the desk or in the headset: the region of the
+//! tool's shape is taken where the tool is when the hand closes, carried (or a copy of it
+//! carried, or the clay bent after it) as the hand moves, and left as one undo step when the
+//! hand opens. The scene's scripted region tools are [`super::playback`]'s; this is the
+//! hand-held one, one at a time, shared by the desk and the headset through
+//! [`super::playback::Playback`].
+
+use crate::field::Field;
+use crate::math::Pose;
+use crate::parts::{Motion, Region, RegionDrag, RegionOp, RegionStats};
+use crate::tool::Tool;
+
+/// How far one press of inflate or deflate moves the surface within the region, metres.
+pub const SWELL_STEP_M: f32 = 0.001;
+
+/// A region tool a hand holds: one of the drags, or a swell of the surface within the region.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RegionTool {
+    /// Carried with the hand while it is closed: move, copy or bend.
+    Drag(RegionOp),
+    /// Each press moves the surface within the region out (inflate) or in (deflate) by
+    /// [`SWELL_STEP_M`].
+    Swell {
+        /// Outwards.
+        out: bool,
+    },
+}
+
+impl RegionTool {
+    /// Every region tool, in the order the headset's palette steps through them.
+    pub const ALL: [RegionTool; 5] = [
+        RegionTool::Drag(RegionOp::Move),
+        RegionTool::Drag(RegionOp::Copy),
+        RegionTool::Drag(RegionOp::Bend),
+        RegionTool::Swell { out: true },
+        RegionTool::Swell { out: false },
+    ];
+
+    /// Its name, as messages say it.
+    pub fn name(self) -> &'static str {
+        match self {
+            RegionTool::Drag(op) => op.name(),
+            RegionTool::Swell { out: true } => "inflate",
+            RegionTool::Swell { out: false } => "deflate",
+        }
+    }
+
+    /// The one after `now` in [`RegionTool::ALL`], none (the hand sculpts again) after the last.
+    pub fn after(now: Option<RegionTool>) -> Option<RegionTool> {
+        match now {
+            None => Some(RegionTool::ALL[0]),
+            Some(t) => {
+                let at = RegionTool::ALL.iter().position(|a| *a == t).unwrap_or(RegionTool::ALL.len());
+                RegionTool::ALL.get(at + 1).copied()
+            }
+        }
+    }
+
+    /// What the hand does with it, as the message that selects it says.
+    pub fn describe(self) -> String {
+        match self {
+            RegionTool::Drag(RegionOp::Move) => {
+                "region tool move: the trigger carries the clay within the tool, leaving empty space".into()
+            }
+            RegionTool::Drag(RegionOp::Copy) => {
+                "region tool copy: the trigger carries a copy of the clay within the tool".into()
+            }
+            RegionTool::Drag(RegionOp::Bend) => {
+                "region tool bend: the trigger bends the clay within the tool after the hand".into()
+            }
+            RegionTool::Swell { out } => format!(
+                "region tool {}: each pull of the trigger moves the surface within the tool {} by {} mm",
+                self.name(),
+                if out { "out" } else { "in" },
+                SWELL_STEP_M * 1e3
+            ),
+        }
+    }
+}
+
+/// A region of part `part`'s clay carried by a hand: the drag, and the hand's pose in the
+/// part's frame when it took the region. The part's stroke stays open while it is held, so
+/// that the whole drag is one undo step.
+#[derive(Clone, Debug)]
+pub struct HeldRegion {
+    part: usize,
+    drag: RegionDrag,
+    grab: Pose,
+}
+
+impl HeldRegion {
+    /// Takes the region of `tool`'s shape at `pose` (both in the part's frame) from `field`
+    /// (part `part`'s clay, its images under `images` with it) for `op`, and opens the part's
+    /// stroke. Refused, with a sentence, while the field's stroke is open or when the region
+    /// cannot be taken.
+    pub fn grab(
+        field: &mut Field,
+        part: usize,
+        op: RegionOp,
+        tool: &Tool,
+        pose: Pose,
+        images: &[crate::math::Isometry],
+    ) -> Result<Self, String> {
+        if field.in_stroke() {
+            return Err(format!("cannot {} the region while a stroke is drawn", op.name()));
+        }
+        let drag = RegionDrag::start(field, Region::of_tool(tool, pose), op, images)
+            .map_err(|e| format!("cannot {} the region: {e}", op.name()))?;
+        field.begin_stroke();
+        Ok(Self { part, drag, grab: pose })
+    }
+
+    /// The part whose clay it carries.
+    pub fn part(&self) -> usize {
+        self.part
+    }
+
+    /// The drag, for drawing where the region is (its regions lie in the part's frame).
+    pub fn drag(&self) -> &RegionDrag {
+        &self.drag
+    }
+
+    /// Carries the region to where the hand is now, at `pose` in the part's frame, on `field`
+    /// (the part's clay).
+    pub fn carry(&mut self, field: &mut Field, pose: Pose) -> Result<RegionStats, String> {
+        self.drag
+            .update(field, Motion::between(self.grab, pose))
+            .map_err(|e| format!("the region stops: {e}"))
+    }
+
+    /// Lets the region go where it was last carried: the part's stroke ends (the caller
+    /// journals it).
+    pub fn let_go(self, field: &mut Field) {
+        field.end_stroke();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_palettes_region_tools_step_through_every_one_then_back_to_sculpting() {
+        let mut seen = Vec::new();
+        let mut now = RegionTool::after(None);
+        while let Some(t) = now {
+            assert!(!seen.contains(&t), "{} comes twice", t.name());
+            seen.push(t);
+            now = RegionTool::after(now);
+        }
+        assert_eq!(seen, RegionTool::ALL);
+        let names: std::collections::HashSet<_> = seen.iter().map(|t| t.name()).collect();
+        assert_eq!(names.len(), RegionTool::ALL.len());
+        for t in RegionTool::ALL {
+            assert!(t.describe().contains(t.name()));
+        }
+    }
+}
