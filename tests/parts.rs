@@ -210,8 +210,16 @@ fn bad_parts_are_refused_at_their_line_with_what_is_wrong() {
         ("[[part]]\nname = \"a\"\n[[part]]\nname = \"a\"\n".to_owned(), "given to two parts"),
         ("[[part]]\nname = \"\"\n".to_owned(), "name must be 1 to"),
         (
-            "[[part]]\nname = \"a\"\nscale = 2.0\n[[region]]\ntime_s = 0.0\nop = \"inflate\"\ncentre_m = [0.0, 0.0, 0.0]\nradius_m = 0.01\ndistance_m = 0.001\n".to_owned(),
-            "[[region]] acts on the first part (\"a\") in world coordinates",
+            "[[part]]\nname = \"a\"\nscale = 2.0\n[[tool]]\nname = \"p\"\nshape = \"sphere\"\nradius_m = 0.01\naction = \"push\"\n".to_owned(),
+            "a push or support tool acts on the first part (\"a\") in world coordinates",
+        ),
+        (
+            format!("{}[[region]]\ntime_s = 0.0\nop = \"inflate\"\npart = \"c\"\ncentre_m = [0.0, 0.0, 0.0]\nradius_m = 0.01\ndistance_m = 0.001\n", part("")),
+            "no part named \"c\" (parts: a, b)",
+        ),
+        (
+            format!("{}[[region]]\ntime_s = 0.0\nop = \"inflate\"\npart = \"b\"\ncentre_m = [0.0, 0.0, 0.0]\nradius_m = 0.01\ndistance_m = 0.001\n", part("locked = true")),
+            "[[region]] part \"b\" is locked: no region tool acts on it",
         ),
         (
             format!("{}[[clay]]\npart = \"c\"\nshape = \"sphere\"\nradius_m = 0.01\n", part("")),
@@ -379,4 +387,39 @@ fn a_scene_lattice_deforms_the_part_it_names_in_that_part_s_frame() {
     assert!(playback.undo().unwrap());
     assert!(playback.assembly().others()[0].same_samples(&arm));
     assert!(!playback.undo().unwrap(), "the lattice was the one step");
+}
+
+/// A scene's region tool acts on the clay of the part it names, in that part's own frame: its
+/// region and its motion are where the part's clay is written, turned, moved and scaled with
+/// the part; the other part is left bit for bit, and one undo step gives the part back.
+#[test]
+fn a_scene_region_tool_moves_the_clay_of_the_part_it_names_in_that_part_s_frame() {
+    let text = "[field]\nvoxel_size_m = 0.002\n\
+        [[part]]\nname = \"base\"\n\
+        [[part]]\nname = \"arm\"\nposition_m = [0.3, 0.0, 0.0]\nrotation_deg = [0.0, 90.0, 0.0]\nscale = 2.0\nvoxel_size_m = 0.001\n\
+        [[clay]]\nshape = \"sphere\"\nradius_m = 0.03\n\
+        [[clay]]\npart = \"arm\"\nshape = \"sphere\"\nradius_m = 0.01\n\
+        [[region]]\ntime_s = 0.5\nduration_s = 0.5\nop = \"move\"\npart = \"arm\"\ncentre_m = [0.0, 0.0, 0.0]\nradius_m = 0.014\nmove_m = [0.02, 0.0, 0.0]\n";
+    let scene = Scene::parse(text, "arm-region.toml", None).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.regions[0].part, 1);
+    let mut playback = Playback::new(&scene);
+    let (base, arm) = (playback.field().clone(), playback.assembly().others()[0].clone());
+    let placement = scene.parts[1].placement;
+    // The arm's own +X is the world's -Z, twice as far: the ball goes 4 cm along world -Z.
+    let (from, to) = (placement.point(Vec3::ZERO), placement.point(Vec3::new(0.02, 0.0, 0.0)));
+    assert!((to - Vec3::new(0.3, 0.0, -0.04)).length() < 1e-5, "{to}");
+    let before = playback.surface().clone();
+    assert!(density(&before, from) > 0.5 && density(&before, to) < 0.1);
+    playback.advance_to(1.5, |_| {});
+    let after = playback.surface().clone();
+    assert!(density(&after, to) > 0.5, "the arm's ball lands 4 cm along -Z: {}", density(&after, to));
+    assert!(density(&after, from) < 0.1, "and leaves empty space: {}", density(&after, from));
+    assert!(playback.field().same_samples(&base), "the base part is left as it was");
+    let moved = playback.assembly().others()[0].mass();
+    assert!((moved - arm.mass()).abs() < 0.01 * arm.mass(), "{moved} against {}", arm.mass());
+    assert_closed_and_oriented(&after, "the moved arm with the base");
+    // One undo step gives the arm back.
+    assert!(playback.undo().unwrap());
+    assert!(playback.assembly().others()[0].same_samples(&arm));
+    assert!(!playback.undo().unwrap(), "the region tool was the one step");
 }

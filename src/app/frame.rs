@@ -81,24 +81,16 @@ pub const REGION_COLOUR: Vec4 = Vec4::new(REGION_RGB[0], REGION_RGB[1], REGION_R
 /// headset holds (placed with its part), with their images, where the hand has taken them.
 pub fn region_glyphs(playback: &super::playback::Playback<'_>) -> Vec<crate::render::ToolGlyph> {
     let glyph = |r: crate::parts::Region| tool_glyph(&r.shape, r.frame.pose, r.frame.scale, REGION_COLOUR);
-    let mut glyphs: Vec<_> = playback
-        .moving_regions()
-        .filter(|(sr, _)| sr.show)
-        .flat_map(|(_, drag)| drag.carried_regions())
-        .map(glyph)
-        .collect();
-    if let Some(held) = playback.held_region() {
-        let frame =
-            playback.assembly().frame_of(held.part()).map_or(crate::math::Mat4::IDENTITY, |p| p.to_matrix());
-        glyphs.extend(
-            held.drag()
-                .carried_regions()
-                .into_iter()
-                .map(glyph)
-                .map(|g| crate::render::ToolGlyph { model: frame * g.model, ..g }),
-        );
-    }
-    glyphs
+    // Each drawn in its part's frame.
+    let in_part = |part: usize, drag: &crate::parts::RegionDrag| {
+        let frame = playback.assembly().frame_of(part).map_or(crate::math::Mat4::IDENTITY, |p| p.to_matrix());
+        let regions = drag.carried_regions().into_iter().map(glyph);
+        regions.map(|g| crate::render::ToolGlyph { model: frame * g.model, ..g }).collect::<Vec<_>>()
+    };
+    let scene =
+        playback.moving_regions().filter(|(sr, _)| sr.show).flat_map(|(sr, drag)| in_part(sr.part, drag));
+    let held = playback.held_region().into_iter().flat_map(|held| in_part(held.part(), held.drag()));
+    scene.chain(held).collect()
 }
 
 /// The glyphs of the symmetry `playback`'s strokes act through, over the scene's initial

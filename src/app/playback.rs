@@ -50,8 +50,8 @@ struct Push {
 #[derive(Debug)]
 pub struct Playback<'s> {
     scene: &'s Scene,
-    /// The first part's clay: the one the desk, the headset, pushes, lattices and region tools
-    /// act on.
+    /// The first part's clay: the one pushes act on (the desk's and the headset's tools, the
+    /// lattices and the region tools act on the part they name, or the active one).
     field: Field,
     /// The other parts, every part's layout and their composition.
     assembly: Assembly,
@@ -745,32 +745,35 @@ impl<'s> Playback<'s> {
                 );
                 RegionState::Done
             };
+            // It acts on its part's clay, in that part's frame, through the symmetry's images
+            // there.
+            let frame = self.assembly.frame_of(sr.part);
+            let field = self.assembly.field_mut(&mut self.field, sr.part);
             if matches!(state, RegionState::Waiting) && t >= sr.time_s {
-                let alone = !self.field.in_stroke();
-                if alone {
-                    self.field.begin_stroke();
+                if !field.in_stroke() {
+                    field.begin_stroke();
+                    own(&mut self.owns_stroke, &mut self.opened, sr.part);
                 }
+                let images: Vec<Isometry> = match frame {
+                    Some(frame) => self.images.iter().map(|i| image_in_part(i, &frame)).collect(),
+                    None => self.images.clone(),
+                };
                 *state = match sr.action {
                     RegionAction::Inflate(distance_m) => {
-                        inflate(&mut self.field, &sr.region, distance_m, &self.images);
+                        inflate(field, &sr.region, distance_m, &images);
                         RegionState::Done
                     }
                     RegionAction::Drag(RegionOp::Copy) if sr.count > 1 => {
-                        copy_repeated(&mut self.field, &sr.region, sr.motion, sr.count, &self.images)
+                        copy_repeated(field, &sr.region, sr.motion, sr.count, &images)
                             .map_or_else(warn, |_| RegionState::Done)
                     }
-                    RegionAction::Drag(op) => {
-                        RegionDrag::start(&self.field, sr.region.clone(), op, &self.images)
-                            .map_or_else(warn, |d| RegionState::Moving(Box::new(d)))
-                    }
+                    RegionAction::Drag(op) => RegionDrag::start(field, sr.region.clone(), op, &images)
+                        .map_or_else(warn, |d| RegionState::Moving(Box::new(d))),
                 };
-                if alone {
-                    self.owns_stroke = true;
-                }
             }
             let RegionState::Moving(drag) = state else { continue };
             let s = if sr.duration_s > 0.0 { ((t - sr.time_s) / sr.duration_s).clamp(0.0, 1.0) } else { 1.0 };
-            match drag.update(&mut self.field, sr.motion.fraction(s)) {
+            match drag.update(field, sr.motion.fraction(s)) {
                 Ok(_) if s < 1.0 => {}
                 Ok(_) => *state = RegionState::Done,
                 Err(e) => *state = warn(e),

@@ -902,23 +902,16 @@ fn resolve(
     let timeline = Timeline::new(keys, step_s).map_err(|(i, msg)| at(Some(file.key[i].span()), msg))?;
     let lattices = lattice::resolve_lattices(&file.lattice, &file.lattice_key, &parts, at)?;
     let symmetry = symmetry::resolve_symmetry(file.symmetry.as_ref(), at)?;
-    let regions = region::resolve_regions(&file.region, field_voxel, at)?;
-    // Those act on the first part in world coordinates: it must be at rest in the world.
-    if !parts[0].placement.is_identity() {
-        let pushing = tools.iter().any(|t| t.action.is_clay_body());
-        let acting = [
-            (!regions.is_empty(), "[[region]]", file.region.first().map(|r| r.span())),
-            (pushing, "a push or support tool", file.tool.first().map(|t| t.span())),
-        ];
-        if let Some((_, what, span)) = acting.into_iter().find(|(present, ..)| *present) {
-            return Err(at(
-                span.or(file.part.first().map(|p| p.span())),
-                format!(
-                    "{what} acts on the first part (\"{}\") in world coordinates, but that part is placed by a position, turn or scale: leave the first part at rest",
-                    parts[0].name
-                ),
-            ));
-        }
+    let regions = region::resolve_regions(&file.region, &parts, at)?;
+    // Pushes act on the first part in world coordinates: it must be at rest in the world.
+    if !parts[0].placement.is_identity() && tools.iter().any(|t| t.action.is_clay_body()) {
+        return Err(at(
+            file.tool.first().map(|t| t.span()).or(file.part.first().map(|p| p.span())),
+            format!(
+                "a push or support tool acts on the first part (\"{}\") in world coordinates, but that part is placed by a position, turn or scale: leave the first part at rest",
+                parts[0].name
+            ),
+        ));
     }
     // The timeline lasts until its last key, the lattices' and the region tools' included.
     let lattice_end = lattices

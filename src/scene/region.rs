@@ -33,6 +33,7 @@ pub(super) struct RegionFile {
     pub duration_s: f32,
     #[serde(default = "yes")]
     pub show: bool,
+    pub part: Option<String>,
 }
 
 fn yes() -> bool {
@@ -65,6 +66,8 @@ pub struct SceneRegion {
     pub count: u32,
     /// Whether captures draw the region while it moves.
     pub show: bool,
+    /// The part whose clay it acts on; the region and its motion are in that part's own frame.
+    pub part: usize,
 }
 
 impl SceneRegion {
@@ -77,7 +80,7 @@ impl SceneRegion {
 /// The scene's region tools, validated, in time order.
 pub(super) fn resolve_regions(
     regions: &[Spanned<RegionFile>],
-    voxel_size_m: f32,
+    parts: &[super::ScenePart],
     at: &At<'_>,
 ) -> Result<Vec<SceneRegion>, SceneError> {
     let mut out = Vec::with_capacity(regions.len());
@@ -85,6 +88,12 @@ pub(super) fn resolve_regions(
         let span = Some(spanned.span());
         let r = spanned.get_ref();
         let fail = |message: String| Err(at(span.clone(), format!("[[region]] {message}")));
+        let part = super::part::part_index(parts, r.part.as_deref(), spanned.span(), at)?;
+        if parts[part].locked {
+            return fail(format!("part \"{}\" is locked: no region tool acts on it", parts[part].name));
+        }
+        // The part's finest voxel, in its own frame.
+        let voxel_size_m = parts[part].voxel_size_m;
         let action = match r.op.as_str() {
             "move" => RegionAction::Drag(RegionOp::Move),
             "copy" => RegionAction::Drag(RegionOp::Copy),
@@ -178,6 +187,7 @@ pub(super) fn resolve_regions(
             motion,
             count,
             show: r.show,
+            part,
         });
     }
     out.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
