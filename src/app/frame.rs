@@ -77,6 +77,9 @@ pub const PART_COLOUR: Vec4 = Vec4::new(0.35, 0.6, 1.0, 0.12);
 /// The colour regions being carried are drawn in: a faint warm yellow.
 pub const REGION_COLOUR: Vec4 = Vec4::new(REGION_RGB[0], REGION_RGB[1], REGION_RGB[2], 0.2);
 
+/// The colour of the box selected for the region tools: the regions' yellow, fainter.
+pub const SELECTION_COLOUR: Vec4 = Vec4::new(REGION_RGB[0], REGION_RGB[1], REGION_RGB[2], 0.1);
+
 /// The regions the scene's region tools are carrying now, and the region the desk or the
 /// headset holds (placed with its part), with their images, where the hand has taken them.
 pub fn region_glyphs(playback: &super::playback::Playback<'_>) -> Vec<crate::render::ToolGlyph> {
@@ -90,7 +93,14 @@ pub fn region_glyphs(playback: &super::playback::Playback<'_>) -> Vec<crate::ren
     let scene =
         playback.moving_regions().filter(|(sr, _)| sr.show).flat_map(|(sr, drag)| in_part(sr.part, drag));
     let held = playback.held_region().into_iter().flat_map(|held| in_part(held.part(), held.drag()));
-    scene.chain(held).collect()
+    let mut glyphs: Vec<_> = scene.chain(held).collect();
+    // The box selected, fainter, unless it is being carried.
+    if let (Some((part, region)), None) = (playback.selection(), playback.held_region()) {
+        let frame = playback.assembly().frame_of(part).map_or(crate::math::Mat4::IDENTITY, |p| p.to_matrix());
+        let g = tool_glyph(&region.shape, region.frame.pose, region.frame.scale, SELECTION_COLOUR);
+        glyphs.push(crate::render::ToolGlyph { model: frame * g.model, ..g });
+    }
+    glyphs
 }
 
 /// The glyphs of the symmetry `playback`'s strokes act through, over the scene's initial

@@ -1,14 +1,13 @@
 //! A region of a part's clay held by a hand, at the desk or in the headset: the region of the
-//! tool's shape is taken where the tool is when the hand closes, carried (or a copy of it
+//! tool's shape (or a box the hand dragged out, [`box_between`]) is taken when the hand closes, carried (or a copy of it
 //! carried, or the clay bent after it) as the hand moves, and left as one undo step when the
 //! hand opens. The scene's scripted region tools are [`super::playback`]'s; this is the
 //! hand-held one, one at a time, shared by the desk and the headset through
 //! [`super::playback::Playback`].
 
 use crate::field::Field;
-use crate::math::Pose;
+use crate::math::{Pose, Vec3};
 use crate::parts::{Motion, Region, RegionDrag, RegionOp, RegionStats};
-use crate::tool::Tool;
 
 /// How far one press of inflate or deflate moves the surface within the region, metres.
 pub const SWELL_STEP_M: f32 = 0.001;
@@ -24,16 +23,21 @@ pub enum RegionTool {
         /// Outwards.
         out: bool,
     },
+    /// The hand drags out a box from where the trigger goes down to where it comes up: the
+    /// region the others act on from then on, instead of the tool's shape (a box too thin
+    /// clears it).
+    SelectBox,
 }
 
 impl RegionTool {
     /// Every region tool, in the order the headset's palette steps through them.
-    pub const ALL: [RegionTool; 5] = [
+    pub const ALL: [RegionTool; 6] = [
         RegionTool::Drag(RegionOp::Move),
         RegionTool::Drag(RegionOp::Copy),
         RegionTool::Drag(RegionOp::Bend),
         RegionTool::Swell { out: true },
         RegionTool::Swell { out: false },
+        RegionTool::SelectBox,
     ];
 
     /// Its name, as messages say it.
@@ -42,6 +46,7 @@ impl RegionTool {
             RegionTool::Drag(op) => op.name(),
             RegionTool::Swell { out: true } => "inflate",
             RegionTool::Swell { out: false } => "deflate",
+            RegionTool::SelectBox => "select box",
         }
     }
 
@@ -60,21 +65,51 @@ impl RegionTool {
     pub fn describe(self) -> String {
         match self {
             RegionTool::Drag(RegionOp::Move) => {
-                "region tool move: the trigger carries the clay within the tool, leaving empty space".into()
+                "region tool move: the trigger carries the clay within the tool (or the box selected), leaving empty space".into()
             }
             RegionTool::Drag(RegionOp::Copy) => {
-                "region tool copy: the trigger carries a copy of the clay within the tool".into()
+                "region tool copy: the trigger carries a copy of the clay within the tool (or the box selected)".into()
             }
             RegionTool::Drag(RegionOp::Bend) => {
-                "region tool bend: the trigger bends the clay within the tool after the hand".into()
+                "region tool bend: the trigger bends the clay within the tool (or the box selected) after the hand".into()
             }
             RegionTool::Swell { out } => format!(
-                "region tool {}: each pull of the trigger moves the surface within the tool {} by {} mm",
+                "region tool {}: each pull of the trigger moves the surface within the tool (or the box selected) {} by {} mm",
                 self.name(),
                 if out { "out" } else { "in" },
                 SWELL_STEP_M * 1e3
             ),
+            RegionTool::SelectBox => {
+                "region tool select box: hold the trigger and drag out a box for the region tools; a pull without a drag clears it".into()
+            }
         }
+    }
+}
+
+/// The fewest voxels of its part a selected box spans on each axis; a thinner one clears the
+/// selection.
+pub const MIN_BOX_VOXELS: f32 = 2.0;
+
+/// The box from corner `a` to corner `b`, axis-aligned in their frame; none where it spans
+/// less than `min_m` on some axis.
+pub fn box_between(a: Vec3, b: Vec3, min_m: f32) -> Option<Region> {
+    let size = (b - a).abs();
+    let centre = 0.5 * (a + b);
+    (size.min_element() >= min_m && size.is_finite())
+        .then(|| Region::boxed(Pose { position_m: centre, ..Pose::default() }, 0.5 * size))
+}
+
+/// What the user is told when a box is selected (its size, metres) or the selection is
+/// cleared; `clear` says how to clear it.
+pub fn selection_said(size_m: Option<Vec3>, clear: &str) -> String {
+    match size_m {
+        Some(s) => format!(
+            "box of {:.0} × {:.0} × {:.0} mm selected: the region tools act on it ({clear} clears it)",
+            s.x * 1e3,
+            s.y * 1e3,
+            s.z * 1e3
+        ),
+        None => "selection cleared: the region tools act on the tool's shape".into(),
     }
 }
 
@@ -89,22 +124,21 @@ pub struct HeldRegion {
 }
 
 impl HeldRegion {
-    /// Takes the region of `tool`'s shape at `pose` (both in the part's frame) from `field`
-    /// (part `part`'s clay, its images under `images` with it) for `op`, and opens the part's
-    /// stroke. Refused, with a sentence, while the field's stroke is open or when the region
-    /// cannot be taken.
+    /// Takes `region` from `field` (part `part`'s clay, its images under `images` with it; the
+    /// hand at `pose`; both in the part's frame) for `op`, and opens the part's stroke. Refused,
+    /// with a sentence, while the field's stroke is open or when the region cannot be taken.
     pub fn grab(
         field: &mut Field,
         part: usize,
         op: RegionOp,
-        tool: &Tool,
+        region: Region,
         pose: Pose,
         images: &[crate::math::Isometry],
     ) -> Result<Self, String> {
         if field.in_stroke() {
             return Err(format!("cannot {} the region while a stroke is drawn", op.name()));
         }
-        let drag = RegionDrag::start(field, Region::of_tool(tool, pose), op, images)
+        let drag = RegionDrag::start(field, region, op, images)
             .map_err(|e| format!("cannot {} the region: {e}", op.name()))?;
         field.begin_stroke();
         Ok(Self { part, drag, grab: pose })
@@ -129,9 +163,14 @@ impl HeldRegion {
     }
 
     /// Lets the region go where it was last carried: the part's stroke ends (the caller
-    /// journals it).
-    pub fn let_go(self, field: &mut Field) {
+    /// journals it). Returns the region where the hand left it when it carried the clay (a
+    /// move or a copy), for a selection to follow.
+    pub fn let_go(self, field: &mut Field) -> Option<Region> {
         field.end_stroke();
+        match self.drag.op() {
+            RegionOp::Bend => None,
+            _ => self.drag.carried_regions().into_iter().next(),
+        }
     }
 }
 

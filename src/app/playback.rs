@@ -11,12 +11,12 @@ use std::sync::Arc;
 
 use super::assembly::{image_in_part, Assembly};
 use super::held_lattice::HeldLattice;
-use super::held_region::HeldRegion;
+use super::held_region::{box_between, HeldRegion, MIN_BOX_VOXELS};
 use crate::clay::{window_around, Clay, ClayParams, ClayTool};
 use crate::lattice::{volume_at, Lattice, LatticeError};
 use crate::math::{Aabb, Isometry, Vec3};
 use crate::parts::Placement;
-use crate::parts::{copy_repeated, inflate, RegionDrag, RegionOp, Symmetry};
+use crate::parts::{copy_repeated, inflate, Region, RegionDrag, RegionOp, Symmetry};
 use crate::scene::{
     Hand, HandState, Key, RegionAction, Scene, SceneLattice, SceneRegion, SceneTool, SceneToolShape,
 };
@@ -91,6 +91,9 @@ pub struct Playback<'s> {
     /// The region the desk or the headset carries: its part's stroke stays open until the
     /// hand lets it go (one undo step).
     held_region: Option<HeldRegion>,
+    /// The box the region tools act on instead of the tool's shape: the part it lies in, and
+    /// the box in that part's frame.
+    selection: Option<(usize, Region)>,
 }
 
 /// Where a scene's region tool stands on the timeline.
@@ -225,6 +228,7 @@ impl<'s> Playback<'s> {
             images: scene.symmetry.images(),
             held: None,
             held_region: None,
+            selection: None,
             lattice_kept: None,
             lattice_seen: None,
         };
@@ -264,6 +268,7 @@ impl<'s> Playback<'s> {
         // ends with that clay.
         self.held = None;
         self.held_region = None;
+        self.selection = None;
         (self.lattice_kept, self.lattice_seen) = (None, None);
         for state in &mut self.lattices {
             if matches!(state, LatticeState::Open(..)) {
@@ -335,7 +340,11 @@ impl<'s> Playback<'s> {
     /// strokes open; returns it.
     pub fn set_active_part(&mut self, part: usize) -> usize {
         self.close_steps();
-        self.assembly.set_active(part)
+        let active = self.assembly.set_active(part);
+        if self.selection.as_ref().is_some_and(|(on, _)| *on != active) {
+            self.selection = None;
+        }
+        active
     }
 
     /// Places part `part` at `placement` in the world (the composition follows); the autosave
@@ -925,12 +934,15 @@ impl<'s> Playback<'s> {
         true
     }
 
-    /// Takes the region of `tool`'s shape at `pose` (world) from the active part's clay, and
-    /// its images under the symmetry, for `op`: held (the part's stroke open) until
-    /// [`Playback::let_go_region`], carried by [`Playback::carry_region`]. Refused, with a
-    /// sentence, while a lattice or a region is held, while a stroke is drawn on the part, on a
-    /// locked part, or when the region cannot be taken.
-    pub fn grab_region(&mut self, op: RegionOp, tool: Tool, pose: Pose) -> Result<(), String> {
+    /// The region the region tools act on with the tool at `pose` (world): the box selected on
+    /// the active part, else `tool`'s shape there; with the part, the hand's pose and the
+    /// symmetry's images in the part's frame. Refused, with a sentence, while a lattice or a
+    /// region is held, or on a locked part.
+    fn region_target(
+        &mut self,
+        tool: Tool,
+        pose: Pose,
+    ) -> Result<(usize, Region, Pose, Vec<Isometry>), String> {
         if self.held.is_some() {
             return Err("a lattice is open: apply it or put the clay back before a region tool acts".into());
         }
@@ -940,8 +952,23 @@ impl<'s> Playback<'s> {
         self.active_target()?;
         let (tool, local, images) = self.in_active_part(tool, pose, &self.images);
         let part = self.assembly.active();
+        let region = match &self.selection {
+            Some((on, selected)) if *on == part => selected.clone(),
+            _ => Region::of_tool(&tool, local),
+        };
+        Ok((part, region, local, images))
+    }
+
+    /// Takes the region the region tools act on (see [`Playback::selection`]; else `tool`'s
+    /// shape at `pose`, world) from the active part's clay, and its images under the symmetry,
+    /// for `op`: held (the part's stroke open) until [`Playback::let_go_region`], carried by
+    /// [`Playback::carry_region`]. Refused, with a sentence, while a lattice or a region is
+    /// held, while a stroke is drawn on the part, on a locked part, or when the region cannot
+    /// be taken.
+    pub fn grab_region(&mut self, op: RegionOp, tool: Tool, pose: Pose) -> Result<(), String> {
+        let (part, region, local, images) = self.region_target(tool, pose)?;
         let field = self.assembly.field_mut(&mut self.field, part);
-        self.held_region = Some(HeldRegion::grab(field, part, op, &tool, local, &images)?);
+        self.held_region = Some(HeldRegion::grab(field, part, op, region, local, &images)?);
         Ok(())
     }
 
@@ -963,11 +990,17 @@ impl<'s> Playback<'s> {
         held
     }
 
-    /// Ends the held region's step; the caller journals it.
+    /// Ends the held region's step (a box selected follows the clay it carried); the caller
+    /// journals it.
     fn let_go_held_region(&mut self) -> bool {
         let Some(held) = self.held_region.take() else { return false };
         let part = held.part();
-        held.let_go(self.assembly.field_mut(&mut self.field, part));
+        let landed = held.let_go(self.assembly.field_mut(&mut self.field, part));
+        if let (Some(landed), Some((on, selected))) = (landed, &mut self.selection) {
+            if *on == part {
+                *selected = landed;
+            }
+        }
         true
     }
 
@@ -976,29 +1009,47 @@ impl<'s> Playback<'s> {
         self.held_region.as_ref()
     }
 
-    /// Moves the surface of the active part's clay within the region of `tool`'s shape at
-    /// `pose` (world), and within its images, out (`distance_m` > 0) or in: one undo step,
-    /// journaled. Refused, with a sentence, as [`Playback::grab_region`] is; says so where no
-    /// surface lies within the region.
+    /// Selects the box from corner `from_m` to corner `to_m` (world) on the active part,
+    /// axis-aligned in its frame: the region tools act on it from then on instead of the
+    /// tool's shape, until it is cleared, another part is made active or another sculpt is
+    /// opened. A box thinner than [`MIN_BOX_VOXELS`] of the part on some axis clears the
+    /// selection. Returns the box's size (the part's frame, metres), or none when cleared.
+    pub fn select_box(&mut self, from_m: Vec3, to_m: Vec3) -> Option<Vec3> {
+        let part = self.assembly.active();
+        let local = |p: Vec3| {
+            self.assembly
+                .frame_of(part)
+                .map_or(p, |f| f.local_pose(Pose { position_m: p, ..Pose::default() }).position_m)
+        };
+        let min_m = MIN_BOX_VOXELS * self.assembly.field(&self.field, part).transform().voxel_size_m;
+        let region = box_between(local(from_m), local(to_m), min_m);
+        let size = region.as_ref().map(|r| 2.0 * r.shape.half_extents_m());
+        self.selection = region.map(|r| (part, r));
+        size
+    }
+
+    /// The box selected: the part it lies in and the box in that part's frame.
+    pub fn selection(&self) -> Option<(usize, &Region)> {
+        self.selection.as_ref().map(|(part, r)| (*part, r))
+    }
+
+    /// Moves the surface of the active part's clay within the region the region tools act on
+    /// (see [`Playback::grab_region`]), and within its images, out (`distance_m` > 0) or in:
+    /// one undo step, journaled. Refused, with a sentence, as [`Playback::grab_region`] is;
+    /// says so where no surface lies within the region.
     pub fn swell_region(&mut self, tool: Tool, pose: Pose, distance_m: f32) -> Result<(), String> {
         let name = if distance_m > 0.0 { "inflate" } else { "deflate" };
-        if self.held.is_some() {
-            return Err("a lattice is open: apply it or put the clay back before a region tool acts".into());
-        }
-        if self.held_region.is_some() {
-            return Err("a region is held already: let it go first".into());
-        }
-        let (tool, local, images) = self.in_active_part(tool, pose, &self.images);
-        let (field, _) = self.active_target()?;
+        let (part, region, _, images) = self.region_target(tool, pose)?;
+        let field = self.assembly.field_mut(&mut self.field, part);
         if field.in_stroke() {
             return Err(format!("cannot {name} the region while a stroke is drawn"));
         }
         field.begin_stroke();
-        let counters = inflate(field, &crate::parts::Region::of_tool(&tool, local), distance_m, &images);
+        let counters = inflate(field, &region, distance_m, &images);
         field.end_stroke();
         self.journal();
         if counters.dirtied == 0 {
-            return Err(format!("no clay surface within the tool to {name}"));
+            return Err(format!("no clay surface within the region to {name}"));
         }
         Ok(())
     }

@@ -44,7 +44,7 @@ use super::document::Document;
 use super::environment::load_environment;
 use super::frame::build_frame;
 use super::glyphs::tool_glyph;
-use super::held_region::{RegionTool, SWELL_STEP_M};
+use super::held_region::{selection_said, RegionTool, SWELL_STEP_M};
 use super::panel_rows::{self, action_cycle, shape_cycle, shape_name};
 use super::playback::Playback;
 use super::recent::RecentSculpts;
@@ -482,6 +482,8 @@ pub struct Station<'s> {
     /// The active part's placement when the device driving the `part` target was last at home,
     /// and the placement it last gave the part while moving it (kept once it stops).
     part_base: crate::parts::Placement,
+    /// While the box selection's key is held: where the tool was when it went down (world).
+    box_from: Option<Vec3>,
     part_moving: Option<crate::parts::Placement>,
     /// Seconds the active part's box is still drawn (after it was picked or moved).
     part_shown_s: f32,
@@ -596,6 +598,7 @@ impl<'s> Station<'s> {
             stroke: None,
             symmetry: SymmetrySwitch::new(scene.symmetry),
             part_base: scene.parts[0].placement,
+            box_from: None,
             part_moving: None,
             part_shown_s: 0.0,
             fullscreen: false,
@@ -1104,6 +1107,7 @@ impl<'s> Station<'s> {
             | StationAction::GrabRegion
             | StationAction::CopyRegion
             | StationAction::BendRegion
+            | StationAction::SelectBox
             | StationAction::PointerLeft
             | StationAction::PointerRight
             | StationAction::PointerUp
@@ -1777,6 +1781,24 @@ impl<'s> Station<'s> {
         }
     }
 
+    /// The box selection held at the desk: the key down takes the tool's position (`at`,
+    /// world) as one corner, the box follows the tool while it is held, and the key up keeps
+    /// it (a tap, a box without size, clears the selection).
+    fn drag_out_box(&mut self, at: Vec3) {
+        match (self.holding(StationAction::SelectBox), self.box_from) {
+            (true, None) => self.box_from = Some(at),
+            (true, Some(from)) => {
+                self.doc.playback.select_box(from, at);
+            }
+            (false, Some(from)) => {
+                self.box_from = None;
+                let size = self.doc.playback.select_box(from, at);
+                self.messages.push(selection_said(size, "a tap of U"));
+            }
+            (false, None) => {}
+        }
+    }
+
     /// Ends the desk tool's stroke and region drag on the active part, each one undo step.
     fn end_desk_strokes(&mut self) {
         let region = self.doc.playback.let_go_region();
@@ -1912,6 +1934,7 @@ impl<'s> Station<'s> {
             }
         }
         if !lattice_open {
+            self.drag_out_box(pose.position_m);
             self.carry_region(pose, applying);
         }
 
@@ -3074,6 +3097,63 @@ mod tests {
         station.step(SCRIPTED_STEP_S, |_| {});
         assert!(at(&station, Vec3::new(0.045, 0.0, 0.0)) > 0.5, "the edge was pulled out");
         assert!(at(&station, Vec3::new(-0.025, 0.0, 0.0)) > 0.5, "the far side stays");
+    }
+
+    #[test]
+    fn u_held_drags_out_a_box_the_region_keys_then_act_on_which_follows_the_clay_and_a_tap_clears() {
+        let scene = ball_scene();
+        let mut station = small_station(&scene);
+        station.controls.mouse.tool_position_m = Vec3::ZERO;
+        sculpt_for(&mut station, 2);
+        let ball = station.doc.playback.field().clone();
+        let at = |station: &Station<'_>, p: Vec3| {
+            let f = station.doc.playback.field();
+            f.density(f.transform().world_to_index(p).round().as_ivec3())
+        };
+        let tool_at = |station: &mut Station<'_>, p: Vec3| {
+            station.controls.mouse.tool_position_m = p;
+            station.step(SCRIPTED_STEP_S, |_| {})
+        };
+        // U held from one corner of the ball's box to the other.
+        tool_at(&mut station, Vec3::splat(-0.045));
+        station.key(KeyCode::KeyU, true);
+        tool_at(&mut station, Vec3::splat(-0.045));
+        tool_at(&mut station, Vec3::ZERO);
+        let frame = tool_at(&mut station, Vec3::splat(0.045));
+        assert!(frame.tools.iter().any(|g| g.colour == super::super::frame::SELECTION_COLOUR), "drawn");
+        station.key(KeyCode::KeyU, false);
+        tool_at(&mut station, Vec3::splat(0.045));
+        assert!(
+            station.messages.last().unwrap().contains("box of 90 × 90 × 90 mm selected"),
+            "{:?}",
+            station.messages
+        );
+        // G held with the tool 10 cm from the ball, out of its reach: the box carries the ball.
+        tool_at(&mut station, Vec3::new(0.1, 0.0, 0.0));
+        station.key(KeyCode::KeyG, true);
+        tool_at(&mut station, Vec3::new(0.1, 0.0, 0.0));
+        tool_at(&mut station, Vec3::new(0.15, 0.0, 0.0));
+        tool_at(&mut station, Vec3::new(0.2, 0.0, 0.0));
+        station.key(KeyCode::KeyG, false);
+        tool_at(&mut station, Vec3::new(0.2, 0.0, 0.0));
+        assert!(at(&station, Vec3::ZERO) < 0.1 && at(&station, Vec3::new(0.1, 0.0, 0.0)) > 0.9, "moved");
+        let (_, selected) = station.doc.playback.selection().expect("still selected");
+        assert!((selected.centre_m() - Vec3::new(0.1, 0.0, 0.0)).length() < 1e-5, "the box follows the clay");
+        station.act(StationAction::Undo);
+        assert!(station.doc.playback.field().same_samples(&ball), "one undo takes the move back");
+        // A tap of U clears it: G with the tool out of reach moves nothing.
+        station.key(KeyCode::KeyU, true);
+        tool_at(&mut station, Vec3::new(0.1, 0.0, 0.0));
+        station.key(KeyCode::KeyU, false);
+        tool_at(&mut station, Vec3::new(0.1, 0.0, 0.0));
+        assert!(station.doc.playback.selection().is_none());
+        assert!(station.messages.last().unwrap().contains("selection cleared"));
+        station.key(KeyCode::KeyG, true);
+        tool_at(&mut station, Vec3::new(0.1, 0.0, 0.0));
+        tool_at(&mut station, Vec3::new(0.2, 0.0, 0.0));
+        station.key(KeyCode::KeyG, false);
+        tool_at(&mut station, Vec3::new(0.2, 0.0, 0.0));
+        assert!(at(&station, Vec3::ZERO) > 0.9, "the tool's own shape held nothing of the ball");
     }
 
     #[test]

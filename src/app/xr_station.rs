@@ -28,6 +28,8 @@
 //!   region: the trigger takes the active part's clay within it and carries it (move: leaving
 //!   empty space; copy: a copy), or bends the clay after the hand, one undo step when the
 //!   trigger comes up; each pull of inflate or deflate moves the surface within it by 1 mm.
+//!   Select box: hold the trigger and drag out a box; the others act on it instead of the
+//!   tool's shape (a move or a copy carries it along) until a pull without a drag clears it.
 //! - the palette's panel button shows the panel (the desk's, less its view and devices
 //!   sections, with a first row that saves, recentres and quits) on a board standing on the
 //!   palette; a ray from the right controller's aim points at it (a dot where it meets it), the
@@ -50,7 +52,7 @@ use super::glyphs::{
     action_colour, buttons, controller_glyph, palette, panel_placement, ray_glyphs, ray_on_panel, tool_glyph,
     Button, REGION_RGB,
 };
-use super::held_region::{RegionTool, SWELL_STEP_M};
+use super::held_region::{selection_said, RegionTool, SWELL_STEP_M};
 use super::panel_rows::{self, action_cycle, shape_cycle, shape_name, LatticeStep};
 use super::playback::Playback;
 use crate::field::{Field, FieldReader};
@@ -234,6 +236,8 @@ pub struct XrSculptor<'s> {
     /// The region tool the tool hand holds instead of sculpting (the palette's region button
     /// steps it), if any.
     region_tool: Option<RegionTool>,
+    /// While a box is dragged out: where the trigger went down (the scene).
+    box_from: Option<Vec3>,
 }
 
 impl<'s> XrSculptor<'s> {
@@ -277,6 +281,7 @@ impl<'s> XrSculptor<'s> {
             last_tool_pose: None,
             exports: super::export::Exports::default(),
             region_tool: None,
+            box_from: None,
         }
     }
 
@@ -406,6 +411,23 @@ impl<'s> XrSculptor<'s> {
     /// inflate and deflate move the surface within the region by one step each pull.
     fn drive_region(&mut self, pose: Option<Pose>, pulling: bool, pulled: bool) {
         let Some(region_tool) = self.region_tool else { return };
+        if region_tool == RegionTool::SelectBox {
+            // The box is dragged out from where the trigger went down to where it comes up.
+            match (pulling, self.box_from, pose) {
+                (true, None, Some(p)) => self.box_from = Some(p.position_m),
+                (true, Some(from), Some(p)) => {
+                    self.doc.playback.select_box(from, p.position_m);
+                }
+                (false, Some(from), Some(p)) => {
+                    self.box_from = None;
+                    let size = self.doc.playback.select_box(from, p.position_m);
+                    self.messages.push(selection_said(size, "a pull without a drag"));
+                }
+                (false, Some(_), None) => self.box_from = None,
+                _ => {}
+            }
+            return;
+        }
         let tool = self.acting_tool(1.0);
         let held = self.doc.playback.held_region().is_some();
         let failed = match (region_tool, pose.filter(|_| pulling), held) {
@@ -462,6 +484,7 @@ impl<'s> XrSculptor<'s> {
             Some(Button::Lattice) => self.lattice_button(),
             Some(Button::Region) => {
                 self.end_stroke();
+                self.box_from = None;
                 self.region_tool = RegionTool::after(self.region_tool);
                 self.messages.push(match self.region_tool {
                     Some(t) => t.describe(),
@@ -1920,7 +1943,10 @@ mod tests {
         assert!(s.messages.last().unwrap().contains("no clay surface"), "{:?}", s.messages);
         assert_eq!(s.field().history_stats().undo_in_memory, steps);
 
-        // Pressed once more, the trigger sculpts again (the scene's gouge removes clay).
+        // Past the box selection (its own test), the trigger sculpts again (the scene's gouge
+        // removes clay).
+        press(&mut s, Button::Region);
+        assert_eq!(s.region_tool(), Some(RegionTool::SelectBox));
         press(&mut s, Button::Region);
         assert_eq!(s.region_tool(), None);
         assert!(s.messages.last().unwrap().contains("sculpts again"));
@@ -1928,6 +1954,48 @@ mod tests {
             frame(&mut s, [left, hand(room, trigger)]);
         }
         assert!(s.field().mass() < mass, "the gouge carved");
+    }
+
+    #[test]
+    fn the_select_box_tool_drags_out_a_box_the_other_region_tools_then_act_on() {
+        let scene = ball();
+        let mut s = sculptor(&scene, false);
+        let (left, hand) = (palette_hand(), tool_hand);
+        let room = |s: &XrSculptor<'_>, p: Vec3| s.placement().matrix().transform_point3(p);
+        while s.region_tool() != Some(RegionTool::SelectBox) {
+            press(&mut s, Button::Region);
+        }
+        // The trigger held from one corner of the ball's box to the other.
+        let (a, b) = (room(&s, Vec3::splat(-0.06)), room(&s, Vec3::splat(0.06)));
+        frame(&mut s, [left, hand(a, 0.0)]);
+        frame(&mut s, [left, hand(a, 1.0)]);
+        let out = frame(&mut s, [left, hand(b, 1.0)]);
+        assert!(out.frame.tools.iter().any(|g| g.colour == super::super::frame::SELECTION_COLOUR));
+        frame(&mut s, [left, hand(b, 0.0)]);
+        assert!(s.messages.last().unwrap().contains("mm selected"), "{:?}", s.messages);
+        let (_, selected) = s.doc.playback.selection().expect("a box is selected");
+        assert!((selected.shape.half_extents_m() - Vec3::splat(0.06)).abs().max_element() < 1e-4);
+        // Two presses on: sculpting, then move. The trigger 10 cm beside the ball carries it.
+        press(&mut s, Button::Region);
+        press(&mut s, Button::Region);
+        assert_eq!(s.region_tool(), Some(RegionTool::Drag(RegionOp::Move)));
+        let beside = room(&s, Vec3::new(0.1, 0.0, 0.0));
+        let lift = Vec3::new(0.0, 0.05, 0.0);
+        for (p, trigger) in [(beside, 0.0), (beside, 1.0), (beside + lift, 1.0), (beside + lift, 0.0)] {
+            frame(&mut s, [left, hand(p, trigger)]);
+        }
+        let up = lift / s.placement().scale;
+        let below = Vec3::new(0.0, -0.04, 0.0);
+        assert!(density(&s, below) < 0.1 && density(&s, up) > 0.9, "the ball went up {up}: {:?}", s.messages);
+        // A pull without a drag clears the box.
+        while s.region_tool() != Some(RegionTool::SelectBox) {
+            press(&mut s, Button::Region);
+        }
+        for trigger in [0.0, 1.0, 0.0] {
+            frame(&mut s, [left, hand(a, trigger)]);
+        }
+        assert!(s.doc.playback.selection().is_none());
+        assert!(s.messages.last().unwrap().contains("selection cleared"));
     }
 
     #[test]
@@ -1944,7 +2012,7 @@ mod tests {
         let ball = s.field().clone();
         let (left, hand) = (palette_hand(), tool_hand);
         let room = s.placement().matrix().transform_point3(Vec3::new(0.0, 0.05, 0.0));
-        for region_tool in RegionTool::ALL {
+        for region_tool in RegionTool::ALL.into_iter().filter(|t| *t != RegionTool::SelectBox) {
             for trigger in [0.0, 1.0, 0.0] {
                 frame(&mut s, [left, hand(Button::Region.centre(PALETTE), trigger)]);
             }

@@ -103,6 +103,9 @@ pub enum StationAction {
     InflateRegion,
     /// Shrink the clay's surface within the tool's shape by a millimetre.
     DeflateRegion,
+    /// Held: a box is dragged out from where the tool was when the key went down to where it
+    /// is; the region keys act on it from then on (a tap clears it).
+    SelectBox,
     /// Held: the clutch is lifted: the mouse's 3D cursor moves without the tool; released, the
     /// tool follows the pointer's motion from where it is, scaled by the mouse's clutch gain.
     Clutch,
@@ -180,6 +183,7 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("bend-region", StationAction::BendRegion),
     ("inflate-region", StationAction::InflateRegion),
     ("deflate-region", StationAction::DeflateRegion),
+    ("select-box", StationAction::SelectBox),
     ("next-part", StationAction::NextPart),
     ("previous-part", StationAction::PreviousPart),
     ("open-lattice", StationAction::OpenLattice),
@@ -429,12 +433,12 @@ mod tests {
     fn a_user_file_overrides_only_what_it_names_and_errors_say_where() {
         let shipped = KeyBindings::shipped();
         let mine =
-            KeyBindings::parse_over("[keys]\nundo = [\"KeyU\"]\n", "mine.toml", Some(&shipped)).unwrap();
-        assert_eq!(mine.action(KeyCode::KeyU, Modifiers::default()), Some(StationAction::Undo));
+            KeyBindings::parse_over("[keys]\nundo = [\"KeyJ\"]\n", "mine.toml", Some(&shipped)).unwrap();
+        assert_eq!(mine.action(KeyCode::KeyJ, Modifiers::default()), Some(StationAction::Undo));
         assert_eq!(mine.chords(StationAction::Redo), shipped.chords(StationAction::Redo));
 
         let e = KeyBindings::parse_over(
-            "[keys]\nundo = [\"KeyU\"]\nfly = [\"KeyF\"]\n",
+            "[keys]\nundo = [\"KeyJ\"]\nfly = [\"KeyF\"]\n",
             "mine.toml",
             Some(&shipped),
         )

@@ -312,6 +312,11 @@ impl RegionDrag {
         })
     }
 
+    /// What it does to the clay.
+    pub fn op(&self) -> RegionOp {
+        self.op
+    }
+
     /// The region carried (the first image).
     pub fn region(&self) -> &Region {
         &self.images[0].region
