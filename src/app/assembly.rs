@@ -22,13 +22,22 @@ pub struct Assembly {
     /// The fields of parts 1.. (part 0's is the playback's).
     others: Vec<Field>,
     composition: Option<Composition>,
-    /// Closed sculpt steps, oldest first: the parts each changed.
-    undo: Vec<Vec<usize>>,
-    redo: Vec<Vec<usize>>,
+    /// Closed sculpt steps, oldest first.
+    undo: Vec<Step>,
+    redo: Vec<Step>,
     /// Per part, the undo steps its field held when last looked at.
     seen: Vec<usize>,
     /// The part the desk's and the headset's tools act on.
     active: usize,
+}
+
+/// A closed sculpt step, as undo takes it back.
+#[derive(Clone, Debug, PartialEq)]
+enum Step {
+    /// Strokes (pushes, region tools, lattices) closed on these parts' fields at once.
+    Edits(Vec<usize>),
+    /// A part carried, turned or scaled from one placement to another.
+    Placed { part: usize, from: Placement, to: Placement },
 }
 
 /// [`steps`] of every part's field, the first's first.
@@ -194,7 +203,18 @@ impl Assembly {
         let grown: Vec<usize> = (0..now.len()).filter(|&i| now[i] > self.seen[i]).collect();
         self.seen = now;
         if !grown.is_empty() {
-            self.undo.push(grown);
+            self.undo.push(Step::Edits(grown));
+            self.redo.clear();
+        }
+    }
+
+    /// Logs part `part`'s move from `from` to where it is now as one sculpt step (none when it
+    /// is back where it was); a new step clears the redo order.
+    pub fn note_placement(&mut self, first: &Field, part: usize, from: Placement) {
+        self.note_steps(first);
+        let to = self.parts[part].placement;
+        if to != from {
+            self.undo.push(Step::Placed { part, from, to });
             self.redo.clear();
         }
     }
@@ -215,15 +235,29 @@ impl Assembly {
     fn step_back(&mut self, first: &mut Field, undo: bool) -> Result<bool, HistoryError> {
         self.note_steps(first);
         let from = if undo { &mut self.undo } else { &mut self.redo };
-        let parts = from.pop().unwrap_or_else(|| vec![0]);
+        // Undo with nothing logged takes back the first part's newest step (a history read from
+        // a file); redo only puts back what undo logged.
+        let step = match from.pop() {
+            Some(step) => step,
+            None if undo => Step::Edits(vec![0]),
+            None => return Ok(false),
+        };
         let mut any = false;
-        for &part in &parts {
-            let field = self.field_mut(first, part);
-            any |= if undo { field.undo()? } else { field.redo() };
+        match &step {
+            Step::Edits(parts) => {
+                for &part in parts {
+                    let field = self.field_mut(first, part);
+                    any |= if undo { field.undo()? } else { field.redo() };
+                }
+            }
+            Step::Placed { part, from, to } => {
+                self.parts[*part].placement = if undo { *from } else { *to };
+                any = true;
+            }
         }
         if any {
             let to = if undo { &mut self.redo } else { &mut self.undo };
-            to.push(parts);
+            to.push(step);
         }
         self.seen = counts(first, &self.others);
         Ok(any)
@@ -231,7 +265,8 @@ impl Assembly {
 
     /// How many steps of the sculpt undo can take back and redo can put back.
     pub fn history_len(&self, first: &Field) -> (usize, usize) {
-        if self.others.is_empty() {
+        let placed = self.undo.iter().chain(&self.redo).any(|s| matches!(s, Step::Placed { .. }));
+        if self.others.is_empty() && !placed {
             let s = first.history_stats();
             return (s.undo_in_memory + s.undo_on_disk, s.redo);
         }

@@ -394,7 +394,31 @@ impl<'s> Playback<'s> {
             return Ok(true);
         }
         self.close_steps();
-        self.assembly.undo(&mut self.field)
+        let placed = self.placements();
+        let undone = self.assembly.undo(&mut self.field)?;
+        self.keep_placements(placed);
+        Ok(undone)
+    }
+
+    /// Every part's placement.
+    fn placements(&self) -> Vec<Placement> {
+        self.assembly.parts().iter().map(|p| p.placement).collect()
+    }
+
+    /// Has the autosave session store the layouts when a part's placement is no longer one of
+    /// `before` (an undo or a redo moved it).
+    fn keep_placements(&mut self, before: Vec<Placement>) {
+        if self.placements() != before {
+            self.keep_layouts();
+        }
+    }
+
+    /// Logs part `part`'s move from `from` to where it is now (the desk's device or the
+    /// headset's support hand let it go) as one undo step, and has the autosave session store
+    /// where it is.
+    pub fn keep_part_moved(&mut self, part: usize, from: Placement) {
+        self.assembly.note_placement(&self.field, part, from);
+        self.keep_layouts();
     }
 
     /// Puts back the newest step undone; returns whether there was one (none while a lattice
@@ -404,7 +428,10 @@ impl<'s> Playback<'s> {
             return false;
         }
         self.close_steps();
-        self.assembly.redo(&mut self.field)
+        let placed = self.placements();
+        let redone = self.assembly.redo(&mut self.field);
+        self.keep_placements(placed);
+        redone
     }
 
     /// Ends the hands' strokes and closes the steps they hold open on every part (as undo does

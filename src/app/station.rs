@@ -479,12 +479,13 @@ pub struct Station<'s> {
     exports: super::export::Exports,
     /// The symmetry the desk tool and the scene's hands act through.
     symmetry: SymmetrySwitch,
-    /// The active part's placement when the device driving the `part` target was last at home,
-    /// and the placement it last gave the part while moving it (kept once it stops).
+    /// The active part's placement when the device driving the `part` target was last at home.
     part_base: crate::parts::Placement,
+    /// While that device moves the part: where the part was when it began (one undo step
+    /// once it stops).
+    part_moving: Option<crate::parts::Placement>,
     /// While the box selection's key is held: where the tool was when it went down (world).
     box_from: Option<Vec3>,
-    part_moving: Option<crate::parts::Placement>,
     /// Seconds the active part's box is still drawn (after it was picked or moved).
     part_shown_s: f32,
     /// Whether the window fills its monitor, and a change the window has yet to make.
@@ -939,6 +940,7 @@ impl<'s> Station<'s> {
                 match self.doc.playback.undo() {
                     Ok(true) => {
                         self.doc.journal();
+                        self.rebase_part();
                         if let Some(name) = self.step_names.pop() {
                             self.redo_names.push(name);
                         }
@@ -950,6 +952,7 @@ impl<'s> Station<'s> {
             StationAction::Redo => {
                 if self.doc.playback.redo() {
                     self.doc.journal();
+                    self.rebase_part();
                     if let Some(name) = self.redo_names.pop() {
                         self.step_names.push(name);
                     }
@@ -1134,8 +1137,7 @@ impl<'s> Station<'s> {
         let part = self.doc.playback.set_active_part(next);
         // The device driving the part starts from home over the part as it is.
         *self.controls.desk.poses.get_mut(Target::Part) = self.controls.home.get(Target::Part);
-        self.part_base = self.doc.playback.assembly().parts()[part].placement;
-        self.part_moving = None;
+        self.rebase_part();
         self.part_shown_s = PART_SHOWN_S;
         self.messages.push(describe_part(self.doc.playback.assembly(), part));
     }
@@ -1649,10 +1651,7 @@ impl<'s> Station<'s> {
         if self.doc.playback.held_lattice().is_some() {
             self.messages.push("Enter applies the lattice, Backspace puts the clay back".into());
         }
-        let active = self.doc.playback.assembly().active();
-        self.part_base = self.doc.playback.assembly().parts()[active].placement;
-        self.part_moving = None;
-        *self.controls.desk.poses.get_mut(Target::Part) = self.controls.home.get(Target::Part);
+        self.rebase_part();
         self.clay_bounds = crate::math::Aabb::EMPTY;
         self.recent.remember(path);
         self.recovered.retain(|(p, _)| p != path);
@@ -1812,9 +1811,18 @@ impl<'s> Station<'s> {
         }
     }
 
+    /// The device driving the part starts from home over the active part as it is now (picked,
+    /// opened, or put back by undo).
+    fn rebase_part(&mut self) {
+        *self.controls.desk.poses.get_mut(Target::Part) = self.controls.home.get(Target::Part);
+        let active = self.doc.playback.assembly().active();
+        self.part_base = self.doc.playback.assembly().parts()[active].placement;
+        self.part_moving = None;
+    }
+
     /// The active part follows the device driving the `part` target: turned about its origin
     /// and moved as far as the device has moved that target from home. Once it stops, the
-    /// autosave session keeps where it is.
+    /// move is one undo step and the autosave session keeps where it is.
     fn drive_active_part(&mut self) {
         let (pose, home) = (self.controls.desk.poses.get(Target::Part), self.controls.home.get(Target::Part));
         let base = self.part_base;
@@ -1825,13 +1833,15 @@ impl<'s> Station<'s> {
             scale: base.scale,
         };
         let part = self.doc.playback.assembly().active();
-        if self.doc.playback.assembly().parts()[part].placement != placement && pose != home {
+        let now = self.doc.playback.assembly().parts()[part].placement;
+        if now != placement && pose != home {
             self.doc.playback.set_part_placement(part, placement);
-            self.part_moving = Some(placement);
+            self.part_moving.get_or_insert(now);
             self.part_shown_s = PART_SHOWN_S;
-        } else if self.part_moving.take().is_some() {
-            self.doc.playback.keep_layouts();
+        } else if let Some(from) = self.part_moving.take() {
+            self.doc.playback.keep_part_moved(part, from);
             self.doc.edited();
+            self.stepped("move part".into());
         }
     }
 
@@ -3864,7 +3874,23 @@ mod tests {
             surface(&mut station, Vec3::new(0.08 - 0.0195, 0.0, 0.0)) < 0.5,
             "the right ball left its old place"
         );
-        // Undo takes back the stroke on the right part.
+        // The gamepad let go, the move is one undo step: undo puts the part back, redo carries it
+        // again, and the next undo takes back the stroke on the right part.
+        let still = GamepadMotion { six: SixDof::default(), size_rate: 0.0 };
+        station.devices(SCRIPTED_STEP_S, &[still], Vec::new());
+        station.step(SCRIPTED_STEP_S, |_| {});
+        let carried = station.doc.playback.assembly().parts()[1].placement;
+        station.act(StationAction::Undo);
+        assert_eq!(station.doc.playback.assembly().parts()[1].placement, scene.parts[1].placement);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        assert_eq!(
+            station.doc.playback.assembly().parts()[1].placement,
+            scene.parts[1].placement,
+            "it stays back"
+        );
+        station.act(StationAction::Redo);
+        assert_eq!(station.doc.playback.assembly().parts()[1].placement, carried);
+        station.act(StationAction::Undo);
         station.act(StationAction::Undo);
         assert!(station.doc.playback.assembly().others()[0].same_samples(&right));
         // Back to the first part.

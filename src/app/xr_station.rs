@@ -813,7 +813,10 @@ impl<'s> XrSculptor<'s> {
             .collect();
         let support = 1 - self.dominant;
         let parted = self.doc.playback.assembly().parts().len() > 1;
-        let was_part = matches!(self.grab, Some(Grab::Part { .. }));
+        let was_part = match self.grab {
+            Some(Grab::Part { start, .. }) => Some(start),
+            _ => None,
+        };
         self.grab = match (gripping.as_slice(), self.grab) {
             ([(i, p)], Some(Grab::Part { start, hand_start, scale })) if *i == support => {
                 let y = hands[support].thumbstick.y;
@@ -852,9 +855,10 @@ impl<'s> XrSculptor<'s> {
             ([(i, p)], _) => Some(Grab::One { hand: *i, start: self.placement, hand_start: *p }),
             _ => None,
         };
-        if was_part && !matches!(self.grab, Some(Grab::Part { .. })) {
-            // Let go: the autosave session keeps where the part is, the file does not yet.
-            self.doc.playback.keep_layouts();
+        if let (Some(start), false) = (was_part, matches!(self.grab, Some(Grab::Part { .. }))) {
+            // Let go: the move is one undo step, and the autosave session keeps where the part
+            // is (the file does not yet).
+            self.doc.playback.keep_part_moved(self.doc.playback.assembly().active(), start);
             self.doc.edited();
         }
     }
@@ -2148,6 +2152,18 @@ mod tests {
         let mut reader = FieldReader::new(s.doc.playback.surface_now());
         assert!(reader.density_world(head_now + Vec3::Y * 0.035) > 0.5, "the head, twice its size");
         assert!(reader.density_world(Vec3::ZERO) > 0.5, "the body stays");
+        // The carry, from grip to letting go, is one undo step; redo carries it again.
+        let (moved, rest) = (s.doc.playback.assembly().parts()[1].placement, scene.parts[1].placement);
+        s.undo();
+        assert_eq!(s.doc.playback.assembly().parts()[1].placement, rest, "undo puts the head back");
+        let _ = s.doc.playback.surface();
+        let mut reader = FieldReader::new(s.doc.playback.surface_now());
+        assert!(reader.density_world(Vec3::new(0.0, 0.08, 0.0)) > 0.5, "drawn where it was");
+        s.redo();
+        assert_eq!(s.doc.playback.assembly().parts()[1].placement, moved);
+        s.undo();
+        s.undo();
+        assert!(s.messages.last().unwrap().contains("nothing to undo"), "{:?}", s.messages);
     }
 
     #[test]
