@@ -44,6 +44,9 @@ pub struct Opened {
     pub tools_restored: bool,
     /// What the user should read (the lattice it left open is open again, or cannot be).
     pub notes: Vec<String>,
+    /// The symmetry it was saved with, now in force (none stored in files before version 7:
+    /// the one in force stays).
+    pub symmetry: Option<crate::parts::Symmetry>,
 }
 
 /// Where [`Document::save`] wrote the sculpt.
@@ -237,11 +240,19 @@ impl<'s> Document<'s> {
                 Err(e) => format!("{}: {e}; the clay is as it was before the lattice", path.display()),
             });
         }
+        if let Some(symmetry) = sculpt.symmetry {
+            self.playback.set_symmetry(symmetry);
+        }
         self.save_to = path.to_owned();
         self.opened = Some(path.to_owned());
         self.unsaved_strokes = 0;
         self.saved_lattice = self.playback.held_lattice().map(HeldLattice::stored);
-        Ok(Opened { view: sculpt.view.filter(|_| same_scene), tools_restored, notes })
+        Ok(Opened {
+            view: sculpt.view.filter(|_| same_scene),
+            tools_restored,
+            notes,
+            symmetry: sculpt.symmetry,
+        })
     }
 
     /// Remembers `path` as the sculpt opened last without opening it (one that could not be

@@ -78,6 +78,7 @@ pub fn save_scene_sculpt(
         layouts: &layouts,
         others: &others,
         lattice: None,
+        symmetry: Some(&scene.symmetry),
     };
     let bytes = encode_sculpt(&field, scene, EncodeOptions::default(), &mut |_| {});
     write_atomically(out, overwrite, |w| {
@@ -190,7 +191,8 @@ pub fn convert_sculpt(
         playback.let_go();
         let tools = playback.stored_tools();
         let (field, parts, others) = playback.into_parts();
-        Sculpt { field, scene_toml: Some(text), tools, view: None, parts, others, lattice: None }
+        let symmetry = Some(scene.symmetry);
+        Sculpt { field, scene_toml: Some(text), tools, view: None, parts, others, lattice: None, symmetry }
     };
     if options.version < 6 && sculpt.lattice.is_some() {
         bail!(
@@ -238,7 +240,16 @@ pub(crate) fn encode_playback(
         let tools = playback.stored_tools();
         let layouts = playback.assembly().layouts();
         let others = if layouts.is_empty() { &[][..] } else { playback.assembly().others() };
-        let scene = SceneParts { toml: scene_toml, tools: &tools, view, layouts: &layouts, others, lattice };
+        let symmetry = Some(playback.symmetry());
+        let scene = SceneParts {
+            toml: scene_toml,
+            tools: &tools,
+            view,
+            layouts: &layouts,
+            others,
+            lattice,
+            symmetry,
+        };
         encode_sculpt(playback.field(), scene, EncodeOptions::default(), &mut |_| {})
     })
 }
@@ -338,6 +349,9 @@ pub fn describe_sculpt(path: &Path) -> Result<String> {
             l.max_m[1],
             l.max_m[2]
         );
+    }
+    if let Some(s) = lazy.symmetry() {
+        let _ = writeln!(out, "  symmetry {} (the strokes act through it when it opens)", s.describe());
     }
     match lazy.history_size() {
         Some((0, _)) => {

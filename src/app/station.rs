@@ -1636,6 +1636,9 @@ impl<'s> Station<'s> {
     pub fn open(&mut self, path: &Path) -> Result<()> {
         let opened = self.doc.open(path)?;
         self.stroke = None;
+        if let Some(symmetry) = opened.symmetry {
+            self.symmetry = SymmetrySwitch::new(symmetry);
+        }
         if opened.tools_restored {
             let stored = self.doc.playback.tools().get(self.tool_index).map(|t| t.shape.clone());
             if let Some(shape @ ToolShape::Freeform(_)) = stored {
@@ -4175,6 +4178,55 @@ mod tests {
             assert_eq!(tools_made, restored, "in {scene_text:?}");
             assert_eq!(station.stored_view() == view, restored, "the view too, in {scene_text:?}");
         }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_sculpt_opens_with_the_symmetry_it_was_saved_with_and_an_older_file_keeps_the_one_in_force() {
+        let dir = std::env::temp_dir().join(format!("argile-station-symmetry-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let scene = ball_scene();
+        let path = dir.join("mirrored.argile");
+        let mut maker = Station::new(&scene, KeyBindings::shipped(), (64, 64), path.clone());
+        // Y switches the mirror on, Shift+Y steps on to the next choice.
+        maker.act(StationAction::ToggleSymmetry);
+        maker.act(StationAction::NextSymmetry);
+        let chosen = *maker.doc.playback.symmetry();
+        assert!(!chosen.is_none());
+        maker.save().unwrap();
+        let saved = crate::io::read_file(&path, &mut |_| {}).unwrap();
+        assert_eq!(saved.symmetry, Some(chosen), "the file stores it");
+        let text = crate::app::describe_sculpt(&path).unwrap();
+        assert!(text.contains(&format!("symmetry {}", chosen.describe())), "{text}");
+        // Opened at another desk, the strokes act through it, and the keys go on from it.
+        let mut desk = Station::new(&scene, KeyBindings::shipped(), (64, 64), dir.join("x.argile"));
+        assert!(desk.doc.playback.symmetry().is_none());
+        desk.open(&path).unwrap();
+        assert_eq!(*desk.doc.playback.symmetry(), chosen);
+        desk.act(StationAction::ToggleSymmetry);
+        assert!(desk.doc.playback.symmetry().is_none(), "Y switches it off");
+        desk.act(StationAction::ToggleSymmetry);
+        assert_eq!(*desk.doc.playback.symmetry(), chosen, "and on again");
+        // Saved with it off, it opens off.
+        desk.act(StationAction::ToggleSymmetry);
+        desk.save().unwrap();
+        let mut other = Station::new(&scene, KeyBindings::shipped(), (64, 64), dir.join("y.argile"));
+        other.act(StationAction::ToggleSymmetry);
+        other.open(&path).unwrap();
+        assert!(other.doc.playback.symmetry().is_none());
+        // A version 6 file stores none: the desk keeps the symmetry in force.
+        let older = dir.join("older.argile");
+        let scene_parts = crate::io::SceneParts { symmetry: Some(&chosen), ..Default::default() };
+        let options = crate::io::EncodeOptions { version: 6, history: true };
+        let bytes = crate::io::encode_sculpt(&saved.field, scene_parts, options, &mut |_| {});
+        std::fs::write(&older, bytes).unwrap();
+        assert_eq!(crate::io::read_file(&older, &mut |_| {}).unwrap().symmetry, None);
+        other.act(StationAction::ToggleSymmetry);
+        let in_force = *other.doc.playback.symmetry();
+        assert!(!in_force.is_none());
+        other.open(&older).unwrap();
+        assert_eq!(*other.doc.playback.symmetry(), in_force);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -250,6 +250,8 @@ impl<'s> XrSculptor<'s> {
             .map(|i| tools[i].clone())
             .unwrap_or_else(|| Tool::new(ToolShape::sphere(0.01), Action::Add, [0.8, 0.5, 0.35, 1.0]));
         let action_index = action_cycle().iter().position(|a| *a == tool.action).unwrap_or(0);
+        // The sculpt's symmetry (the scene's, or the one a sculpt file stored).
+        let symmetry = *playback.symmetry();
         Self {
             scene,
             doc: Document::new(playback, save_to),
@@ -267,7 +269,7 @@ impl<'s> XrSculptor<'s> {
             time_s: 0.0,
             times: (0.0, 0.0),
             pointed: None,
-            symmetry: SymmetrySwitch::new(scene.symmetry),
+            symmetry: SymmetrySwitch::new(symmetry),
             quit: false,
             messages: Vec::new(),
             mesher: Mesher::default(),
@@ -666,6 +668,9 @@ impl<'s> XrSculptor<'s> {
             Ok(opened) => {
                 self.messages.push(panel_rows::opened_said(path, left, fate));
                 self.messages.extend(opened.notes);
+                if let Some(symmetry) = opened.symmetry {
+                    self.symmetry = SymmetrySwitch::new(symmetry);
+                }
             }
             Err(e) => self.messages.push(format!("{e:#}")),
         }
@@ -1115,6 +1120,9 @@ pub fn run_xr(
     let playback = match opened {
         Some(sculpt) => {
             let mut playback = Playback::on_sculpt(scene, sculpt.field, sculpt.others, &sculpt.tools, start);
+            if let Some(symmetry) = sculpt.symmetry {
+                playback.set_symmetry(symmetry);
+            }
             if let Some(stored) = &sculpt.lattice {
                 if let Err(e) = playback.reopen_lattice(stored) {
                     eprintln!(

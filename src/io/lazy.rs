@@ -66,6 +66,7 @@ pub struct LazySculpt {
     parts: Vec<super::PartLayout>,
     others: Vec<Field>,
     lattice: Option<super::StoredLattice>,
+    symmetry: Option<crate::parts::Symmetry>,
     entries: Vec<IndexEntry>,
     chunks: Vec<ChunkInfo>,
     /// Per chunk, its bytes in the file once it has been read.
@@ -127,6 +128,7 @@ impl LazySculpt {
             layouts,
             others,
             lattice,
+            symmetry,
             index,
             base,
             chunks_read,
@@ -144,6 +146,7 @@ impl LazySculpt {
             parts: layouts,
             others: others.map_or_else(Vec::new, super::parts::PartsReader::finish),
             lattice,
+            symmetry,
             entries: Vec::new(),
             chunks: Vec::new(),
             read: Vec::new(),
@@ -175,6 +178,7 @@ impl LazySculpt {
                 sculpt.parts = whole.parts;
                 sculpt.others = whole.others;
                 sculpt.lattice = whole.lattice;
+                sculpt.symmetry = whole.symmetry;
                 sculpt.whole = true;
             }
         }
@@ -210,6 +214,11 @@ impl LazySculpt {
     /// The lattice held open when it was saved.
     pub fn lattice(&self) -> Option<&super::StoredLattice> {
         self.lattice.as_ref()
+    }
+
+    /// The symmetry the strokes acted through when it was saved (version 7).
+    pub fn symmetry(&self) -> Option<&crate::parts::Symmetry> {
+        self.symmetry.as_ref()
     }
 
     /// The scene file's text, if the sculpt was made from one.
@@ -332,6 +341,7 @@ impl LazySculpt {
                 parts: self.parts,
                 others: self.others,
                 lattice: self.lattice,
+                symmetry: self.symmetry,
             });
         }
         let total = self.chunks.len().max(1) as f32;
@@ -380,6 +390,7 @@ impl LazySculpt {
             parts: self.parts,
             others: self.others,
             lattice: self.lattice,
+            symmetry: self.symmetry,
         })
     }
 }

@@ -3,7 +3,7 @@
 //!
 //! Knows the field (it stores bricks) and nothing of Vulkan or devices.
 //!
-//! ## Layout, version 6
+//! ## Layout, version 7
 //!
 //! ```text
 //!  header  "ARGL" · version u32 · chunk count u32                      (little-endian)
@@ -35,6 +35,10 @@
 //!                               history the closed steps before it): a reader reopens the
 //!                               lattice over it and puts its controls in place to have the
 //!                               sculpt as it was left, or applies it for the shape alone
+//!          SYMM  (at most once, after LATT, before INDX) JSON: the symmetry the strokes acted
+//!                               through when the sculpt was saved: its frame's origin and
+//!                               rotation, the mirror planes, the radial copies and their axis
+//!                               (written whenever the symmetry is known, off included)
 //!          INDX  (once, before any brick) the directory of the brick chunks that follow it:
 //!                               chunk count u32 · history offset u64 · per brick chunk, in
 //!                               file order: level u8 · block (3 × i32) · brick count u32 ·
@@ -63,7 +67,8 @@
 //! META, SCNE and INDX, and any brick chunk can then be read on its own, by where its block
 //! lies (loading a box reads the chunks whose samples reach into it, and nothing else).
 //!
-//! Version 5 is version 6 without LATT: a lattice held open is refused there rather than lost
+//! Version 6 is version 7 without SYMM: a sculpt opened from it keeps the symmetry in force, and
+//! one converted to it leaves its symmetry out (a setting, not clay). Version 5 is version 6 without LATT: a lattice held open is refused there rather than lost
 //! (`argile convert`). Version 4 is version 5 without PRTS and PART: a sculpt of one part. The undo history (HIST)
 //! is the first part's; the other parts' histories are not stored.
 //! Version 3 is version 4 without INDX, TOOL and VIEW, its brick chunks holding up to 512 bricks of one level
@@ -160,6 +165,7 @@ mod lattice;
 mod lazy;
 mod parts;
 mod process;
+mod symmetry;
 pub mod text;
 
 pub use atomic::write_atomically;
@@ -169,7 +175,7 @@ pub use parts::{PartLayout, MAX_PARTS, PART_OPS};
 pub use process::process_alive;
 
 /// The format version this build writes.
-pub const VERSION: u32 = 6;
+pub const VERSION: u32 = 7;
 /// The largest raw chunk a reader accepts.
 pub const MAX_CHUNK_BYTES: usize = 64 << 20;
 /// The most chunks a file may declare.
@@ -210,6 +216,9 @@ pub struct Sculpt {
     pub others: Vec<Field>,
     /// The lattice held open when it was saved, over the clay as it was when it opened.
     pub lattice: Option<StoredLattice>,
+    /// The symmetry the strokes acted through when it was saved (version 7; none stored
+    /// before).
+    pub symmetry: Option<crate::parts::Symmetry>,
 }
 
 impl Sculpt {
@@ -223,6 +232,7 @@ impl Sculpt {
             parts: Vec::new(),
             others: Vec::new(),
             lattice: None,
+            symmetry: None,
         }
     }
 
@@ -235,6 +245,7 @@ impl Sculpt {
             layouts: &self.parts,
             others: &self.others,
             lattice: self.lattice.as_ref(),
+            symmetry: self.symmetry.as_ref(),
         }
     }
 }
@@ -255,6 +266,8 @@ pub struct SceneParts<'a> {
     pub others: &'a [Field],
     /// The lattice held open (version 6), over the clay as it was when it opened.
     pub lattice: Option<&'a StoredLattice>,
+    /// The symmetry the strokes act through (version 7).
+    pub symmetry: Option<&'a crate::parts::Symmetry>,
 }
 
 /// The station's view when a sculpt was saved: where the camera looks from, the stereo
@@ -394,9 +407,9 @@ struct Meta {
 /// What [`encode_with`] writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct EncodeOptions {
-    /// The format version to write (1 to 5; version 1 holds no history, versions 1 and 2 no
+    /// The format version to write (1 to 7; version 1 holds no history, versions 1 and 2 no
     /// coarse levels, versions 1 to 3 no index, versions 1 to 4 no parts: the first part
-    /// alone).
+    /// alone; versions 1 to 5 no lattice, 1 to 6 no symmetry).
     pub version: u32,
     /// Whether to store the undo history held in memory.
     pub history: bool,
@@ -486,7 +499,7 @@ fn encode_parts(
     version: u32,
     (voxel_size_m, iso): (f32, f32),
     mut bricks: Vec<(LevelKey, &Brick)>,
-    SceneParts { toml: scene_toml, tools, view, layouts, lattice, .. }: SceneParts<'_>,
+    SceneParts { toml: scene_toml, tools, view, layouts, lattice, symmetry, .. }: SceneParts<'_>,
     mut others: Vec<(u32, LevelKey, &Brick)>,
     history: Option<&History>,
     progress: &mut dyn FnMut(f32),
@@ -549,9 +562,11 @@ fn encode_parts(
         0
     };
     let lattice = lattice.filter(|_| version >= 6);
+    let symmetry = symmetry.filter(|_| version >= 7);
     let chunk_count = 1
         + part_chunks
         + u32::from(lattice.is_some())
+        + u32::from(symmetry.is_some())
         + u32::from(scene_toml.is_some())
         + u32::from(view.is_some())
         + tools.len() as u32
@@ -575,6 +590,9 @@ fn encode_parts(
     out.extend_from_slice(&parts);
     if let Some(lattice) = lattice {
         put_chunk(&mut out, *b"LATT", &lattice.put());
+    }
+    if let Some(symmetry) = symmetry {
+        put_chunk(&mut out, *b"SYMM", &symmetry::put(symmetry));
     }
     if indexed {
         put_chunk(&mut out, *b"INDX", &put_index(&entries, offset));
@@ -1236,6 +1254,8 @@ struct Head {
     others: Option<parts::PartsReader>,
     /// Version 6: the lattice held open.
     lattice: Option<StoredLattice>,
+    /// Version 7: the symmetry.
+    symmetry: Option<crate::parts::Symmetry>,
     /// Version 4: the brick chunks, and where the history starts, both from `base`.
     index: Option<(Vec<IndexEntry>, u64)>,
     /// The first byte after the index (version 4; before, it means nothing).
@@ -1272,6 +1292,7 @@ fn read_head(
         layouts: Vec::new(),
         others: None,
         lattice: None,
+        symmetry: None,
         index: None,
         base: source.position(),
         chunks_read: 1,
@@ -1327,6 +1348,9 @@ fn read_head(
             b"LATT" if version >= 6 && head.lattice.is_none() => {
                 head.lattice = Some(StoredLattice::read(raw, index)?);
             }
+            b"SYMM" if version >= 7 && head.symmetry.is_none() => {
+                head.symmetry = Some(symmetry::read(raw, index)?);
+            }
             b"INDX" if version >= 4 => {
                 if let Some(lattice) = &head.lattice {
                     lattice.check_part(head.layouts.len().max(1))?;
@@ -1380,6 +1404,7 @@ fn decode_from(
         layouts,
         others,
         lattice,
+        symmetry,
         index: directory,
         base,
         chunks_read,
@@ -1453,7 +1478,7 @@ fn decode_from(
     field.take_dirty();
     field.set_history(history.undo, history.redo);
     let others = others.map_or_else(Vec::new, parts::PartsReader::finish);
-    Ok(Sculpt { field, scene_toml, tools, view, parts: layouts, others, lattice })
+    Ok(Sculpt { field, scene_toml, tools, view, parts: layouts, others, lattice, symmetry })
 }
 
 #[cfg(test)]
@@ -1563,9 +1588,9 @@ mod tests {
     fn future_versions_and_absurd_claims_are_refused_by_name() {
         let bytes = encode(&sample_field(), None, &mut |_| {});
         let mut future = bytes.clone();
-        future[4..8].copy_from_slice(&7u32.to_le_bytes());
+        future[4..8].copy_from_slice(&(VERSION + 1).to_le_bytes());
         let e = decode(&future, "f.argile", &mut |_| {}).unwrap_err().to_string();
-        assert!(e.contains("format version 7") && e.contains("newer Argile"), "{e}");
+        assert!(e.contains(&format!("format version {}", VERSION + 1)) && e.contains("newer Argile"), "{e}");
         let mut many = bytes.clone();
         many[8..12].copy_from_slice(&u32::MAX.to_le_bytes());
         let e = decode(&many, "m.argile", &mut |_| {}).unwrap_err().to_string();
