@@ -423,3 +423,82 @@ fn a_scene_region_tool_moves_the_clay_of_the_part_it_names_in_that_part_s_frame(
     assert!(playback.assembly().others()[0].same_samples(&arm));
     assert!(!playback.undo().unwrap(), "the region tool was the one step");
 }
+
+/// A region copied into a new part (Hua and Qin's copy and compose into another patch): the
+/// new part holds the clay within the region and becomes the active one, the part it came from
+/// is left bit for bit, one undo takes the part away and one redo brings it back, and an
+/// autosave session recovers the sculpt as each step left it.
+#[test]
+fn a_region_copied_into_a_new_part_is_one_undo_step_and_autosave_recovers_it() {
+    use argile::io::autosave::{recover, Autosave, AutosaveConfig, LocalDisk};
+    use argile::tool::{Action, Tool, ToolShape};
+    let root = std::env::temp_dir().join(format!("argile-copy-to-part-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    std::fs::create_dir_all(&root).unwrap();
+    let text = "[field]\nvoxel_size_m = 0.002\n[[clay]]\nshape = \"sphere\"\nradius_m = 0.03\n";
+    let scene = Scene::parse(text, "copy-to-part.toml", None).unwrap_or_else(|e| panic!("{e}"));
+    let config =
+        AutosaveConfig { sync_interval: std::time::Duration::from_millis(5), ..AutosaveConfig::default() };
+    let mut playback = Playback::new_autosaved(&scene, |field, besides| {
+        Autosave::start_with_tools(
+            &root,
+            field,
+            (Some(text), besides),
+            "test",
+            config,
+            std::sync::Arc::new(LocalDisk),
+        )
+        .ok()
+    })
+    .unwrap();
+    let ball = playback.field().clone();
+    // A tool of 1 cm radius at the ball's top.
+    let tool = Tool::new(ToolShape::sphere(0.01), Action::Add, [1.0; 4]);
+    let top = Pose { position_m: Vec3::new(0.0, 0.03, 0.0), rotation: Quat::IDENTITY };
+    let part = playback.copy_to_new_part(tool.clone(), top).unwrap();
+    assert_eq!((part, playback.assembly().parts().len(), playback.assembly().active()), (1, 2, 1));
+    assert_eq!(playback.assembly().parts()[1].name, "clay copy");
+    assert!(playback.field().same_samples(&ball), "the ball is left as it was");
+    let copy = playback.assembly().others()[0].clone();
+    assert!(density(&copy, Vec3::new(0.0, 0.025, 0.0)) > 0.9, "the copy holds the clay within the tool");
+    assert!(density(&copy, Vec3::new(0.0, -0.02, 0.0)) < 0.01, "and nothing of the rest");
+    assert!(copy.mass() > 0.0 && copy.mass() < 0.3 * ball.mass(), "{} of {}", copy.mass(), ball.mass());
+    assert_closed_and_oriented(&playback.surface().clone(), "the ball with its copied cap");
+    // A second copy is named apart; away from the clay, nothing is copied and no part added.
+    let away = Pose { position_m: Vec3::new(0.5, 0.0, 0.0), ..top };
+    let e = playback.copy_to_new_part(tool.clone(), away).unwrap_err();
+    assert!(e.contains("no clay within the region"), "{e}");
+    assert_eq!(playback.assembly().parts().len(), 2);
+    let recovered_now = |playback: &Playback<'_>| {
+        let dir = playback.autosave().unwrap().dir().to_owned();
+        let strokes = playback.autosave().unwrap().strokes();
+        let start = std::time::Instant::now();
+        while playback.autosave().unwrap().durable_strokes() < strokes {
+            assert!(start.elapsed().as_secs() < 20, "the journal syncs");
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        recover(&dir).unwrap().sculpt
+    };
+    let r = recovered_now(&playback);
+    assert_eq!(r.parts.len(), 2, "the snapshot lists the new part");
+    assert!(r.field.same_samples(&ball) && r.others[0].same_samples(&copy), "recovered as it stands");
+    // Undo takes the part away, redo brings it back.
+    assert!(playback.undo().unwrap());
+    assert_eq!(playback.assembly().parts().len(), 1);
+    assert_eq!(playback.assembly().active(), 0);
+    assert!(playback.field().same_samples(&ball));
+    let r = recovered_now(&playback);
+    assert!(r.parts.len() <= 1 && r.others.is_empty(), "recovered without it: {} parts", r.parts.len());
+    assert!(r.field.same_samples(&ball));
+    assert!(playback.redo());
+    assert_eq!(playback.assembly().parts().len(), 2);
+    assert!(playback.assembly().others()[0].same_samples(&copy), "brought back bit for bit");
+    playback.journal();
+    let r = recovered_now(&playback);
+    assert_eq!(r.parts.len(), 2);
+    assert!(r.others[0].same_samples(&copy), "and recovered with it");
+    assert!(playback.undo().unwrap());
+    assert!(!playback.undo().unwrap(), "the copy was the one step");
+    drop(playback);
+    std::fs::remove_dir_all(&root).unwrap();
+}

@@ -32,12 +32,15 @@ pub struct Assembly {
 }
 
 /// A closed sculpt step, as undo takes it back.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 enum Step {
     /// Strokes (pushes, region tools, lattices) closed on these parts' fields at once.
     Edits(Vec<usize>),
     /// A part carried, turned or scaled from one placement to another.
     Placed { part: usize, from: Placement, to: Placement },
+    /// A part added last with its clay as its field's one step; undone, the part is taken away
+    /// and kept here (its layout and its field, holding that step to redo).
+    Added { part: usize, taken: Option<Box<(ScenePart, Field)>> },
 }
 
 /// [`steps`] of every part's field, the first's first.
@@ -208,6 +211,20 @@ impl Assembly {
         }
     }
 
+    /// Adds a part of `layout` after the others, holding `field` (empty but for one closed
+    /// step, its clay): one sculpt step, which undo takes back by taking the part away and redo
+    /// by bringing it back. Returns its index.
+    pub fn add_part(&mut self, first: &Field, layout: ScenePart, field: Field) -> usize {
+        self.note_steps(first);
+        self.parts.push(layout);
+        self.others.push(field);
+        self.seen = counts(first, &self.others);
+        let part = self.parts.len() - 1;
+        self.undo.push(Step::Added { part, taken: None });
+        self.redo.clear();
+        part
+    }
+
     /// Logs part `part`'s move from `from` to where it is now as one sculpt step (none when it
     /// is back where it was); a new step clears the redo order.
     pub fn note_placement(&mut self, first: &Field, part: usize, from: Placement) {
@@ -220,19 +237,30 @@ impl Assembly {
     }
 
     /// Takes back the newest sculpt step in every part it changed (the first part's newest step
-    /// when none is logged). Returns whether there was one.
-    pub fn undo(&mut self, first: &mut Field) -> Result<bool, HistoryError> {
-        self.step_back(first, true)
+    /// when none is logged). Returns whether there was one. A part added by that step is taken
+    /// away once `journal` has been given every part's field with its clay taken back (so that
+    /// a journal of the parts' bricks sees it emptied before it goes).
+    pub fn undo(
+        &mut self,
+        first: &mut Field,
+        journal: &mut dyn FnMut(&mut Field, &mut [Field]),
+    ) -> Result<bool, HistoryError> {
+        self.step_back(first, true, journal)
     }
 
     /// Puts back the newest step undone. Returns whether there was one.
     pub fn redo(&mut self, first: &mut Field) -> bool {
-        self.step_back(first, false).unwrap_or(false)
+        self.step_back(first, false, &mut |_, _| {}).unwrap_or(false)
     }
 
     /// Undoes (or redoes) the newest logged step in every part it changed, and logs it on the
     /// other stack.
-    fn step_back(&mut self, first: &mut Field, undo: bool) -> Result<bool, HistoryError> {
+    fn step_back(
+        &mut self,
+        first: &mut Field,
+        undo: bool,
+        journal: &mut dyn FnMut(&mut Field, &mut [Field]),
+    ) -> Result<bool, HistoryError> {
         self.note_steps(first);
         let from = if undo { &mut self.undo } else { &mut self.redo };
         // Undo with nothing logged takes back the first part's newest step (a history read from
@@ -243,9 +271,27 @@ impl Assembly {
             None => return Ok(false),
         };
         let mut any = false;
-        match &step {
+        let mut step = step;
+        match &mut step {
+            Step::Added { part, taken } => {
+                if undo && *part + 1 == self.parts.len() && *part > 0 {
+                    self.others[*part - 1].undo()?;
+                    journal(first, &mut self.others);
+                    let field = self.others.pop().expect("the part added last");
+                    let layout = self.parts.pop().expect("its layout");
+                    *taken = Some(Box::new((layout, field)));
+                    self.active = self.active.min(self.parts.len() - 1);
+                    any = true;
+                } else if let (false, Some(back)) = (undo, taken.take()) {
+                    let (layout, mut field) = *back;
+                    field.redo();
+                    self.parts.push(layout);
+                    self.others.push(field);
+                    any = true;
+                }
+            }
             Step::Edits(parts) => {
-                for &part in parts {
+                for &part in parts.iter() {
                     let field = self.field_mut(first, part);
                     any |= if undo { field.undo()? } else { field.redo() };
                 }

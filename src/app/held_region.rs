@@ -23,6 +23,9 @@ pub enum RegionTool {
         /// Outwards.
         out: bool,
     },
+    /// Each pull copies the region into a new part, which becomes the active one (the support
+    /// grip then carries it).
+    CopyToPart,
     /// The hand drags out a box from where the trigger goes down to where it comes up: the
     /// region the others act on from then on, instead of the tool's shape (a box too thin
     /// clears it).
@@ -31,12 +34,13 @@ pub enum RegionTool {
 
 impl RegionTool {
     /// Every region tool, in the order the headset's palette steps through them.
-    pub const ALL: [RegionTool; 6] = [
+    pub const ALL: [RegionTool; 7] = [
         RegionTool::Drag(RegionOp::Move),
         RegionTool::Drag(RegionOp::Copy),
         RegionTool::Drag(RegionOp::Bend),
         RegionTool::Swell { out: true },
         RegionTool::Swell { out: false },
+        RegionTool::CopyToPart,
         RegionTool::SelectBox,
     ];
 
@@ -46,6 +50,7 @@ impl RegionTool {
             RegionTool::Drag(op) => op.name(),
             RegionTool::Swell { out: true } => "inflate",
             RegionTool::Swell { out: false } => "deflate",
+            RegionTool::CopyToPart => "copy to part",
             RegionTool::SelectBox => "select box",
         }
     }
@@ -79,6 +84,9 @@ impl RegionTool {
                 if out { "out" } else { "in" },
                 SWELL_STEP_M * 1e3
             ),
+            RegionTool::CopyToPart => {
+                "region tool copy to part: each pull of the trigger copies the clay within the tool (or the box selected) into a new part, which the support grip then carries".into()
+            }
             RegionTool::SelectBox => {
                 "region tool select box: hold the trigger and drag out a box for the region tools; a pull without a drag clears it".into()
             }

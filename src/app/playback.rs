@@ -395,7 +395,14 @@ impl<'s> Playback<'s> {
         }
         self.close_steps();
         let placed = self.placements();
-        let undone = self.assembly.undo(&mut self.field)?;
+        let autosave = &mut self.autosave;
+        let undone = self.assembly.undo(&mut self.field, &mut |first, others| {
+            if let Some(a) = autosave.as_mut() {
+                a.record_parts(first, others);
+            }
+        })?;
+        // A box selected on a part taken away goes with it.
+        self.selection = self.selection.take().filter(|(p, _)| *p < self.assembly.parts().len());
         self.keep_placements(placed);
         Ok(undone)
     }
@@ -405,8 +412,8 @@ impl<'s> Playback<'s> {
         self.assembly.parts().iter().map(|p| p.placement).collect()
     }
 
-    /// Has the autosave session store the layouts when a part's placement is no longer one of
-    /// `before` (an undo or a redo moved it).
+    /// Has the autosave session store the layouts when the parts are no longer as `before`
+    /// placed them (an undo or a redo moved one, or added or took one away).
     fn keep_placements(&mut self, before: Vec<Placement>) {
         if self.placements() != before {
             self.keep_layouts();
@@ -1058,6 +1065,51 @@ impl<'s> Playback<'s> {
     /// The box selected: the part it lies in and the box in that part's frame.
     pub fn selection(&self) -> Option<(usize, &Region)> {
         self.selection.as_ref().map(|(part, r)| (*part, r))
+    }
+
+    /// Copies the clay of the active part within the region the region tools act on (see
+    /// [`Playback::grab_region`]), and within its images, into a new part after the others:
+    /// named after the active one, placed as it is, at its voxel size, united with the rest
+    /// (Hua and Qin's copy and compose). The new part becomes the active one, so that the tools,
+    /// the desk's part device and the headset's support grip move it. One undo step, which
+    /// takes the part away again; journaled. Returns the new part's index. Refused, with a
+    /// sentence, as [`Playback::grab_region`] is, past [`crate::io::MAX_PARTS`] parts, or where
+    /// no clay lies within the region.
+    pub fn copy_to_new_part(&mut self, tool: Tool, pose: Pose) -> Result<usize, String> {
+        if self.assembly.parts().len() >= crate::io::MAX_PARTS {
+            return Err(format!("a sculpt holds at most {} parts", crate::io::MAX_PARTS));
+        }
+        let (part, region, _, images) = self.region_target(tool, pose)?;
+        self.close_steps();
+        let source = self.assembly.field(&self.field, part);
+        let mut copy = Field::new(source.transform().voxel_size_m, source.iso());
+        copy.set_history_config(super::history_config());
+        copy.begin_stroke();
+        let copied = crate::parts::copy_into(source, &region, &images, &mut copy);
+        copy.end_stroke();
+        copied.map_err(|e| format!("cannot copy the region into a new part: {e}"))?;
+        if copy.mass() <= 0.0 {
+            return Err("no clay within the region to copy into a new part".into());
+        }
+        let layouts = self.assembly.parts();
+        let base = &layouts[part].name;
+        let name = (1..)
+            .map(|i| if i == 1 { format!("{base} copy") } else { format!("{base} copy {i}") })
+            .find(|n| layouts.iter().all(|p| &p.name != n))
+            .expect("a free name");
+        let layout = crate::scene::ScenePart {
+            name,
+            op: crate::parts::Csg::Union,
+            visible: true,
+            locked: false,
+            ..layouts[part].clone()
+        };
+        let added = self.assembly.add_part(&self.field, layout, copy);
+        // The snapshot lists the part before the journal holds its clay.
+        self.keep_layouts();
+        self.journal();
+        self.set_active_part(added);
+        Ok(added)
     }
 
     /// Moves the surface of the active part's clay within the region the region tools act on

@@ -1038,6 +1038,22 @@ impl<'s> Station<'s> {
                     Err(why) => self.messages.push(why),
                 }
             }
+            StationAction::CopyToPart => {
+                let pose = self.controls.desk.poses.get(Target::Tool);
+                match self.doc.playback.copy_to_new_part(self.desk_tool.clone(), pose) {
+                    Ok(part) => {
+                        self.doc.edited();
+                        self.stepped("copy to part".into());
+                        self.rebase_part();
+                        self.part_shown_s = PART_SHOWN_S;
+                        self.messages.push(format!(
+                            "the region is copied into a new part: {}",
+                            describe_part(self.doc.playback.assembly(), part)
+                        ));
+                    }
+                    Err(why) => self.messages.push(why),
+                }
+            }
             StationAction::NextPart | StationAction::PreviousPart => {
                 let count = self.doc.playback.assembly().parts().len();
                 let now = self.doc.playback.assembly().active();
@@ -3170,6 +3186,35 @@ mod tests {
     }
 
     #[test]
+    fn j_copies_the_region_into_a_new_active_part_which_the_part_device_carries_and_undo_takes_away() {
+        let scene = ball_scene();
+        let mut station = small_station(&scene);
+        station.controls.mouse.tool_position_m = Vec3::ZERO;
+        sculpt_for(&mut station, 2);
+        let ball = station.doc.playback.field().clone();
+        station.key(KeyCode::KeyJ, true);
+        station.key(KeyCode::KeyJ, false);
+        station.step(SCRIPTED_STEP_S, |_| {});
+        let parts = station.doc.playback.assembly();
+        assert_eq!((parts.parts().len(), parts.active()), (2, 1), "{:?}", station.messages);
+        assert!(station
+            .messages
+            .iter()
+            .any(|m| m.contains("copied into a new part") && m.contains("clay copy")));
+        assert!(station.doc.playback.field().same_samples(&ball));
+        // A gamepad on the part target carries the copy away along X; the ball stays.
+        let moved = carry_part_along_x(&mut station);
+        assert!(moved.x > 0.001, "{moved}");
+        assert!(station.doc.playback.field().same_samples(&ball));
+        // Undo takes back the carry, then the part.
+        let_the_gamepad_go(&mut station);
+        station.act(StationAction::Undo);
+        station.act(StationAction::Undo);
+        assert_eq!(station.doc.playback.assembly().parts().len(), 1);
+        assert!(station.doc.playback.field().same_samples(&ball));
+    }
+
+    #[test]
     fn the_lattice_keys_open_shape_apply_and_put_back_a_lattice_each_one_undo_step() {
         let scene = ball_scene();
         let mut station = small_station(&scene);
@@ -3802,6 +3847,29 @@ mod tests {
         station.set_input_settings(&settings);
     }
 
+    /// A gamepad on the part target pushes the active part along X for ten frames; returns
+    /// where the second part is then.
+    fn carry_part_along_x(station: &mut Station<'_>) -> Vec3 {
+        use crate::input::calibration::SixDof;
+        gamepad_drives(station, Target::Part);
+        let push = GamepadMotion {
+            six: SixDof { translation: Vec3::X * 0.5, rotation: Vec3::ZERO },
+            size_rate: 0.0,
+        };
+        for _ in 0..10 {
+            station.devices(SCRIPTED_STEP_S, &[push], Vec::new());
+            station.step(SCRIPTED_STEP_S, |_| {});
+        }
+        station.doc.playback.assembly().parts()[1].placement.translation_m
+    }
+
+    /// The gamepad let go: a frame without motion.
+    fn let_the_gamepad_go(station: &mut Station<'_>) {
+        let still = GamepadMotion { six: crate::input::calibration::SixDof::default(), size_rate: 0.0 };
+        station.devices(SCRIPTED_STEP_S, &[still], Vec::new());
+        station.step(SCRIPTED_STEP_S, |_| {});
+    }
+
     /// Two parts: a ball at rest and a ball of its own, 2 mm voxels, placed 8 cm along X at
     /// twice its size.
     fn two_part_scene() -> Scene {
@@ -3815,7 +3883,6 @@ mod tests {
 
     #[test]
     fn n_makes_the_next_part_active_the_desk_tool_acts_in_its_frame_and_a_device_moves_it() {
-        use crate::input::calibration::SixDof;
         let scene = two_part_scene();
         let mut station = small_station(&scene);
         let left = station.doc.playback.field().clone();
@@ -3861,16 +3928,7 @@ mod tests {
         };
         assert!(surface(&mut station, Vec3::new(0.08, 0.026, 0.0)) > 0.5, "drawn where it was laid");
         // A gamepad on the part target carries it along X.
-        gamepad_drives(&mut station, Target::Part);
-        let push = GamepadMotion {
-            six: SixDof { translation: Vec3::X * 0.5, rotation: Vec3::ZERO },
-            size_rate: 0.0,
-        };
-        for _ in 0..10 {
-            station.devices(SCRIPTED_STEP_S, &[push], Vec::new());
-            station.step(SCRIPTED_STEP_S, |_| {});
-        }
-        let moved = station.doc.playback.assembly().parts()[1].placement.translation_m;
+        let moved = carry_part_along_x(&mut station);
         assert!(moved.x > 0.081 && moved.y.abs() < 1e-6, "the part moved along X: {moved}");
         assert!(station.doc.playback.field().same_samples(&left), "the left part stays");
         assert!(
@@ -3879,9 +3937,7 @@ mod tests {
         );
         // The gamepad let go, the move is one undo step: undo puts the part back, redo carries it
         // again, and the next undo takes back the stroke on the right part.
-        let still = GamepadMotion { six: SixDof::default(), size_rate: 0.0 };
-        station.devices(SCRIPTED_STEP_S, &[still], Vec::new());
-        station.step(SCRIPTED_STEP_S, |_| {});
+        let_the_gamepad_go(&mut station);
         let carried = station.doc.playback.assembly().parts()[1].placement;
         station.act(StationAction::Undo);
         assert_eq!(station.doc.playback.assembly().parts()[1].placement, scene.parts[1].placement);

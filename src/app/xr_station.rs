@@ -24,10 +24,11 @@
 //!   the trigger. Every profile has a trigger, so each of these is reachable on every
 //!   controller.
 //! - the palette's region button steps the right hand's region tool: move, copy, bend,
-//!   inflate, deflate, then sculpting again. The tool is then drawn yellow and its shape is the
-//!   region: the trigger takes the active part's clay within it and carries it (move: leaving
+//!   inflate, deflate, copy to part, select box, then sculpting again. The tool is then drawn
+//!   yellow and its shape is the region: the trigger takes the active part's clay within it and carries it (move: leaving
 //!   empty space; copy: a copy), or bends the clay after the hand, one undo step when the
 //!   trigger comes up; each pull of inflate or deflate moves the surface within it by 1 mm.
+//!   Copy to part: each pull copies the clay within it into a new part, the active one.
 //!   Select box: hold the trigger and drag out a box; the others act on it instead of the
 //!   tool's shape (a move or a copy carries it along) until a pull without a drag clears it.
 //! - the palette's panel button shows the panel (the desk's, less its view and devices
@@ -436,6 +437,22 @@ impl<'s> XrSculptor<'s> {
             (RegionTool::Drag(op), Some(pose), false) => self.doc.playback.grab_region(op, tool, pose).err(),
             (RegionTool::Drag(_), Some(pose), true) => {
                 self.doc.playback.carry_region(pose).and_then(Result::err)
+            }
+            (RegionTool::CopyToPart, Some(pose), false) if pulled => {
+                match self.doc.playback.copy_to_new_part(tool, pose) {
+                    Ok(part) => {
+                        self.doc.edited();
+                        let count = self.doc.playback.assembly().parts().len();
+                        let name = &self.doc.playback.assembly().parts()[part].name;
+                        let said = format!(
+                            "the region is copied into a new part: active part {} of {count}: {name}",
+                            part + 1
+                        );
+                        self.messages.push(said);
+                        None
+                    }
+                    Err(why) => Some(why),
+                }
             }
             (RegionTool::Swell { out }, Some(pose), false) if pulled => {
                 let distance = if out { SWELL_STEP_M } else { -SWELL_STEP_M };
@@ -1955,10 +1972,24 @@ mod tests {
         assert!(s.messages.last().unwrap().contains("no clay surface"), "{:?}", s.messages);
         assert_eq!(s.field().history_stats().undo_in_memory, steps);
 
+        // Copy to part: a pull makes a new part of the clay within the tool, the active one.
+        press(&mut s, Button::Region);
+        assert_eq!(s.region_tool(), Some(RegionTool::CopyToPart));
+        for trigger in [0.0, 1.0, 1.0, 0.0] {
+            frame(&mut s, [left, hand(room, trigger)]);
+        }
+        let parts = s.doc.playback.assembly();
+        assert_eq!((parts.parts().len(), parts.active()), (2, 1), "{:?}", s.messages);
+        assert!(s.messages.last().unwrap().contains("active part 2 of 2: clay copy"), "{:?}", s.messages);
+        assert!(s.field().same_samples(&ball), "the ball stays");
+        press(&mut s, Button::Undo);
+        assert_eq!(s.doc.playback.assembly().parts().len(), 1, "undo takes the part away");
+
         // Past the box selection (its own test), the trigger sculpts again (the scene's gouge
         // removes clay).
-        press(&mut s, Button::Region);
-        assert_eq!(s.region_tool(), Some(RegionTool::SelectBox));
+        while s.region_tool() != Some(RegionTool::SelectBox) {
+            press(&mut s, Button::Region);
+        }
         press(&mut s, Button::Region);
         assert_eq!(s.region_tool(), None);
         assert!(s.messages.last().unwrap().contains("sculpts again"));

@@ -103,6 +103,9 @@ pub enum StationAction {
     InflateRegion,
     /// Shrink the clay's surface within the tool's shape by a millimetre.
     DeflateRegion,
+    /// Copy the region of the tool's shape (or the box selected) into a new part, which becomes
+    /// the active one.
+    CopyToPart,
     /// Held: a box is dragged out from where the tool was when the key went down to where it
     /// is; the region keys act on it from then on (a tap clears it).
     SelectBox,
@@ -184,6 +187,7 @@ pub const ACTIONS: &[(&str, StationAction)] = &[
     ("inflate-region", StationAction::InflateRegion),
     ("deflate-region", StationAction::DeflateRegion),
     ("select-box", StationAction::SelectBox),
+    ("copy-to-part", StationAction::CopyToPart),
     ("next-part", StationAction::NextPart),
     ("previous-part", StationAction::PreviousPart),
     ("open-lattice", StationAction::OpenLattice),
@@ -432,13 +436,12 @@ mod tests {
     #[test]
     fn a_user_file_overrides_only_what_it_names_and_errors_say_where() {
         let shipped = KeyBindings::shipped();
-        let mine =
-            KeyBindings::parse_over("[keys]\nundo = [\"KeyJ\"]\n", "mine.toml", Some(&shipped)).unwrap();
-        assert_eq!(mine.action(KeyCode::KeyJ, Modifiers::default()), Some(StationAction::Undo));
+        let mine = KeyBindings::parse_over("[keys]\nundo = [\"F5\"]\n", "mine.toml", Some(&shipped)).unwrap();
+        assert_eq!(mine.action(KeyCode::F5, Modifiers::default()), Some(StationAction::Undo));
         assert_eq!(mine.chords(StationAction::Redo), shipped.chords(StationAction::Redo));
 
         let e = KeyBindings::parse_over(
-            "[keys]\nundo = [\"KeyJ\"]\nfly = [\"KeyF\"]\n",
+            "[keys]\nundo = [\"F5\"]\nfly = [\"KeyF\"]\n",
             "mine.toml",
             Some(&shipped),
         )

@@ -23,6 +23,7 @@ pub use part::{
     local_bounds, part_bounds, Composition, Csg, PartView, Placement, PlacementError, SCALE_RANGE,
 };
 pub use region::{
-    copy_repeated, inflate, Motion, Region, RegionDrag, RegionError, RegionOp, RegionStats, MAX_REGION_POINTS,
+    copy_into, copy_repeated, inflate, Motion, Region, RegionDrag, RegionError, RegionOp, RegionStats,
+    MAX_REGION_POINTS,
 };
 pub use symmetry::{Axis, Symmetry, SymmetrySwitch, MAX_IMAGES, MAX_RADIAL};

@@ -349,6 +349,17 @@ impl RegionDrag {
     /// was when the drag started; what earlier updates wrote and this one does not reach is
     /// given back as it was.
     pub fn update(&mut self, field: &mut Field, motion: Motion) -> Result<RegionStats, RegionError> {
+        self.apply(field, motion, true)
+    }
+
+    /// [`RegionDrag::update`]; a still motion gives the clay back exactly where `exact_still`
+    /// says so, else it is resampled as any other (to write the region into another field).
+    fn apply(
+        &mut self,
+        field: &mut Field,
+        motion: Motion,
+        exact_still: bool,
+    ) -> Result<RegionStats, RegionError> {
         let t = *field.transform();
         let radius = self.region().radius_m();
         // A bend turns about its grab point, the region's centre.
@@ -357,7 +368,7 @@ impl RegionDrag {
             _ => motion,
         };
         // Still: the clay as it was, exactly (a resampling at the points themselves would round).
-        let still = motion.translation_m == Vec3::ZERO && motion.rotation == Quat::IDENTITY;
+        let still = exact_still && motion.translation_m == Vec3::ZERO && motion.rotation == Quat::IDENTITY;
         let motions: Vec<Motion> = self.images.iter().map(|i| motion.image(&i.isometry)).collect();
         let sweeps: Vec<Sweep> = match self.op {
             RegionOp::Bend => motions.iter().map(|m| Sweep::new(m, radius)).collect(),
@@ -595,6 +606,20 @@ pub fn inflate(field: &mut Field, region: &Region, distance_m: f32, images: &[Is
         }
     }
     counters
+}
+
+/// Copies the clay of `source` within `region` (and its images under `images`) into `target`,
+/// a field on the same lattice, where it lands united with what `target` holds: Hua and Qin's
+/// copy and compose into another patch (a region pasted as a new part).
+pub fn copy_into(
+    source: &Field,
+    region: &Region,
+    images: &[Isometry],
+    target: &mut Field,
+) -> Result<RegionStats, RegionError> {
+    debug_assert_eq!(source.transform(), target.transform(), "one lattice");
+    let mut drag = RegionDrag::start(source, region.clone(), RegionOp::Copy, images)?;
+    drag.apply(target, Motion::still(region.centre_m()), false)
 }
 
 /// Copies `region` `count` times, each along `motion` once more than the last (a row of
