@@ -1315,6 +1315,7 @@ impl<'s> Station<'s> {
             | PanelCommand::ControlWeight(_)
             | PanelCommand::Quit => {}
             PanelCommand::ActivePart(i) => self.pick_part(i),
+            PanelCommand::CopyToPart => self.act(StationAction::CopyToPart),
             PanelCommand::ToggleSymmetry => self.act(StationAction::ToggleSymmetry),
             PanelCommand::NextSymmetry => self.act(StationAction::NextSymmetry),
             PanelCommand::ConvergenceM(m) => {
@@ -3212,6 +3213,9 @@ mod tests {
         station.act(StationAction::Undo);
         assert_eq!(station.doc.playback.assembly().parts().len(), 1);
         assert!(station.doc.playback.field().same_samples(&ball));
+        // The panel's Parts section has the same copy.
+        station.panel_command(PanelCommand::CopyToPart);
+        assert_eq!(station.doc.playback.assembly().parts().len(), 2, "{:?}", station.messages);
     }
 
     #[test]

@@ -408,6 +408,19 @@ impl<'s> XrSculptor<'s> {
         self.region_tool
     }
 
+    /// Copies the clay within the tool at `pose` (the scene), or the box selected, into a new
+    /// part, the active one; says so.
+    fn copy_to_part(&mut self, pose: Pose) -> Result<(), String> {
+        let part = self.doc.playback.copy_to_new_part(self.acting_tool(1.0), pose)?;
+        self.doc.edited();
+        let count = self.doc.playback.assembly().parts().len();
+        let name = &self.doc.playback.assembly().parts()[part].name;
+        let said =
+            format!("the region is copied into a new part: active part {} of {count}: {name}", part + 1);
+        self.messages.push(said);
+        Ok(())
+    }
+
     /// The tool hand's region tool at `pose` (the scene), the trigger `pulling` it (`pulled`:
     /// this frame): a drag takes the region of the tool's shape as the trigger goes down,
     /// carries it with the hand and lets it go, one undo step, as the trigger comes up;
@@ -438,22 +451,7 @@ impl<'s> XrSculptor<'s> {
             (RegionTool::Drag(_), Some(pose), true) => {
                 self.doc.playback.carry_region(pose).and_then(Result::err)
             }
-            (RegionTool::CopyToPart, Some(pose), false) if pulled => {
-                match self.doc.playback.copy_to_new_part(tool, pose) {
-                    Ok(part) => {
-                        self.doc.edited();
-                        let count = self.doc.playback.assembly().parts().len();
-                        let name = &self.doc.playback.assembly().parts()[part].name;
-                        let said = format!(
-                            "the region is copied into a new part: active part {} of {count}: {name}",
-                            part + 1
-                        );
-                        self.messages.push(said);
-                        None
-                    }
-                    Err(why) => Some(why),
-                }
-            }
+            (RegionTool::CopyToPart, Some(pose), false) if pulled => self.copy_to_part(pose).err(),
             (RegionTool::Swell { out }, Some(pose), false) if pulled => {
                 let distance = if out { SWELL_STEP_M } else { -SWELL_STEP_M };
                 let swelled = self.doc.playback.swell_region(tool, pose, distance);
@@ -631,6 +629,16 @@ impl<'s> XrSculptor<'s> {
                 let part = self.doc.playback.set_active_part(i);
                 let name = &self.doc.playback.assembly().parts()[part].name;
                 self.messages.push(format!("active part {} of {count}: {name}", part + 1));
+            }
+            PanelCommand::CopyToPart => {
+                self.end_stroke();
+                let copied = match self.last_tool_pose {
+                    Some(pose) => self.copy_to_part(pose),
+                    None => Err("the tool hand has not been seen: nothing to copy around it".into()),
+                };
+                if let Err(why) = copied {
+                    self.messages.push(why);
+                }
             }
             PanelCommand::ToggleSymmetry => {
                 let symmetry = self.symmetry.toggle();

@@ -190,6 +190,8 @@ pub enum PanelCommand {
     LevelBySize,
     /// The tools act on the part of this index of [`PanelView::parts`].
     ActivePart(usize),
+    /// Copy the clay within the tool (or the box selected) into a new part, the active one.
+    CopyToPart,
     /// Symmetry on or off.
     ToggleSymmetry,
     /// The next symmetry (one plane, two, three, radial).
@@ -850,6 +852,13 @@ fn parts_ui(ui: &mut egui::Ui, view: &PanelView, commands: &mut Vec<PanelCommand
         if ui.selectable_label(view.active_part == i, text).clicked() && view.active_part != i {
             commands.push(PanelCommand::ActivePart(i));
         }
+    }
+    let copy = ui.button("copy to new part");
+    if copy
+        .on_hover_text("the clay within the tool (or the box selected) becomes a part of its own")
+        .clicked()
+    {
+        commands.push(PanelCommand::CopyToPart);
     }
     ui.horizontal(|ui| {
         let (said, on) = &view.symmetry;
