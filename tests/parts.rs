@@ -502,3 +502,40 @@ fn a_region_copied_into_a_new_part_is_one_undo_step_and_autosave_recovers_it() {
     drop(playback);
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+/// A scene's `copy-to-part` region tool makes a part of the clay within its region at its
+/// time, named as the entry says; bad entries are refused at their line.
+#[test]
+fn a_scene_copy_to_part_makes_a_named_part_of_the_region_and_bad_ones_are_refused() {
+    let head = "[field]\nvoxel_size_m = 0.002\n[[clay]]\nshape = \"sphere\"\nradius_m = 0.03\n";
+    let entry = |extra: &str| {
+        format!("{head}[[region]]\ntime_s = 0.5\nop = \"copy-to-part\"\ncentre_m = [0.0, 0.03, 0.0]\nradius_m = 0.01\n{extra}")
+    };
+    let text = entry("name = \"cap\"\n");
+    let scene = Scene::parse(&text, "cap.toml", None).unwrap_or_else(|e| panic!("{e}"));
+    let mut playback = Playback::new(&scene);
+    let ball = playback.field().clone();
+    playback.advance_to(0.4, |_| {});
+    assert_eq!(playback.assembly().parts().len(), 1, "not before its time");
+    playback.advance_to(1.0, |_| {});
+    let parts = playback.assembly().parts();
+    assert_eq!((parts.len(), parts[1].name.as_str()), (2, "cap"));
+    let cap = &playback.assembly().others()[0];
+    assert!(density(cap, Vec3::new(0.0, 0.025, 0.0)) > 0.9 && density(cap, Vec3::ZERO) < 0.01);
+    assert!(playback.field().same_samples(&ball));
+    assert!(playback.undo().unwrap());
+    assert_eq!(playback.assembly().parts().len(), 1, "one undo step takes it away");
+    for (extra, says) in [
+        ("name = \"clay\"\n", "name must be 1 to 64 characters and no [[part]]'s"),
+        ("move_m = [0.01, 0.0, 0.0]\n", "copy-to-part takes no move_m"),
+        ("distance_m = 0.001\n", "distance_m is for inflate and deflate"),
+    ] {
+        let e = Scene::parse(&entry(extra), "bad.toml", None).unwrap_err().to_string();
+        assert!(e.contains(says) && e.contains("bad.toml:6:1"), "{extra}: {e}");
+    }
+    let moving = format!(
+        "{head}[[region]]\ntime_s = 0.5\nop = \"move\"\nname = \"x\"\ncentre_m = [0.0, 0.0, 0.0]\nradius_m = 0.01\nmove_m = [0.01, 0.0, 0.0]\n"
+    );
+    let e = Scene::parse(&moving, "bad.toml", None).unwrap_err().to_string();
+    assert!(e.contains("name is for copy-to-part"), "{e}");
+}

@@ -30,6 +30,7 @@ fn region_name(r: &SceneRegion) -> &'static str {
         RegionAction::Drag(op) => op.name(),
         RegionAction::Inflate(d) if d > 0.0 => "inflate",
         RegionAction::Inflate(_) => "deflate",
+        RegionAction::CopyToPart => "copy to part",
     }
 }
 
@@ -778,6 +779,7 @@ impl<'s> Playback<'s> {
     /// copy of the clay would be too large) stops with a warning.
     fn step_regions(&mut self, t: f32) {
         let scene = self.scene;
+        let mut new_parts: Vec<(&SceneRegion, Vec<Isometry>)> = Vec::new();
         for (state, sr) in self.regions.iter_mut().zip(&scene.regions) {
             let warn = |e: crate::parts::RegionError| {
                 eprintln!(
@@ -812,6 +814,11 @@ impl<'s> Playback<'s> {
                     }
                     RegionAction::Drag(op) => RegionDrag::start(field, sr.region.clone(), op, &images)
                         .map_or_else(warn, |d| RegionState::Moving(Box::new(d))),
+                    // Made once the loop lets go of the part's field.
+                    RegionAction::CopyToPart => {
+                        new_parts.push((sr, images));
+                        RegionState::Done
+                    }
                 };
             }
             let RegionState::Moving(drag) = state else { continue };
@@ -820,6 +827,11 @@ impl<'s> Playback<'s> {
                 Ok(_) if s < 1.0 => {}
                 Ok(_) => *state = RegionState::Done,
                 Err(e) => *state = warn(e),
+            }
+        }
+        for (sr, images) in new_parts {
+            if let Err(e) = self.add_copied_part(sr.part, &sr.region, &images, sr.name.as_deref()) {
+                eprintln!("warning: {}: the copy to part at {} s is not made: {e}", scene.source, sr.time_s);
             }
         }
     }
@@ -1076,25 +1088,40 @@ impl<'s> Playback<'s> {
     /// sentence, as [`Playback::grab_region`] is, past [`crate::io::MAX_PARTS`] parts, or where
     /// no clay lies within the region.
     pub fn copy_to_new_part(&mut self, tool: Tool, pose: Pose) -> Result<usize, String> {
+        let (part, region, _, images) = self.region_target(tool, pose)?;
+        self.close_steps();
+        let added = self.add_copied_part(part, &region, &images, None)?;
+        self.set_active_part(added);
+        Ok(added)
+    }
+
+    /// Adds a part holding the clay of part `part` within `region` and its `images` (that
+    /// part's frame), named `name` (else after that part), placed and sized as it is and
+    /// united with the rest: one undo step, journaled. Returns its index.
+    fn add_copied_part(
+        &mut self,
+        part: usize,
+        region: &Region,
+        images: &[Isometry],
+        name: Option<&str>,
+    ) -> Result<usize, String> {
         if self.assembly.parts().len() >= crate::io::MAX_PARTS {
             return Err(format!("a sculpt holds at most {} parts", crate::io::MAX_PARTS));
         }
-        let (part, region, _, images) = self.region_target(tool, pose)?;
-        self.close_steps();
         let source = self.assembly.field(&self.field, part);
         let mut copy = Field::new(source.transform().voxel_size_m, source.iso());
         copy.set_history_config(super::history_config());
         copy.begin_stroke();
-        let copied = crate::parts::copy_into(source, &region, &images, &mut copy);
+        let copied = crate::parts::copy_into(source, region, images, &mut copy);
         copy.end_stroke();
         copied.map_err(|e| format!("cannot copy the region into a new part: {e}"))?;
         if copy.mass() <= 0.0 {
             return Err("no clay within the region to copy into a new part".into());
         }
         let layouts = self.assembly.parts();
-        let base = &layouts[part].name;
+        let base = name.map_or_else(|| format!("{} copy", layouts[part].name), str::to_owned);
         let name = (1..)
-            .map(|i| if i == 1 { format!("{base} copy") } else { format!("{base} copy {i}") })
+            .map(|i| if i == 1 { base.clone() } else { format!("{base} {i}") })
             .find(|n| layouts.iter().all(|p| &p.name != n))
             .expect("a free name");
         let layout = crate::scene::ScenePart {
@@ -1108,7 +1135,6 @@ impl<'s> Playback<'s> {
         // The snapshot lists the part before the journal holds its clay.
         self.keep_layouts();
         self.journal();
-        self.set_active_part(added);
         Ok(added)
     }
 

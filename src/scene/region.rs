@@ -34,6 +34,7 @@ pub(super) struct RegionFile {
     #[serde(default = "yes")]
     pub show: bool,
     pub part: Option<String>,
+    pub name: Option<String>,
 }
 
 fn yes() -> bool {
@@ -47,6 +48,8 @@ pub enum RegionAction {
     Drag(RegionOp),
     /// The surface within moved out (> 0) or in (< 0) by this many metres.
     Inflate(f32),
+    /// The clay within copied into a new part, after the others.
+    CopyToPart,
 }
 
 /// A region tool on the scene's timeline.
@@ -68,6 +71,8 @@ pub struct SceneRegion {
     pub show: bool,
     /// The part whose clay it acts on; the region and its motion are in that part's own frame.
     pub part: usize,
+    /// `copy-to-part`: the new part's name (else its part's name and " copy").
+    pub name: Option<String>,
 }
 
 impl SceneRegion {
@@ -98,6 +103,7 @@ pub(super) fn resolve_regions(
             "move" => RegionAction::Drag(RegionOp::Move),
             "copy" => RegionAction::Drag(RegionOp::Copy),
             "bend" => RegionAction::Drag(RegionOp::Bend),
+            "copy-to-part" => RegionAction::CopyToPart,
             "inflate" | "deflate" => {
                 let Some(d) = r.distance_m.filter(|d| d.is_finite() && *d > 0.0 && *d <= MAX_INFLATION_M)
                 else {
@@ -110,7 +116,7 @@ pub(super) fn resolve_regions(
             }
             other => {
                 return fail(format!(
-                    "op must be \"move\", \"copy\", \"bend\", \"inflate\" or \"deflate\", not \"{other}\""
+                    "op must be \"move\", \"copy\", \"bend\", \"inflate\", \"deflate\" or \"copy-to-part\", not \"{other}\""
                 ))
             }
         };
@@ -147,14 +153,24 @@ pub(super) fn resolve_regions(
                     op.name()
                 ))
             }
-            RegionAction::Inflate(_) if !still || r.duration_s > 0.0 => {
+            RegionAction::Inflate(_) | RegionAction::CopyToPart if !still || r.duration_s > 0.0 => {
                 return fail(format!("{} takes no move_m, turn_deg or duration_s", r.op))
             }
             _ => {}
         }
-        if r.distance_m.is_some() && matches!(action, RegionAction::Drag(_)) {
+        if r.distance_m.is_some() && !matches!(action, RegionAction::Inflate(_)) {
             return fail("distance_m is for inflate and deflate".into());
         }
+        let name = match (action, &r.name) {
+            (_, None) => None,
+            (RegionAction::CopyToPart, Some(n)) => {
+                if n.is_empty() || n.chars().count() > 64 || parts.iter().any(|p| &p.name == n) {
+                    return fail(format!("name must be 1 to 64 characters and no [[part]]'s, not \"{n}\""));
+                }
+                Some(n.clone())
+            }
+            (_, Some(_)) => return fail("name is for copy-to-part".into()),
+        };
         let count = match (action, r.count) {
             (_, None) => 1,
             (RegionAction::Drag(RegionOp::Copy), Some(n)) if (1..=MAX_COPIES).contains(&n) => n,
@@ -188,6 +204,7 @@ pub(super) fn resolve_regions(
             count,
             show: r.show,
             part,
+            name,
         });
     }
     out.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
