@@ -19,19 +19,15 @@ pub fn lattice_glyphs(playback: &super::playback::Playback<'_>) -> Vec<crate::re
                 glyphs.extend(super::glyphs::lattice_slice_glyphs(lattice.volume(), k, iso));
             }
             // Drawn in its part's frame.
-            if let Some(frame) = playback.assembly().frame_of(scene.part) {
-                let frame = frame.to_matrix();
-                for g in &mut glyphs {
-                    g.model = frame * g.model;
-                }
+            let frame = part_matrix(playback, scene.part);
+            for g in &mut glyphs {
+                g.model = frame * g.model;
             }
             glyphs
         })
         .collect();
     if let Some(held) = playback.held_lattice() {
-        let frame =
-            playback.assembly().frame_of(held.part()).map_or(crate::math::Mat4::IDENTITY, |p| p.to_matrix());
-        glyphs.extend(held.glyphs(iso, frame));
+        glyphs.extend(held.glyphs(iso, part_matrix(playback, held.part())));
     }
     glyphs
 }
@@ -83,24 +79,28 @@ pub const SELECTION_COLOUR: Vec4 = Vec4::new(REGION_RGB[0], REGION_RGB[1], REGIO
 /// The regions the scene's region tools are carrying now, and the region the desk or the
 /// headset holds (placed with its part), with their images, where the hand has taken them.
 pub fn region_glyphs(playback: &super::playback::Playback<'_>) -> Vec<crate::render::ToolGlyph> {
-    let glyph = |r: crate::parts::Region| tool_glyph(&r.shape, r.frame.pose, r.frame.scale, REGION_COLOUR);
     // Each drawn in its part's frame.
-    let in_part = |part: usize, drag: &crate::parts::RegionDrag| {
-        let frame = playback.assembly().frame_of(part).map_or(crate::math::Mat4::IDENTITY, |p| p.to_matrix());
-        let regions = drag.carried_regions().into_iter().map(glyph);
-        regions.map(|g| crate::render::ToolGlyph { model: frame * g.model, ..g }).collect::<Vec<_>>()
+    let glyph = |part: usize, r: &crate::parts::Region, colour: Vec4| {
+        let g = tool_glyph(&r.shape, r.frame.pose, r.frame.scale, colour);
+        crate::render::ToolGlyph { model: part_matrix(playback, part) * g.model, ..g }
+    };
+    let carried = |part: usize, drag: &crate::parts::RegionDrag| {
+        drag.carried_regions().iter().map(|r| glyph(part, r, REGION_COLOUR)).collect::<Vec<_>>()
     };
     let scene =
-        playback.moving_regions().filter(|(sr, _)| sr.show).flat_map(|(sr, drag)| in_part(sr.part, drag));
-    let held = playback.held_region().into_iter().flat_map(|held| in_part(held.part(), held.drag()));
-    let mut glyphs: Vec<_> = scene.chain(held).collect();
+        playback.moving_regions().filter(|(sr, _)| sr.show).flat_map(|(sr, drag)| carried(sr.part, drag));
+    let held = playback.held_region().into_iter().flat_map(|held| carried(held.part(), held.drag()));
     // The box selected, fainter, unless it is being carried.
-    if let (Some((part, region)), None) = (playback.selection(), playback.held_region()) {
-        let frame = playback.assembly().frame_of(part).map_or(crate::math::Mat4::IDENTITY, |p| p.to_matrix());
-        let g = tool_glyph(&region.shape, region.frame.pose, region.frame.scale, SELECTION_COLOUR);
-        glyphs.push(crate::render::ToolGlyph { model: frame * g.model, ..g });
-    }
-    glyphs
+    let selected = playback
+        .selection()
+        .filter(|_| playback.held_region().is_none())
+        .map(|(part, r)| glyph(part, r, SELECTION_COLOUR));
+    scene.chain(held).chain(selected).collect()
+}
+
+/// Part `part`'s frame: its placement's matrix (the identity for a part at rest).
+fn part_matrix(playback: &super::playback::Playback<'_>, part: usize) -> crate::math::Mat4 {
+    playback.assembly().frame_of(part).map_or(crate::math::Mat4::IDENTITY, |p| p.to_matrix())
 }
 
 /// The glyphs of the symmetry `playback`'s strokes act through, over the scene's initial

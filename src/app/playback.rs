@@ -1062,11 +1062,7 @@ impl<'s> Playback<'s> {
     /// selection. Returns the box's size (the part's frame, metres), or none when cleared.
     pub fn select_box(&mut self, from_m: Vec3, to_m: Vec3) -> Option<Vec3> {
         let part = self.assembly.active();
-        let local = |p: Vec3| {
-            self.assembly
-                .frame_of(part)
-                .map_or(p, |f| f.local_pose(Pose { position_m: p, ..Pose::default() }).position_m)
-        };
+        let local = |p: Vec3| self.assembly.frame_of(part).map_or(p, |f| f.local_point(p));
         let min_m = MIN_BOX_VOXELS * self.assembly.field(&self.field, part).transform().voxel_size_m;
         let region = box_between(local(from_m), local(to_m), min_m);
         let size = region.as_ref().map(|r| 2.0 * r.shape.half_extents_m());

@@ -1826,7 +1826,8 @@ impl<'s> Station<'s> {
                 field.end_stroke();
             }
             self.doc.journal();
-            let name = self.stroke_name();
+            // The history names a region carried as the region keys do.
+            let name = if region { "region".into() } else { self.stroke_name() };
             self.stepped(name);
         }
     }
