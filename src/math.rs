@@ -14,7 +14,7 @@
 //!
 //! This module depends on nothing else in the crate.
 
-pub use glam::{IVec3, Mat3, Mat4, Quat, UVec3, Vec2, Vec3, Vec4};
+pub use glam::{Affine3A, IVec3, Mat3, Mat4, Quat, UVec3, Vec2, Vec3, Vec4};
 
 /// The world's up direction.
 pub const WORLD_UP: Vec3 = Vec3::Y;
@@ -40,6 +40,17 @@ impl VoxelTransform {
     /// World position of a (possibly fractional) lattice coordinate.
     pub fn index_to_world(&self, index: Vec3) -> Vec3 {
         self.origin_m + index * self.voxel_size_m
+    }
+
+    /// [`VoxelTransform::index_to_world`] as an affine map.
+    pub fn index_to_world_affine(&self) -> Affine3A {
+        Affine3A::from_mat3_translation(Mat3::from_diagonal(Vec3::splat(self.voxel_size_m)), self.origin_m)
+    }
+
+    /// [`VoxelTransform::world_to_index`] as an affine map.
+    pub fn world_to_index_affine(&self) -> Affine3A {
+        let s = 1.0 / self.voxel_size_m;
+        Affine3A::from_mat3_translation(Mat3::from_diagonal(Vec3::splat(s)), -self.origin_m * s)
     }
 
     /// Fractional lattice coordinate of a world position.

@@ -849,7 +849,7 @@ fn bench_region_move(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()
     field.begin_stroke();
     let mut drag = RegionDrag::start(&field, region, RegionOp::Move, &[])?;
     let start_ms = start.elapsed().as_secs_f64() * 1e3;
-    let (mut update_ms, mut written) = (Vec::new(), 0u64);
+    let (mut update_ms, mut written, mut evaluated) = (Vec::new(), 0u64, 0u64);
     let mut copied = 0u64;
     for frame in 0..size.region_frames {
         // A hand carrying the region 2 mm a frame along a gentle arc, turning it as it goes.
@@ -863,6 +863,7 @@ fn bench_region_move(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()
         let stats = drag.update(&mut field, motion)?;
         update_ms.push(t.elapsed().as_secs_f64() * 1e3);
         written = stats.written;
+        evaluated = stats.evaluated;
         copied = stats.copied;
     }
     field.end_stroke();
@@ -873,6 +874,7 @@ fn bench_region_move(size: BenchSize, emit: &mut impl FnMut(Value)) -> Result<()
         "threads": rayon::current_num_threads(),
         "start_ms": start_ms,
         "written_per_frame": written,
+        "evaluated_per_frame": evaluated,
         "copied_points": copied,
         "update_ms_median": median(update_ms.clone()),
         "update_ms_max": update_ms.iter().copied().fold(0.0, f64::max),

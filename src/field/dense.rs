@@ -16,6 +16,44 @@ pub struct DenseCopy {
     dims: IVec3,
     density: Vec<f32>,
     colour: Vec<Colour>,
+    /// What each cell of [`CELL`]³ points holds, `x` fastest, for [`DenseCopy::span`].
+    cells: Vec<Span>,
+}
+
+/// Lattice points along each side of a [`DenseCopy`]'s summary cells.
+const CELL: i32 = 4;
+
+/// What some lattice points hold: their lowest and highest density, and their colour where
+/// every one of them is full and of that one colour.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Span {
+    /// The lowest density.
+    pub min: f32,
+    /// The highest density.
+    pub max: f32,
+    /// The colour of them all, where each is full and of one colour.
+    pub full: Option<Colour>,
+}
+
+impl Span {
+    /// Empty points.
+    pub const EMPTY: Span = Span { min: 0.0, max: 0.0, full: None };
+
+    fn of(density: f32, colour: Colour) -> Span {
+        Span { min: density, max: density, full: (density == 1.0).then_some(colour) }
+    }
+
+    /// What the points of both hold.
+    pub fn with(self, other: Span) -> Span {
+        Span {
+            min: self.min.min(other.min),
+            max: self.max.max(other.max),
+            full: match (self.full, other.full) {
+                (Some(a), Some(b)) if a == b => Some(a),
+                _ => None,
+            },
+        }
+    }
 }
 
 impl DenseCopy {
@@ -46,7 +84,30 @@ impl DenseCopy {
                 }
             }
         }
-        Self { lo, dims, density, colour }
+        let cells = summarise(dims, &density, &colour);
+        Self { lo, dims, density, colour, cells }
+    }
+
+    /// What the points of `lo ..= hi` hold, points outside the copy empty; the cells it reads
+    /// may hold a few points around the box too (the span is then wider, never narrower).
+    pub fn span(&self, lo: IVec3, hi: IVec3) -> Span {
+        let (a, b) = (lo.max(self.lo), hi.min(self.hi()));
+        if a.cmpgt(b).any() {
+            return Span::EMPTY;
+        }
+        let outside = !(a == lo && b == hi);
+        let (ca, cb) = ((a - self.lo) / CELL, (b - self.lo) / CELL);
+        let cd = cell_dims(self.dims);
+        let mut span = if outside { Some(Span::EMPTY) } else { None };
+        for z in ca.z..=cb.z {
+            for y in ca.y..=cb.y {
+                for x in ca.x..=cb.x {
+                    let cell = self.cells[(x + cd.x * (y + cd.y * z)) as usize];
+                    span = Some(span.map_or(cell, |s| s.with(cell)));
+                }
+            }
+        }
+        span.unwrap_or(Span::EMPTY)
     }
 
     /// The lowest lattice point held.
@@ -93,19 +154,91 @@ impl DenseCopy {
         self.index(p).map_or(DEFAULT_COLOUR, |i| self.colour[i])
     }
 
+    /// The density, where every point of `lo ..= hi` is held and has the same one.
+    pub fn constant_density(&self, lo: IVec3, hi: IVec3) -> Option<f32> {
+        let span = self.span(lo, hi);
+        (self.contains(lo, hi) && span.min == span.max).then_some(span.min)
+    }
+
+    /// The trilinear density at a fractional lattice coordinate held in double precision
+    /// (for mappings whose parameters need it).
+    #[inline]
+    pub fn density_f64(&self, p: [f64; 3]) -> f32 {
+        let base = p.map(f64::floor);
+        let f = [p[0] - base[0], p[1] - base[1], p[2] - base[2]];
+        let b = IVec3::new(base[0] as i32, base[1] as i32, base[2] as i32);
+        let c = b - self.lo;
+        if c.cmpge(IVec3::ZERO).all() && (c + IVec3::ONE).cmplt(self.dims).all() {
+            // The 2 × 2 × 2 block lies in the copy: direct indices.
+            let (sy, sz) = (self.dims.x as usize, (self.dims.x * self.dims.y) as usize);
+            let i = c.x as usize + sy * c.y as usize + sz * c.z as usize;
+            let d = &self.density;
+            let lerp = |a: f32, b: f32, t: f64| a as f64 + (b as f64 - a as f64) * t;
+            let x00 = lerp(d[i], d[i + 1], f[0]);
+            let x10 = lerp(d[i + sy], d[i + sy + 1], f[0]);
+            let x01 = lerp(d[i + sz], d[i + sz + 1], f[0]);
+            let x11 = lerp(d[i + sy + sz], d[i + sy + sz + 1], f[0]);
+            let y0 = x00 + (x10 - x00) * f[1];
+            let y1 = x01 + (x11 - x01) * f[1];
+            return (y0 + (y1 - y0) * f[2]) as f32;
+        }
+        let mut acc = 0.0f64;
+        for n in 0..8 {
+            let o = IVec3::new(n & 1, (n >> 1) & 1, (n >> 2) & 1);
+            let w = (if o.x == 1 { f[0] } else { 1.0 - f[0] })
+                * (if o.y == 1 { f[1] } else { 1.0 - f[1] })
+                * (if o.z == 1 { f[2] } else { 1.0 - f[2] });
+            if w != 0.0 {
+                acc += w * self.density(b + o) as f64;
+            }
+        }
+        acc as f32
+    }
+
+    /// The colour of the nearest lattice point holding matter around `p`, else the default.
+    pub fn colour_near(&self, p: [f64; 3]) -> Colour {
+        let near = IVec3::new(p[0].round() as i32, p[1].round() as i32, p[2].round() as i32);
+        if let Some(i) = self.index(near).filter(|&i| self.density[i] > 0.0) {
+            return self.colour[i];
+        }
+        let base = IVec3::new(p[0].floor() as i32, p[1].floor() as i32, p[2].floor() as i32);
+        (0..8)
+            .map(|c| base + IVec3::new(c & 1, (c >> 1) & 1, (c >> 2) & 1))
+            .filter_map(|q| self.index(q))
+            .filter(|&i| self.density[i] > 0.0)
+            .max_by(|&a, &b| self.density[a].total_cmp(&self.density[b]))
+            .map_or(DEFAULT_COLOUR, |i| self.colour[i])
+    }
+
+    /// The heap bytes its densities and colours take.
+    pub fn bytes(&self) -> usize {
+        self.density.len() * (std::mem::size_of::<f32>() + std::mem::size_of::<Colour>())
+            + self.cells.len() * std::mem::size_of::<Span>()
+    }
+
     /// Trilinear density and density-weighted colour at a fractional lattice coordinate.
     #[inline]
     pub fn sample(&self, index: Vec3) -> (f32, Colour) {
         let base = index.floor();
         let f = index - base;
         let b = base.as_ivec3();
+        // All eight corners held (the usual case): their indices by strides from the first.
+        let first = b - self.lo;
+        let inside = first.cmpge(IVec3::ZERO).all() && (first + IVec3::ONE).cmplt(self.dims).all();
+        let (sy, sz) = (self.dims.x, self.dims.x * self.dims.y);
         let (mut d, mut c) = (0.0f32, [0.0f32; 4]);
         for corner in 0..8 {
             let o = IVec3::new(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
             let w = (if o.x == 1 { f.x } else { 1.0 - f.x })
                 * (if o.y == 1 { f.y } else { 1.0 - f.y })
                 * (if o.z == 1 { f.z } else { 1.0 - f.z });
-            let Some(i) = self.index(b + o) else { continue };
+            let i = if inside {
+                let c = first + o;
+                (c.x + sy * c.y + sz * c.z) as usize
+            } else {
+                let Some(i) = self.index(b + o) else { continue };
+                i
+            };
             let wd = w * self.density[i];
             d += wd;
             for (a, v) in c.iter_mut().zip(self.colour[i]) {
@@ -118,6 +251,29 @@ impl DenseCopy {
             (0.0, DEFAULT_COLOUR)
         }
     }
+}
+
+fn cell_dims(dims: IVec3) -> IVec3 {
+    (dims + IVec3::splat(CELL - 1)) / CELL
+}
+
+/// The [`Span`] of each cell of a copy of `dims` points.
+fn summarise(dims: IVec3, density: &[f32], colour: &[Colour]) -> Vec<Span> {
+    let cd = cell_dims(dims);
+    let mut cells: Vec<Option<Span>> = vec![None; (cd.x * cd.y * cd.z).max(0) as usize];
+    let mut i = 0;
+    for z in 0..dims.z {
+        for y in 0..dims.y {
+            let row = ((y / CELL) + cd.y * (z / CELL)) * cd.x;
+            for x in 0..dims.x {
+                let cell = &mut cells[(row + x / CELL) as usize];
+                let s = Span::of(density[i], colour[i]);
+                *cell = Some(cell.map_or(s, |c| c.with(s)));
+                i += 1;
+            }
+        }
+    }
+    cells.into_iter().map(|c| c.unwrap_or(Span::EMPTY)).collect()
 }
 
 /// Lattice points along each side of a [`TiledCopy`]'s tiles.
@@ -172,6 +328,17 @@ impl TiledCopy {
 
     /// The lattice points of one tile.
     pub const TILE_POINTS: usize = TILE_VOLUME;
+
+    /// What the points of `lo ..= hi` held ([`DenseCopy::span`]), points it does not hold empty.
+    pub fn span(&self, lo: IVec3, hi: IVec3) -> Span {
+        tiles_over(lo, hi)
+            .map(|key| {
+                let (a, b) = (lo.max(key * TILE), hi.min(key * TILE + IVec3::splat(TILE - 1)));
+                self.index.get(&key).map_or(Span::EMPTY, |&i| self.tiles[i].span(a, b))
+            })
+            .reduce(Span::with)
+            .unwrap_or(Span::EMPTY)
+    }
 
     /// A reader of the copy that remembers the last tile it read, so that runs of points in one
     /// tile cost one look-up.
@@ -272,5 +439,44 @@ mod tests {
         }
         assert_eq!(r.get(IVec3::splat(40)).0, 0.0, "nothing held there");
         assert_eq!(copy.points(), 8 * TiledCopy::TILE_POINTS);
+    }
+
+    #[test]
+    fn a_span_holds_the_lowest_and_highest_density_and_the_one_colour_of_full_points() {
+        let mut f = Field::new(0.001, 0.5);
+        let blue = [0.1, 0.2, 0.9, 1.0];
+        f.edit_box(IVec3::ZERO, IVec3::new(11, 11, 11), true, |p, d, c| {
+            *d = if p.x < 8 { 1.0 } else { 0.25 };
+            *c = blue;
+        });
+        let copy = DenseCopy::read(&f, IVec3::ZERO, IVec3::splat(15));
+        let full = copy.span(IVec3::new(0, 0, 0), IVec3::new(7, 7, 7));
+        assert_eq!((full.min, full.max, full.full), (1.0, 1.0, Some(blue)));
+        let mixed = copy.span(IVec3::new(6, 0, 0), IVec3::new(9, 3, 3));
+        assert_eq!((mixed.min, mixed.max, mixed.full), (0.25, 1.0, None));
+        // Cells are read whole: a box within a cell spans the cell's points.
+        let edge = copy.span(IVec3::new(9, 0, 0), IVec3::new(9, 1, 1));
+        assert_eq!((edge.min, edge.max), (0.25, 0.25));
+        let wide = copy.span(IVec3::new(11, 0, 0), IVec3::new(12, 1, 1));
+        assert_eq!((wide.min, wide.max), (0.0, 0.25), "its cells hold 8 to 15");
+        assert_eq!(copy.span(IVec3::splat(20), IVec3::splat(30)), Span::EMPTY, "outside the copy");
+        let beyond = copy.span(IVec3::new(0, 0, 0), IVec3::new(7, 7, 30));
+        assert_eq!((beyond.min, beyond.full), (0.0, None), "partly outside: empty points");
+        // Every point is within its span, whatever the box.
+        for (lo, hi) in [(IVec3::splat(-3), IVec3::splat(17)), (IVec3::new(5, 1, 2), IVec3::new(10, 4, 13))] {
+            let s = copy.span(lo, hi);
+            for z in lo.z..=hi.z {
+                for y in lo.y..=hi.y {
+                    for x in lo.x..=hi.x {
+                        let d = copy.density(IVec3::new(x, y, z));
+                        assert!(s.min <= d && d <= s.max);
+                    }
+                }
+            }
+        }
+        let mut tiled = TiledCopy::new();
+        tiled.take(&f, IVec3::ZERO, IVec3::splat(7));
+        assert_eq!(tiled.span(IVec3::ZERO, IVec3::splat(7)).full, Some(blue));
+        assert_eq!(tiled.span(IVec3::splat(40), IVec3::splat(41)), Span::EMPTY, "not held: empty");
     }
 }

@@ -80,7 +80,7 @@ pub use edit::{volume_at, ControlEdit, Selection, TimedEdit};
 
 use rayon::prelude::*;
 
-use crate::field::{Colour, Field, FieldReader, DEFAULT_COLOUR};
+use crate::field::{Colour, DenseCopy, Field, DEFAULT_COLOUR};
 use crate::math::{Aabb, IVec3, Vec3, VoxelTransform};
 use crate::spline::{
     unit_cube_function, FitReport, KnotStyle, SplineError, SplineKind, SplineVolume, Uvw,
@@ -304,172 +304,6 @@ impl std::ops::Add for LatticeStats {
     }
 }
 
-/// The clay as it was, over a box of lattice points: densities and colours, `x` fastest.
-#[derive(Clone, Debug)]
-struct Source {
-    lo: IVec3,
-    dims: IVec3,
-    density: Vec<f32>,
-    colour: Vec<Colour>,
-    /// The lowest and highest density of each block of [`BLOCK`]³ samples from `lo`, `x`
-    /// fastest: where a deformation only reads within a constant block, it needs no reads.
-    blocks: Vec<(f32, f32)>,
-    block_dims: IVec3,
-}
-
-/// The side of the copy's blocks of known density range, samples.
-const BLOCK: i32 = 4;
-
-impl Source {
-    fn empty() -> Self {
-        Self {
-            lo: IVec3::ZERO,
-            dims: IVec3::ZERO,
-            density: Vec::new(),
-            colour: Vec::new(),
-            blocks: Vec::new(),
-            block_dims: IVec3::ZERO,
-        }
-    }
-
-    fn contains(&self, lo: IVec3, hi: IVec3) -> bool {
-        lo.cmpge(self.lo).all() && (hi - self.lo).cmplt(self.dims).all()
-    }
-
-    #[inline]
-    fn index(&self, p: IVec3) -> Option<usize> {
-        let c = p - self.lo;
-        (c.cmpge(IVec3::ZERO).all() && c.cmplt(self.dims).all())
-            .then(|| (c.x + self.dims.x * (c.y + self.dims.y * c.z)) as usize)
-    }
-
-    /// The source over `lo ..= hi`: what this one holds is kept, the rest read from `field`
-    /// (which, outside this source's box, still holds the clay as it was).
-    fn grown(&self, field: &Field, lo: IVec3, hi: IVec3) -> Self {
-        let dims = hi - lo + IVec3::ONE;
-        let n = (dims.x as usize) * (dims.y as usize) * (dims.z as usize);
-        let mut density = Vec::with_capacity(n);
-        let mut colour = Vec::with_capacity(n);
-        let mut reader = FieldReader::new(field);
-        for z in lo.z..=hi.z {
-            for y in lo.y..=hi.y {
-                for x in lo.x..=hi.x {
-                    let p = IVec3::new(x, y, z);
-                    match self.index(p) {
-                        Some(i) => {
-                            density.push(self.density[i]);
-                            colour.push(self.colour[i]);
-                        }
-                        None => {
-                            let d = reader.density(p);
-                            density.push(if d.is_finite() { d.clamp(0.0, 1.0) } else { 0.0 });
-                            colour.push(if d > 0.0 { reader.colour(p) } else { DEFAULT_COLOUR });
-                        }
-                    }
-                }
-            }
-        }
-        let block_dims = (dims + IVec3::splat(BLOCK - 1)) / BLOCK;
-        let mut blocks =
-            vec![(f32::INFINITY, f32::NEG_INFINITY); (block_dims.x * block_dims.y * block_dims.z) as usize];
-        let mut i = 0;
-        for z in 0..dims.z {
-            for y in 0..dims.y {
-                let row = ((y / BLOCK) + block_dims.y * (z / BLOCK)) * block_dims.x;
-                for x in 0..dims.x {
-                    let b = &mut blocks[(row + x / BLOCK) as usize];
-                    b.0 = b.0.min(density[i]);
-                    b.1 = b.1.max(density[i]);
-                    i += 1;
-                }
-            }
-        }
-        Self { lo, dims, density, colour, blocks, block_dims }
-    }
-
-    /// The density, when every sample of the lattice points `lo ..= hi` (index coordinates,
-    /// any of them outside the copy reading 0) has the same one.
-    fn constant_over(&self, lo: IVec3, hi: IVec3) -> Option<f32> {
-        let inside = lo.cmpge(self.lo).all() && (hi - self.lo).cmplt(self.dims).all();
-        if !inside {
-            return None;
-        }
-        let (a, b) = ((lo - self.lo) / BLOCK, (hi - self.lo) / BLOCK);
-        let mut range = (f32::INFINITY, f32::NEG_INFINITY);
-        for z in a.z..=b.z {
-            for y in a.y..=b.y {
-                for x in a.x..=b.x {
-                    let r = self.blocks[(x + self.block_dims.x * (y + self.block_dims.y * z)) as usize];
-                    range = (range.0.min(r.0), range.1.max(r.1));
-                    if range.0 != range.1 {
-                        return None;
-                    }
-                }
-            }
-        }
-        Some(range.0)
-    }
-
-    /// The density at a lattice point (0 outside).
-    #[inline]
-    fn at(&self, p: IVec3) -> f32 {
-        self.index(p).map_or(0.0, |i| self.density[i])
-    }
-
-    /// The trilinear density at index coordinates `p`.
-    #[inline]
-    fn density_at(&self, p: [f64; 3]) -> f32 {
-        let base = p.map(f64::floor);
-        let f = [p[0] - base[0], p[1] - base[1], p[2] - base[2]];
-        let b = IVec3::new(base[0] as i32, base[1] as i32, base[2] as i32);
-        let c = b - self.lo;
-        if c.cmpge(IVec3::ZERO).all() && (c + IVec3::ONE).cmplt(self.dims).all() {
-            // The 2 × 2 × 2 block lies in the copy: direct indices.
-            let (sy, sz) = (self.dims.x as usize, (self.dims.x * self.dims.y) as usize);
-            let i = c.x as usize + sy * c.y as usize + sz * c.z as usize;
-            let d = &self.density;
-            let lerp = |a: f32, b: f32, t: f64| a as f64 + (b as f64 - a as f64) * t;
-            let x00 = lerp(d[i], d[i + 1], f[0]);
-            let x10 = lerp(d[i + sy], d[i + sy + 1], f[0]);
-            let x01 = lerp(d[i + sz], d[i + sz + 1], f[0]);
-            let x11 = lerp(d[i + sy + sz], d[i + sy + sz + 1], f[0]);
-            let y0 = x00 + (x10 - x00) * f[1];
-            let y1 = x01 + (x11 - x01) * f[1];
-            return (y0 + (y1 - y0) * f[2]) as f32;
-        }
-        let mut acc = 0.0f64;
-        for n in 0..8 {
-            let o = IVec3::new(n & 1, (n >> 1) & 1, (n >> 2) & 1);
-            let w = (if o.x == 1 { f[0] } else { 1.0 - f[0] })
-                * (if o.y == 1 { f[1] } else { 1.0 - f[1] })
-                * (if o.z == 1 { f[2] } else { 1.0 - f[2] });
-            if w != 0.0 {
-                acc += w * self.at(b + o) as f64;
-            }
-        }
-        acc as f32
-    }
-
-    /// The colour of the nearest lattice point holding matter around `p`, else the default.
-    fn colour_near(&self, p: [f64; 3]) -> Colour {
-        let near = IVec3::new(p[0].round() as i32, p[1].round() as i32, p[2].round() as i32);
-        if let Some(i) = self.index(near).filter(|&i| self.density[i] > 0.0) {
-            return self.colour[i];
-        }
-        let base = IVec3::new(p[0].floor() as i32, p[1].floor() as i32, p[2].floor() as i32);
-        (0..8)
-            .map(|c| base + IVec3::new(c & 1, (c >> 1) & 1, (c >> 2) & 1))
-            .filter_map(|q| self.index(q))
-            .filter(|&i| self.density[i] > 0.0)
-            .max_by(|&a, &b| self.density[a].total_cmp(&self.density[b]))
-            .map_or(DEFAULT_COLOUR, |i| self.colour[i])
-    }
-
-    fn bytes(&self) -> usize {
-        self.density.len() * (std::mem::size_of::<f32>() + std::mem::size_of::<Colour>())
-    }
-}
-
 /// The spacing, in lattice points, of the nodes where a deformed lattice's inverse mapping is
 /// found by Newton's method; between them the parameters are interpolated trilinearly (the
 /// mapping is a polynomial of the lattice's order over spans many voxels long: `tests` bound
@@ -591,7 +425,7 @@ pub struct Lattice {
     fitted: SplineVolume,
     fit: FitReport,
     transform: VoxelTransform,
-    source: Source,
+    source: DenseCopy,
     /// The field's iso-level: the surface the function mapping moves.
     iso: f64,
     /// `ε` of the shift, per metre.
@@ -669,7 +503,7 @@ impl Lattice {
             volume: volume.clone(),
             fit: FitReport { max_error: 0.0, rms_error: 0.0, samples: 0 },
             transform,
-            source: Source::empty(),
+            source: DenseCopy::default(),
             iso: field.iso() as f64,
             epsilon: 0.25 / spacing,
             max_shift_m: spec.max_shift_m(),
@@ -678,7 +512,7 @@ impl Lattice {
         };
         let (lo, hi) = lattice.source_box(volume.hull())?;
         let start = std::time::Instant::now();
-        lattice.source = Source::empty().grown(field, lo, hi);
+        lattice.source = DenseCopy::read(field, lo, hi);
         lattice.opened.copy_s = start.elapsed().as_secs_f64();
         let start = std::time::Instant::now();
         let source = &lattice.source;
@@ -687,7 +521,7 @@ impl Lattice {
             [p.x as f64, p.y as f64, p.z as f64]
         };
         let per_span = spec.fit_samples_per_span(transform.voxel_size_m);
-        lattice.fit = volume.fit_field(|x| source.density_at(to_index(x)), per_span)?;
+        lattice.fit = volume.fit_field(|x| source.density_f64(to_index(x)), per_span)?;
         lattice.opened.fit_s = start.elapsed().as_secs_f64();
         lattice.fitted = volume.clone();
         lattice.volume = volume;
@@ -1080,12 +914,9 @@ impl Lattice {
     /// The density and colour of sample `p` read as `read` says (the colour only when asked).
     #[inline]
     fn read(&self, p: IVec3, read: Read, colour: bool) -> (f32, Colour) {
-        let own = || {
-            let i = self.source.index(p);
-            (i.map_or(0.0, |i| self.source.density[i]), i.map_or(DEFAULT_COLOUR, |i| self.source.colour[i]))
-        };
+        let own = || (self.source.density(p), self.source.colour(p));
         let at = |q: [f64; 3]| {
-            let d = self.source.density_at(q).clamp(0.0, 1.0);
+            let d = self.source.density_f64(q).clamp(0.0, 1.0);
             (d, if colour { self.source.colour_near(q) } else { DEFAULT_COLOUR })
         };
         match read {
@@ -1169,7 +1000,7 @@ impl Lattice {
                 let lo = IVec3::new(lo[0].floor() as i32, lo[1].floor() as i32, lo[2].floor() as i32);
                 let hi =
                     IVec3::new(hi[0].floor() as i32, hi[1].floor() as i32, hi[2].floor() as i32) + IVec3::ONE;
-                self.source.constant_over(lo, hi)
+                self.source.constant_density(lo, hi)
             })
             .collect();
         (Some(CoarseMap { counts, origin: lo, last, nodes, constant }), stats)
@@ -1181,8 +1012,8 @@ impl Lattice {
     pub fn write(&mut self, field: &mut Field, world: Aabb) -> Result<LatticeStats, LatticeError> {
         let (slo, shi) = self.source_box(self.volume.hull())?;
         if !self.source.contains(slo, shi) {
-            let lo = slo.min(self.source.lo);
-            let hi = shi.max(self.source.lo + self.source.dims - IVec3::ONE);
+            let lo = slo.min(self.source.lo());
+            let hi = shi.max(self.source.hi());
             self.source = self.source.grown(field, lo, hi);
         }
         let reach = self.reach();

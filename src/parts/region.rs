@@ -32,8 +32,15 @@
 //! motion (`I·M·I⁻¹`), and all act at once on the clay as it was, so images that overlap
 //! unite rather than overwrite each other.
 
-use crate::field::{Colour, DenseCopy, Field, TiledCopy};
-use crate::math::{Aabb, IVec3, Isometry, Mat3, Pose, Quat, Vec3};
+use std::collections::HashMap;
+
+use rayon::prelude::*;
+
+use crate::field::{
+    brick_key, Brick, Colour, DenseCopy, Field, Span, TiledCopy, TiledReader, BRICK_SIZE, BRICK_VOLUME,
+    DEFAULT_COLOUR,
+};
+use crate::math::{Aabb, Affine3A, IVec3, Isometry, Mat3, Pose, Quat, Vec3, VoxelTransform};
 use crate::tool::{
     apply_tool_mirrored, wyvill, Action, Solid, StampCounters, Tool, ToolFrame, ToolShape, SOLID_BAND_VOXELS,
 };
@@ -111,12 +118,6 @@ impl Region {
         self.frame.world_bounds(self.shape.half_extents_m() + Vec3::splat(reach))
     }
 
-    /// Its weight at a world point: 1 inside, 0 outside.
-    #[inline]
-    fn weight(&self, world_m: Vec3, band_local_m: f32) -> f32 {
-        self.shape.potential(self.frame.world_to_local(world_m), band_local_m)
-    }
-
     /// The region's image under a symmetry's image (mirrored when the image mirrors).
     pub fn image(&self, image: &Isometry) -> Region {
         let (pose, mirrored) = image.pose(&self.frame.pose);
@@ -161,6 +162,13 @@ impl Motion {
     #[inline]
     pub fn apply(&self, p: Vec3) -> Vec3 {
         self.pivot_m + self.translation_m + self.rotation * (p - self.pivot_m)
+    }
+
+    /// [`Motion::inverse_apply`] as an affine map.
+    fn inverse_affine(&self) -> Affine3A {
+        Affine3A::from_translation(self.pivot_m)
+            * Affine3A::from_quat(self.rotation.inverse())
+            * Affine3A::from_translation(-self.pivot_m - self.translation_m)
     }
 
     /// Where `x` came from.
@@ -238,8 +246,11 @@ impl RegionOp {
 /// What one update of a drag did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct RegionStats {
-    /// Lattice points written (evaluated).
+    /// Lattice points written (each brick that became other than what it held).
     pub written: u64,
+    /// Of those, the points evaluated one by one (the rest are whole bricks filled or given
+    /// back).
+    pub evaluated: u64,
     /// Lattice points the drag's copies hold.
     pub copied: u64,
     /// Sweep steps a bend took (0 for other operations).
@@ -263,8 +274,10 @@ pub struct RegionDrag {
     images: Vec<Image>,
     /// The clay as it was wherever the drag has written.
     originals: TiledCopy,
-    /// The lattice boxes the last update wrote.
-    written: Vec<(IVec3, IVec3)>,
+    /// What the drag left in each brick it holds other than as it was (by brick key).
+    left: HashMap<IVec3, Fill>,
+    /// The values of the bricks evaluated point by point, kept from one update to the next.
+    scratch: Vec<(f32, Colour)>,
     /// The ramp across a region's edge, in the region's local units.
     band_local_m: f32,
     /// The motion last applied.
@@ -306,7 +319,8 @@ impl RegionDrag {
             op,
             images,
             originals: TiledCopy::new(),
-            written: Vec::new(),
+            left: HashMap::new(),
+            scratch: Vec::new(),
             band_local_m: band_m / region.frame.min_scale(),
             motion: None,
         })
@@ -352,6 +366,38 @@ impl RegionDrag {
         self.apply(field, motion, true)
     }
 
+    /// What `motion` does to each image for an update (a still one, where `exact_still` says
+    /// so, gives the clay back as it was, exactly: a resampling at the points themselves would
+    /// round).
+    fn moved(&self, motion: Motion, exact_still: bool) -> Moved {
+        // A bend turns about its grab point, the region's centre.
+        let motion = match self.op {
+            RegionOp::Bend => Motion { pivot_m: self.region().centre_m(), ..motion },
+            _ => motion,
+        };
+        let still = exact_still && motion.translation_m == Vec3::ZERO && motion.rotation == Quat::IDENTITY;
+        let motions: Vec<Motion> = self.images.iter().map(|i| motion.image(&i.isometry)).collect();
+        let sweeps: Vec<Sweep> = match self.op {
+            RegionOp::Bend => motions.iter().map(|m| Sweep::new(m, self.region().radius_m())).collect(),
+            _ => Vec::new(),
+        };
+        let steps = sweeps.first().map_or(1, |s| s.steps.len() as u32);
+        Moved { motion, still, motions, sweeps, steps }
+    }
+
+    /// How an update moved as `moved` resamples the clay held in `originals`.
+    fn resample<'a>(&'a self, moved: &'a Moved, t: VoxelTransform, originals: &'a TiledCopy) -> Resample<'a> {
+        Resample {
+            op: if moved.still { None } else { Some(self.op) },
+            images: &self.images,
+            sweeps: &moved.sweeps,
+            carries: self.images.iter().zip(&moved.motions).map(|(i, m)| Carry::new(i, m, &t)).collect(),
+            t,
+            band: self.band_local_m,
+            originals,
+        }
+    }
+
     /// [`RegionDrag::update`]; a still motion gives the clay back exactly where `exact_still`
     /// says so, else it is resampled as any other (to write the region into another field).
     fn apply(
@@ -361,24 +407,12 @@ impl RegionDrag {
         exact_still: bool,
     ) -> Result<RegionStats, RegionError> {
         let t = *field.transform();
-        let radius = self.region().radius_m();
-        // A bend turns about its grab point, the region's centre.
-        let motion = match self.op {
-            RegionOp::Bend => Motion { pivot_m: self.region().centre_m(), ..motion },
-            _ => motion,
-        };
-        // Still: the clay as it was, exactly (a resampling at the points themselves would round).
-        let still = exact_still && motion.translation_m == Vec3::ZERO && motion.rotation == Quat::IDENTITY;
-        let motions: Vec<Motion> = self.images.iter().map(|i| motion.image(&i.isometry)).collect();
-        let sweeps: Vec<Sweep> = match self.op {
-            RegionOp::Bend => motions.iter().map(|m| Sweep::new(m, radius)).collect(),
-            _ => Vec::new(),
-        };
-        let steps = sweeps.first().map_or(1, |s| s.steps.len() as u32);
+        let moved = self.moved(motion, exact_still);
+        let (motion, steps) = (moved.motion, moved.steps);
         // Where the clay may change now: each image's region and where it lands (for a bend,
         // every step of the sweep).
         let mut reach: Vec<(IVec3, IVec3)> = Vec::new();
-        for (image, m) in self.images.iter().zip(&motions) {
+        for (image, m) in self.images.iter().zip(&moved.motions) {
             let bounds = image.region.bounds(SOLID_BAND_VOXELS * t.voxel_size_m);
             let mut landed = bounds.transformed(&m.matrix());
             if self.op == RegionOp::Bend {
@@ -390,74 +424,301 @@ impl RegionDrag {
             reach.push(lattice_box(field, landed, 1));
         }
         // The region's own place is in both every frame: each box once.
-        let mut boxes: Vec<(IVec3, IVec3)> = reach.iter().chain(&self.written).copied().collect();
-        boxes.sort_by_key(|&(lo, hi)| (lo.to_array(), hi.to_array()));
-        boxes.dedup();
-        let missing = self.originals.missing(&boxes);
+        reach.sort_by_key(|&(lo, hi)| (lo.to_array(), hi.to_array()));
+        reach.dedup();
+        let missing = self.originals.missing(&reach);
         let sources: usize = self.images.iter().map(|i| i.source.len()).sum();
         let points = self.originals.points() + missing * TiledCopy::TILE_POINTS + sources;
         if points > MAX_REGION_POINTS {
             return Err(RegionError::TooLarge { points, max: MAX_REGION_POINTS });
         }
-        for &(lo, hi) in &boxes {
+        // Tiles are whole bricks: every brick a box reaches is held whole.
+        for &(lo, hi) in &reach {
             self.originals.take(field, lo, hi);
         }
-        let lo = boxes.iter().fold(IVec3::MAX, |a, b| a.min(b.0));
-        let hi = boxes.iter().fold(IVec3::MIN, |a, b| a.max(b.1));
+        // Every brick the clay may change in now, and every one an earlier update left other
+        // than as it was: what each becomes, decided for the whole brick where it can be.
+        let mut keys: Vec<IVec3> =
+            reach.iter().flat_map(|&(lo, hi)| bricks_over(lo, hi)).chain(self.left.keys().copied()).collect();
+        keys.sort_unstable_by_key(|k| k.to_array());
+        keys.dedup();
+        let size = IVec3::splat(BRICK_SIZE);
+        let mut values = std::mem::take(&mut self.scratch);
+        let how = self.resample(&moved, t, &self.originals);
+        let fills: Vec<Fill> = keys.par_iter().map(|&key| how.fill(key * size, BRICK_SIZE)).collect();
+        // A brick left as it is now is not written again; a mixed one is evaluated point by
+        // point, on every thread.
+        let was = |key: &IVec3| self.left.get(key).copied().unwrap_or(Fill::Original);
+        let writes: Vec<(IVec3, Fill)> = keys
+            .iter()
+            .zip(&fills)
+            .filter(|&(key, &fill)| fill == Fill::Mixed || fill != was(key))
+            .map(|(&key, &fill)| (key, fill))
+            .collect();
+        let mixed: Vec<IVec3> = writes.iter().filter(|w| w.1 == Fill::Mixed).map(|w| w.0).collect();
+        values.resize(mixed.len() * BRICK_VOLUME, (0.0, DEFAULT_COLOUR));
+        let evaluated: usize = values
+            .par_chunks_mut(BRICK_VOLUME)
+            .zip(&mixed)
+            .map_init(|| self.originals.reader(), |originals, (out, &key)| how.evaluate(key, originals, out))
+            .sum();
+        let plan: HashMap<IVec3, Planned> = writes
+            .iter()
+            .map(|&(key, fill)| (key, Planned::Fill(fill)))
+            .chain(mixed.iter().enumerate().map(|(i, &key)| (key, Planned::Values(i))))
+            .collect();
+        let lo = writes.iter().fold(IVec3::MAX, |a, w| a.min(w.0 * size));
+        let hi = writes.iter().fold(IVec3::MIN, |a, w| a.max(w.0 * size + size - IVec3::ONE));
         let mut written = 0u64;
         let mut originals = self.originals.reader();
-        let (op, images, band) = (self.op, &self.images, self.band_local_m);
+        let mut brick: Option<(IVec3, Planned)> = None;
         field.edit_region(
             lo,
             hi,
             true,
-            |a, b| boxes.iter().any(|&(l, h)| a.cmple(h).all() && b.cmpge(l).all()),
+            |a, _| plan.contains_key(&brick_key(a)),
             |p, d, c| {
                 written += 1;
-                let (od, oc) = originals.get(p);
-                let x = t.index_to_world(p.as_vec3());
-                let (nd, nc) = match op {
-                    _ if still => (od, oc),
-                    RegionOp::Move | RegionOp::Copy => {
-                        carried(images, &motions, x, &t, band, op == RegionOp::Move, (od, oc))
+                let key = brick_key(p);
+                let planned = match brick {
+                    Some((k, planned)) if k == key => planned,
+                    _ => {
+                        let planned = plan[&key];
+                        brick = Some((key, planned));
+                        planned
                     }
-                    RegionOp::Bend => bent(images, &sweeps, x, &t, (od, oc)),
                 };
-                *d = nd;
-                *c = nc;
+                match planned {
+                    Planned::Fill(Fill::Original) => (*d, *c) = originals.get(p),
+                    Planned::Fill(Fill::Empty) => *d = 0.0,
+                    Planned::Fill(Fill::Full(colour)) => (*d, *c) = (1.0, colour),
+                    Planned::Fill(Fill::Mixed) => unreachable!("a mixed brick's values are evaluated"),
+                    Planned::Values(i) => (*d, *c) = values[i * BRICK_VOLUME + Brick::linear(p - key * size)],
+                }
             },
         );
-        self.written = reach;
+        for (key, fill) in keys.into_iter().zip(fills) {
+            if fill == Fill::Original {
+                self.left.remove(&key);
+            } else {
+                self.left.insert(key, fill);
+            }
+        }
         self.motion = Some(motion);
+        self.scratch = values;
         let copied = (self.originals.points() + sources) as u64;
-        Ok(RegionStats { written, copied, sweep_steps: if op == RegionOp::Bend { steps } else { 0 } })
+        Ok(RegionStats {
+            written,
+            evaluated: evaluated as u64,
+            copied,
+            sweep_steps: if self.op == RegionOp::Bend { steps } else { 0 },
+        })
     }
 }
 
-/// Move and copy at a world point: what stays (times what each moving image leaves) plus what
-/// each image carries there, at most full. Across a region's soft edge the part that stays and
-/// the part carried add up to the clay that was, so a region cut out of the clay and put back
-/// leaves no seam; where carried clay lands on clay, the two unite.
+/// The motion of each image of a drag for one update.
+struct Moved {
+    /// The hand's motion (a bend's about its grab point).
+    motion: Motion,
+    /// Whether the clay is given back exactly as it was.
+    still: bool,
+    /// Each image's motion.
+    motions: Vec<Motion>,
+    /// A bend's sweep of each image's motion.
+    sweeps: Vec<Sweep>,
+    /// The steps of a bend's sweep (1 for other operations).
+    steps: u32,
+}
+
+/// What an update makes of a whole brick.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Fill {
+    /// The clay as it was.
+    Original,
+    /// No clay.
+    Empty,
+    /// Full clay of one colour.
+    Full(Colour),
+    /// Each point its own: evaluated one by one.
+    Mixed,
+}
+
+/// How a brick is written: filled, or from its evaluated values.
+#[derive(Clone, Copy, Debug)]
+enum Planned {
+    Fill(Fill),
+    Values(usize),
+}
+
+/// What one update resamples the clay through (`op` none: the clay as it was, exactly).
+struct Resample<'a> {
+    op: Option<RegionOp>,
+    images: &'a [Image],
+    sweeps: &'a [Sweep],
+    carries: Vec<Carry>,
+    t: VoxelTransform,
+    band: f32,
+    originals: &'a TiledCopy,
+}
+
+/// Lattice points along a side of the blocks a mixed brick is decided in, block by block,
+/// before its points are evaluated one by one.
+const BLOCK: i32 = 4;
+
+impl Resample<'_> {
+    /// What the lattice points `lo ..= lo + n − 1` become, where they all become one thing;
+    /// else [`Fill::Mixed`]. Decided from bounds of each region's weight over the box (and over
+    /// its image under each inverse motion) and the spans of the copies there.
+    fn fill(&self, lo: IVec3, n: i32) -> Fill {
+        let Some(op) = self.op else { return Fill::Original };
+        let hi = lo + IVec3::splat(n - 1);
+        // The box's corners and centre on the lattice, and the ball holding it (in metres, a
+        // little wider for rounding).
+        let corners: [Vec3; 8] = std::array::from_fn(|i| {
+            let o = IVec3::new(i as i32 & 1, (i as i32 >> 1) & 1, (i as i32 >> 2) & 1);
+            (lo + o * (n - 1)).as_vec3()
+        });
+        let centre = 0.5 * (corners[0] + corners[7]);
+        let r = 0.5 * (n - 1) as f32 * 3f32.sqrt() * self.t.voxel_size_m * 1.001;
+        if op == RegionOp::Bend {
+            let centre = self.t.index_to_world(centre);
+            let reached =
+                self.sweeps.iter().flat_map(|s| &s.steps).any(|s| centre.distance(s.centre) <= s.reach + r);
+            return if reached { Fill::Mixed } else { Fill::Original };
+        }
+        let original = self.originals.span(lo, hi);
+        let (mut kept, mut gone) = (true, false);
+        let mut brought = Fill::Original;
+        for (image, c) in self.images.iter().zip(&self.carries) {
+            let shape = &image.region.shape;
+            let r_local = r / image.region.frame.min_scale();
+            let bounds = |map: &Affine3A| {
+                let local = corners.map(|p| map.transform_point3(p));
+                shape.potential_bounds(&local, map.transform_point3(centre), r_local, self.band)
+            };
+            let (w_lo, w_hi) = bounds(&c.here_local);
+            kept &= w_hi == 0.0;
+            gone |= w_lo == 1.0;
+            let (w_lo, w_hi) = bounds(&c.from_local);
+            if w_hi == 0.0 {
+                continue;
+            }
+            // The source points the trilinear reads there touch.
+            let index = corners.map(|p| c.from_index.transform_point3(p));
+            let a = index.iter().fold(Vec3::INFINITY, |a, &c| a.min(c)).floor().as_ivec3();
+            let b = index.iter().fold(Vec3::NEG_INFINITY, |a, &c| a.max(c)).floor().as_ivec3() + IVec3::ONE;
+            let source = image.source.span(a, b);
+            brought = match (brought, source) {
+                (_, Span { max: 0.0, .. }) => brought,
+                (Fill::Original, Span { min, full: Some(colour), .. }) if w_lo == 1.0 && min == 1.0 => {
+                    Fill::Full(colour)
+                }
+                _ => Fill::Mixed,
+            };
+        }
+        let leaves = op == RegionOp::Move;
+        match brought {
+            Fill::Original if original.max == 0.0 || !leaves || kept => Fill::Original,
+            Fill::Original if gone => Fill::Empty,
+            Fill::Full(colour) if original.max == 0.0 || (leaves && gone) => Fill::Full(colour),
+            _ => Fill::Mixed,
+        }
+    }
+
+    /// Writes the brick `key`'s densities and colours into `out`, point by point
+    /// ([`Brick::linear`] order); returns how many points were evaluated one by one (blocks of
+    /// one fill are not).
+    fn evaluate(&self, key: IVec3, originals: &mut TiledReader<'_>, out: &mut [(f32, Colour)]) -> usize {
+        let base = key * IVec3::splat(BRICK_SIZE);
+        let mut evaluated = 0;
+        let blocks = BRICK_SIZE / BLOCK;
+        for block in 0..blocks * blocks * blocks {
+            let offset =
+                IVec3::new(block % blocks, (block / blocks) % blocks, block / (blocks * blocks)) * BLOCK;
+            let fill = self.fill(base + offset, BLOCK);
+            for i in 0..BLOCK * BLOCK * BLOCK {
+                let local = offset + IVec3::new(i % BLOCK, (i / BLOCK) % BLOCK, i / (BLOCK * BLOCK));
+                let p = base + local;
+                out[Brick::linear(local)] = match fill {
+                    Fill::Original => originals.get(p),
+                    Fill::Empty => (0.0, DEFAULT_COLOUR),
+                    Fill::Full(colour) => (1.0, colour),
+                    Fill::Mixed => {
+                        evaluated += 1;
+                        self.point(p, originals.get(p))
+                    }
+                };
+            }
+        }
+        evaluated
+    }
+
+    /// The clay at the lattice point `p`, which held `original`.
+    #[inline]
+    fn point(&self, p: IVec3, original: (f32, Colour)) -> (f32, Colour) {
+        match self.op {
+            None => original,
+            Some(RegionOp::Bend) => {
+                bent(self.images, self.sweeps, self.t.index_to_world(p.as_vec3()), &self.t, original)
+            }
+            Some(op) => {
+                carried(self.images, &self.carries, p.as_vec3(), self.band, op == RegionOp::Move, original)
+            }
+        }
+    }
+}
+
+/// The keys of the bricks over the lattice box `lo ..= hi`.
+fn bricks_over(lo: IVec3, hi: IVec3) -> impl Iterator<Item = IVec3> {
+    let size = IVec3::splat(BRICK_SIZE);
+    let (a, b) = (lo.div_euclid(size), hi.div_euclid(size));
+    (a.z..=b.z)
+        .flat_map(move |z| (a.y..=b.y).flat_map(move |y| (a.x..=b.x).map(move |x| IVec3::new(x, y, z))))
+}
+
+/// One image's maps from a lattice point, for [`carried`]: into its region's frame where it
+/// is, and into the frame and the source's lattice where it came from.
+#[derive(Clone, Copy, Debug)]
+struct Carry {
+    here_local: Affine3A,
+    from_local: Affine3A,
+    from_index: Affine3A,
+}
+
+impl Carry {
+    fn new(image: &Image, motion: &Motion, t: &VoxelTransform) -> Self {
+        let (to_world, to_local) = (t.index_to_world_affine(), image.region.frame.world_to_local_affine());
+        let from_world = motion.inverse_affine() * to_world;
+        Self {
+            here_local: to_local * to_world,
+            from_local: to_local * from_world,
+            from_index: t.world_to_index_affine() * from_world,
+        }
+    }
+}
+
+/// Move and copy at a lattice point: what stays (times what each moving image leaves) plus
+/// what each image carries there, at most full. Across a region's soft edge the part that
+/// stays and the part carried add up to the clay that was, so a region cut out of the clay
+/// and put back leaves no seam; where carried clay lands on clay, the two unite.
 #[inline]
 fn carried(
     images: &[Image],
-    motions: &[Motion],
-    x: Vec3,
-    t: &crate::math::VoxelTransform,
+    carries: &[Carry],
+    p: Vec3,
     band: f32,
     leaves: bool,
     (od, oc): (f32, Colour),
 ) -> (f32, Colour) {
     let mut keep = 1.0;
     let (mut brought, mut colour) = (0.0f32, [0.0f32; 4]);
-    for (image, m) in images.iter().zip(motions) {
+    for (image, c) in images.iter().zip(carries) {
         if leaves && od > 0.0 {
-            keep *= 1.0 - image.region.weight(x, band);
+            keep *= 1.0 - image.region.shape.potential(c.here_local.transform_point3(p), band);
         }
-        let q = m.inverse_apply(x);
-        let w = image.region.weight(q, band);
+        let w = image.region.shape.potential(c.from_local.transform_point3(p), band);
         if w > 0.0 {
-            let (sd, sc) = image.source.sample(t.world_to_index(q));
+            let (sd, sc) = image.source.sample(c.from_index.transform_point3(p));
             let a = w * sd;
             brought += a;
             for (c, v) in colour.iter_mut().zip(sc) {
@@ -483,7 +744,7 @@ fn bent(
     images: &[Image],
     sweeps: &[Sweep],
     x: Vec3,
-    t: &crate::math::VoxelTransform,
+    t: &VoxelTransform,
     original: (f32, Colour),
 ) -> (f32, Colour) {
     let mut q = x;
@@ -636,6 +897,7 @@ pub fn copy_repeated(
         let mut drag = RegionDrag::start(field, region.clone(), RegionOp::Copy, images)?;
         let s = drag.update(field, motion.times(k))?;
         stats.written += s.written;
+        stats.evaluated += s.evaluated;
         stats.copied = stats.copied.max(s.copied);
     }
     Ok(stats)

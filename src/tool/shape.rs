@@ -74,6 +74,11 @@ impl Solid {
         }
     }
 
+    /// Whether it is convex (its signed distance then a convex function).
+    pub fn is_convex(&self) -> bool {
+        !matches!(self, Solid::Torus { .. })
+    }
+
     /// The solid's volume and surface area, m³ and m² (a rounded box's are its sharp box's, a
     /// little more). For estimates of what rasterising it costs.
     pub fn volume_and_area(&self) -> (f64, f64) {

@@ -251,3 +251,129 @@ fn a_region_too_large_to_copy_is_refused_and_an_empty_one_too() {
     assert!(matches!(wide.update(&mut f, far), Err(RegionError::TooLarge { .. })));
     assert!(f.same_samples(&before), "a refused update leaves the clay as it was");
 }
+
+/// What a drag moved by `motion` should leave at each lattice point of `lo ..= hi`: every
+/// point evaluated one by one on the clay as it was (`start`), none decided a brick or a block
+/// at a time.
+fn each_point(
+    drag: &RegionDrag,
+    start: &Field,
+    motion: Motion,
+    lo: IVec3,
+    hi: IVec3,
+) -> Vec<(IVec3, f32, Colour)> {
+    let mut originals = TiledCopy::new();
+    originals.take(start, lo, hi);
+    let moved = drag.moved(motion, true);
+    let how = drag.resample(&moved, *start.transform(), &originals);
+    let mut reader = originals.reader();
+    let mut out = Vec::new();
+    for z in lo.z..=hi.z {
+        for y in lo.y..=hi.y {
+            for x in lo.x..=hi.x {
+                let p = IVec3::new(x, y, z);
+                let (d, c) = how.point(p, reader.get(p));
+                out.push((p, d, c));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn bricks_filled_whole_hold_what_each_point_evaluated_would_through_every_update() {
+    // Two colours of clay: a ball and a bar through it.
+    let mut start = ball_at(Vec3::new(0.001, 0.0, 0.0), 0.006);
+    solid(
+        &mut start,
+        Solid::Box { half_m: Vec3::new(0.011, 0.002, 0.003) },
+        Vec3::ZERO,
+        [0.2, 0.4, 0.9, 1.0],
+    );
+    let turned = Pose { position_m: Vec3::new(0.0, 0.001, 0.0), rotation: Quat::from_rotation_z(0.4) };
+    let mirror = crate::parts::Symmetry::mirror(crate::parts::Axis::X).images();
+    let regions = [
+        (Region::boxed(turned, Vec3::new(0.008, 0.006, 0.007)), RegionOp::Move, vec![]),
+        (Region::ball(Vec3::new(0.002, 0.0, 0.0), 0.007), RegionOp::Copy, vec![]),
+        (
+            Region {
+                shape: ToolShape::Solid(Solid::Torus { major_m: 0.006, minor_m: 0.003 }),
+                frame: ToolFrame::new(turned, Vec3::new(1.0, 1.5, 0.8)),
+            },
+            RegionOp::Move,
+            mirror.clone(),
+        ),
+        (
+            Region {
+                shape: ToolShape::Ellipsoid(crate::tool::Ellipsoid {
+                    radii_m: Vec3::new(0.008, 0.005, 0.006),
+                    falloff: crate::tool::Falloff::Wyvill,
+                }),
+                frame: ToolFrame::new(turned, Vec3::ONE),
+            },
+            RegionOp::Move,
+            vec![],
+        ),
+        (Region::ball(Vec3::new(0.008, 0.0, 0.0), 0.006), RegionOp::Bend, mirror),
+    ];
+    let frames = [
+        (Vec3::new(0.003, 0.0, 0.0), 0.0),
+        (Vec3::new(0.007, 0.002, -0.001), 0.2),
+        (Vec3::new(0.012, 0.004, 0.0), 0.5),
+        (Vec3::new(0.004, -0.003, 0.002), -0.3),
+    ];
+    let (lo, hi) = (IVec3::new(-30, -24, -20), IVec3::new(30, 24, 20));
+    for (k, (region, op, images)) in regions.into_iter().enumerate() {
+        let mut f = start.clone();
+        let mut drag = RegionDrag::start(&f, region, op, &images).unwrap();
+        let mut filled = 0;
+        for (i, &(translation_m, angle)) in frames.iter().enumerate() {
+            let motion =
+                Motion { translation_m, rotation: Quat::from_rotation_y(angle), ..Motion::still(Vec3::ZERO) };
+            let stats = drag.update(&mut f, motion).unwrap();
+            filled += stats.written - stats.evaluated;
+            for (p, d, c) in each_point(&drag, &start, motion, lo, hi) {
+                let got = f.density(p);
+                assert!((got - d).abs() < 1e-4, "region {k}, update {i}, at {p}: {got} against {d}");
+                if d > 0.01 {
+                    let got = f.colour(p);
+                    assert!(
+                        got.iter().zip(c).all(|(a, b)| (a - b).abs() < 2e-3),
+                        "region {k}, update {i}, colour at {p}: {got:?} against {c:?}"
+                    );
+                }
+            }
+        }
+        assert!(filled > 0, "region {k}: some bricks or blocks were filled whole");
+        drag.update(&mut f, Motion::still(Vec3::ZERO)).unwrap();
+        // Every density and every colour of clay as it was (an empty sample's colour is none).
+        for z in lo.z..=hi.z {
+            for y in lo.y..=hi.y {
+                for x in lo.x..=hi.x {
+                    let p = IVec3::new(x, y, z);
+                    let (d, was) = (f.density(p), start.density(p));
+                    assert!(
+                        d == was && (d == 0.0 || f.colour(p) == start.colour(p)),
+                        "region {k}: back, at {p}"
+                    );
+                }
+            }
+        }
+        assert_eq!(f.brick_count(), start.brick_count());
+    }
+}
+
+#[test]
+fn an_update_leaves_alone_the_bricks_that_stay_as_the_last_one_left_them() {
+    let mut f = ball_at(Vec3::ZERO, 0.01);
+    let mut drag = RegionDrag::start(&f, boxed(Vec3::ZERO, 0.014), RegionOp::Move, &[]).unwrap();
+    let step = |x: f32| Motion { translation_m: Vec3::new(x, 0.0, 0.0), ..Motion::still(Vec3::ZERO) };
+    drag.update(&mut f, step(0.006)).unwrap();
+    let moved = drag.update(&mut f, step(0.04)).unwrap();
+    // Held again where it is: the bricks filled whole (the ball's inside, the place it left)
+    // are as the last update left them, and only those of the ball's surface are written.
+    let again = drag.update(&mut f, step(0.04)).unwrap();
+    assert_eq!(again.evaluated, moved.evaluated);
+    assert!(again.written < moved.written, "{} then {}", moved.written, again.written);
+    assert!(again.written < again.evaluated + moved.written / 2, "{again:?} after {moved:?}");
+}

@@ -80,6 +80,46 @@ impl ToolShape {
     }
 }
 
+impl ToolShape {
+    /// The lowest and the highest potential over the local box (or parallelepiped) of
+    /// `corners`, held in the ball of radius `radius_local_m` about `centre_local_m`. A solid's
+    /// signed distance moves by at most the distance moved, so the ball bounds it both ways;
+    /// a convex solid's is a convex function, so over the box it is at most its largest at
+    /// the corners. Other shapes: 0 and 1 where the ball reaches the box of their influence,
+    /// 0 and 0 where it does not.
+    pub fn potential_bounds(
+        &self,
+        corners_local_m: &[Vec3; 8],
+        centre_local_m: Vec3,
+        radius_local_m: f32,
+        band_local_m: f32,
+    ) -> (f32, f32) {
+        if let ToolShape::Solid(s) = self {
+            let d = s.signed_distance(centre_local_m);
+            // The farthest out any point of the box can be.
+            let mut farthest = d + radius_local_m;
+            if s.is_convex() {
+                let corner =
+                    corners_local_m.iter().fold(f32::NEG_INFINITY, |a, &c| a.max(s.signed_distance(c)));
+                farthest = farthest.min(corner);
+            }
+            return (ramp(farthest, band_local_m), ramp(d - radius_local_m, band_local_m));
+        }
+        // A freeform's trilinear reads reach one spacing past its outer samples.
+        let reach = match self {
+            ToolShape::Freeform(f) => f.spacing_m(),
+            _ if self.is_hard_edged() => 0.5 * band_local_m,
+            _ => 0.0,
+        };
+        let outside = centre_local_m.abs() - Vec3::splat(radius_local_m);
+        if outside.cmpgt(self.half_extents_m() + Vec3::splat(reach)).any() {
+            (0.0, 0.0)
+        } else {
+            (0.0, 1.0)
+        }
+    }
+}
+
 #[inline]
 fn ramp(distance: f32, band: f32) -> f32 {
     (0.5 - distance / band).clamp(0.0, 1.0)
@@ -112,6 +152,15 @@ impl ToolFrame {
     #[inline]
     pub fn world_to_local(&self, world_m: Vec3) -> Vec3 {
         self.flip(self.pose.world_to_local(world_m)) / self.scale
+    }
+
+    /// [`ToolFrame::world_to_local`] as an affine map, for many points.
+    pub fn world_to_local_affine(&self) -> crate::math::Affine3A {
+        let flip = if self.mirrored { Vec3::new(-1.0, 1.0, 1.0) } else { Vec3::ONE };
+        let linear = crate::math::Mat3::from_diagonal(flip / self.scale)
+            * crate::math::Mat3::from_quat(self.pose.rotation.inverse());
+        crate::math::Affine3A::from_mat3(linear)
+            * crate::math::Affine3A::from_translation(-self.pose.position_m)
     }
 
     /// Takes a world direction (or difference of points) into the local frame.
@@ -182,5 +231,62 @@ mod tests {
         let torus = ToolShape::Solid(Solid::Torus { major_m: 0.02, minor_m: 0.005 });
         assert_eq!(torus.potential(Vec3::new(0.02, 0.0, 0.0), 0.002), 1.0);
         assert_eq!(torus.potential(Vec3::ZERO, 0.002), 0.0);
+    }
+
+    #[test]
+    fn the_affine_map_into_a_frame_is_the_frame_s_own() {
+        let pose = Pose {
+            position_m: Vec3::new(0.1, -0.2, 0.3),
+            rotation: Quat::from_euler(glam::EulerRot::XYZ, 0.3, -0.7, 1.1),
+        };
+        for mirrored in [false, true] {
+            let frame = ToolFrame::with_mirror(pose, Vec3::new(1.5, 0.5, 2.0), mirrored);
+            let affine = frame.world_to_local_affine();
+            for p in [Vec3::ZERO, Vec3::new(0.3, 0.1, -0.2), Vec3::new(-1.0, 2.0, 0.5)] {
+                let (a, b) = (affine.transform_point3(p), frame.world_to_local(p));
+                assert!((a - b).length() < 1e-5, "{a} against {b}");
+            }
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig {
+            cases: 200,
+            rng_seed: proptest::test_runner::RngSeed::Fixed(0xb0b5),
+            ..proptest::prelude::ProptestConfig::default()
+        })]
+        /// The bounds over a turned, scaled box hold every potential sampled in it.
+        #[test]
+        fn potential_bounds_hold_every_point_of_the_box(
+            shape in 0usize..7,
+            centre in proptest::array::uniform3(-0.03f32..0.03),
+            size in proptest::array::uniform3(0.0005f32..0.02),
+            turn in proptest::array::uniform3(-3.0f32..3.0),
+        ) {
+            let shapes = [
+                ToolShape::sphere(0.01),
+                ToolShape::Solid(Solid::Box { half_m: Vec3::new(0.01, 0.02, 0.015) }),
+                ToolShape::Solid(Solid::RoundedBox { half_m: Vec3::new(0.01, 0.02, 0.015), corner_m: 0.004 }),
+                ToolShape::Solid(Solid::Cylinder { radius_m: 0.01, half_height_m: 0.02 }),
+                ToolShape::Solid(Solid::Torus { major_m: 0.015, minor_m: 0.005 }),
+                ToolShape::Ellipsoid(Ellipsoid { radii_m: Vec3::new(0.01, 0.02, 0.015), falloff: Falloff::Wyvill }),
+                ToolShape::Ellipsoid(Ellipsoid { radii_m: Vec3::new(0.01, 0.02, 0.015), falloff: Falloff::Box }),
+            ];
+            let s = &shapes[shape];
+            let rotation = Quat::from_euler(glam::EulerRot::XYZ, turn[0], turn[1], turn[2]);
+            let (centre, half) = (Vec3::from(centre), Vec3::from(size));
+            let corner = |i: usize| {
+                let o = Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32) * 2.0 - Vec3::ONE;
+                centre + rotation * (o * half)
+            };
+            let corners: [Vec3; 8] = std::array::from_fn(corner);
+            let band = 0.004;
+            let (lo, hi) = s.potential_bounds(&corners, centre, half.length(), band);
+            for i in 0..343 {
+                let f = Vec3::new((i % 7) as f32, ((i / 7) % 7) as f32, (i / 49) as f32) / 3.0 - Vec3::ONE;
+                let w = s.potential(centre + rotation * (f * half), band);
+                proptest::prop_assert!(lo <= w && w <= hi, "{lo} ≤ {w} ≤ {hi} at {f}");
+            }
+        }
     }
 }
