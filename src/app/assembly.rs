@@ -112,7 +112,12 @@ impl Assembly {
         tools: &'a [crate::io::StoredTool],
         layouts: &'a [PartLayout],
     ) -> Besides<'a> {
-        Besides { tools, layouts, others: if layouts.is_empty() { &mut [] } else { &mut self.others } }
+        Besides {
+            tools,
+            layouts,
+            others: if layouts.is_empty() { &mut [] } else { &mut self.others },
+            symmetry: None,
+        }
     }
 
     /// The fields of the parts after the first, ending the assembly.

@@ -209,7 +209,8 @@ impl<'s> Playback<'s> {
         let mut tools: Vec<Tool> = scene.tools.iter().map(|t| build_tool(t, &field)).collect();
         restore_tools(&mut tools, stored);
         let (stored_now, layouts) = (stored_tools(&tools), assembly.layouts());
-        let autosave = start(&mut field, assembly.besides(&stored_now, &layouts));
+        let besides = Besides { symmetry: Some(scene.symmetry), ..assembly.besides(&stored_now, &layouts) };
+        let autosave = start(&mut field, besides);
         let mut playback = Self {
             scene,
             field,
@@ -291,7 +292,9 @@ impl<'s> Playback<'s> {
         self.field = field;
         let old = self.autosave.take();
         let (stored_now, layouts) = (stored_tools(&self.tools), self.assembly.layouts());
-        self.autosave = start(&mut self.field, self.assembly.besides(&stored_now, &layouts));
+        let besides =
+            Besides { symmetry: Some(self.symmetry), ..self.assembly.besides(&stored_now, &layouts) };
+        self.autosave = start(&mut self.field, besides);
         old
     }
 
@@ -1274,6 +1277,11 @@ impl<'s> Playback<'s> {
 
     /// Changes the symmetry: the strokes and pushes that start from now on act through it.
     pub fn set_symmetry(&mut self, symmetry: Symmetry) {
+        if symmetry != self.symmetry {
+            if let Some(a) = &mut self.autosave {
+                a.set_symmetry(symmetry);
+            }
+        }
         self.symmetry = symmetry;
         self.images = symmetry.images();
     }
@@ -1775,6 +1783,26 @@ position_m = [0.036, -0.014, 0.0]
         let r = recovered(&root);
         assert!(r.sculpt.lattice.is_none());
         assert!(r.sculpt.field.same_samples(&field), "the lattice's work is journaled, applied");
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[test]
+    fn a_crash_recovers_the_symmetry_the_strokes_acted_through() {
+        let root = temp_root("symmetry");
+        let scene = bar_scene();
+        let mut p = autosaved_bar(&scene, &root);
+        drop(p);
+        let r = recovered(&root);
+        assert_eq!(r.sculpt.symmetry, Some(scene.symmetry), "the first snapshot holds the scene's");
+        std::fs::remove_dir_all(&root).unwrap();
+        p = autosaved_bar(&scene, &root);
+        let mirrored = crate::parts::Symmetry::mirror(crate::parts::Axis::X);
+        assert_ne!(mirrored, scene.symmetry);
+        p.set_symmetry(mirrored);
+        // Killed: the playback is gone without closing its session.
+        drop(p);
+        let r = recovered(&root);
+        assert_eq!(r.sculpt.symmetry, Some(mirrored), "the symmetry set last");
         std::fs::remove_dir_all(&root).unwrap();
     }
 }

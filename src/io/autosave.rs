@@ -26,10 +26,11 @@
 //! - [`Autosave::close`] marks the session closed and removes its files; a session folder
 //!   that is neither closed nor owned by a live process is what [`unclosed_sessions`] finds
 //!   and [`recover`] reads.
-//! - A lattice held open ([`Autosave::set_lattice`]) and the parts' layouts live only in
-//!   snapshots: a change of either rewrites the newest snapshot (on the writer thread), with
-//!   the clay the lattice rests on, so a crash recovers it open as it last stood; a stroke
-//!   journaled later on its part is the lattice applied, and recovery then drops it.
+//! - A lattice held open ([`Autosave::set_lattice`]), the parts' layouts and the symmetry the
+//!   strokes act through ([`Autosave::set_symmetry`]) live only in snapshots: a change of any
+//!   rewrites the newest snapshot (on the writer thread), with the clay the lattice rests on,
+//!   so a crash recovers it open as it last stood, and the symmetry in force; a stroke
+//!   journaled later on the lattice's part is the lattice applied, and recovery then drops it.
 //! - File operations go through [`Disk`], so that tests can make them fail.
 
 use std::collections::HashMap;
@@ -51,6 +52,7 @@ use super::{
     StoredTool,
 };
 use crate::field::{Brick, Field, LevelKey};
+use crate::parts::Symmetry;
 
 /// When autosave syncs and checkpoints.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -236,6 +238,8 @@ pub struct Besides<'a> {
     pub layouts: &'a [PartLayout],
     /// The clay of the parts after the first.
     pub others: &'a mut [Field],
+    /// The symmetry the strokes act through (none: the scene's, never stored).
+    pub symmetry: Option<Symmetry>,
 }
 
 impl<'a> Besides<'a> {
@@ -254,6 +258,8 @@ enum Msg {
     Layouts(Vec<PartLayout>, Sender<()>),
     /// The lattice held open as it is now (`None`: none is held).
     Lattice(Option<StoredLattice>),
+    /// The symmetry the strokes act through now.
+    Symmetry(Symmetry),
     Checkpointed(u64, Result<(), String>),
     Close(Sender<Result<()>>),
     /// Stop without closing: the session stays open for recovery.
@@ -296,7 +302,7 @@ impl Autosave {
     pub fn start_with_tools(
         root: &Path,
         field: &mut Field,
-        (scene_toml, Besides { tools, layouts, others }): (Option<&str>, Besides<'_>),
+        (scene_toml, Besides { tools, layouts, others, symmetry }): (Option<&str>, Besides<'_>),
         source: &str,
         config: AutosaveConfig,
         disk: Arc<dyn Disk>,
@@ -321,8 +327,12 @@ impl Autosave {
         let first = snapshot_path(&dir, 0);
         let encoding = Instant::now();
         let (voxel_size_m, iso) = (field.transform().voxel_size_m, field.iso());
-        let bytes =
-            snapshot_bytes((voxel_size_m, iso), mirror.iter(), (scene_toml, &tools), (&layouts, None));
+        let bytes = snapshot_bytes(
+            (voxel_size_m, iso),
+            mirror.iter(),
+            (scene_toml, &tools),
+            (&layouts, None, symmetry.as_ref()),
+        );
         let first_written = disk.write_whole(&first, &bytes).map_err(|e| format!("{e:#}"));
         tracing::debug!(
             "autosave: the first snapshot ({} bytes) took {:.1} ms",
@@ -344,6 +354,7 @@ impl Autosave {
             tools,
             layouts,
             lattice: None,
+            symmetry,
             journal: None,
             journals: Vec::new(),
             snapshots: if first_written.is_ok() { vec![(0, first)] } else { Vec::new() },
@@ -406,6 +417,13 @@ impl Autosave {
         let _ = self.tx.send(Msg::Lattice(lattice));
     }
 
+    /// Stores the symmetry the strokes act through from now on: the writer writes the snapshot
+    /// of the strokes so far again with it, so that a crash recovers the sculpt with the
+    /// symmetry in force. Does not wait for the disk.
+    pub fn set_symmetry(&mut self, symmetry: Symmetry) {
+        let _ = self.tx.send(Msg::Symmetry(symmetry));
+    }
+
     /// The session folder.
     pub fn dir(&self) -> &Path {
         &self.dir
@@ -465,6 +483,7 @@ struct Job {
     bricks: Vec<(PartKey, Arc<Brick>)>,
     layouts: Vec<PartLayout>,
     lattice: Option<StoredLattice>,
+    symmetry: Option<Symmetry>,
 }
 
 struct Writer {
@@ -482,6 +501,8 @@ struct Writer {
     /// The lattice held open over the clay of `mirror` (which is its part's clay as it was when
     /// the lattice opened: its stroke is journaled when it is applied).
     lattice: Option<StoredLattice>,
+    /// The symmetry the strokes act through (none: the scene's, never set).
+    symmetry: Option<Symmetry>,
     journal: Option<Journal>,
     /// Journal files on disk (base, path), oldest first; the last one is `journal`'s.
     journals: Vec<(u64, PathBuf)>,
@@ -536,6 +557,17 @@ impl Writer {
                                 }
                                 false => tracing::debug!("autosave: no open lattice on disk (snapshot {n})"),
                             }
+                        }
+                    }
+                }
+                Ok(Msg::Symmetry(symmetry)) => {
+                    if self.symmetry != Some(symmetry) {
+                        self.symmetry = Some(symmetry);
+                        if self.rewrite_snapshot() {
+                            tracing::debug!(
+                                "autosave: the symmetry in force is on disk (snapshot {})",
+                                self.written
+                            );
                         }
                     }
                 }
@@ -625,7 +657,7 @@ impl Writer {
             (self.voxel_size_m, self.iso),
             self.mirror.iter(),
             (self.scene_toml.as_deref(), &self.tools),
-            (&self.layouts, self.lattice.as_ref()),
+            (&self.layouts, self.lattice.as_ref(), self.symmetry.as_ref()),
         );
         let path = snapshot_path(&self.dir, n);
         match self.disk.write_whole(&path, &bytes) {
@@ -714,6 +746,7 @@ impl Writer {
             bricks: self.mirror.iter().map(|(k, b)| (*k, Arc::clone(b))).collect(),
             layouts: self.layouts.clone(),
             lattice: self.lattice.clone(),
+            symmetry: self.symmetry,
         };
         let (dir, disk, tx) = (self.dir.clone(), Arc::clone(&self.disk), self.tx.clone());
         let (voxel, iso, scene, tools) =
@@ -725,7 +758,7 @@ impl Writer {
                 (voxel, iso),
                 bricks,
                 (scene.as_deref(), &tools),
-                (&job.layouts, job.lattice.as_ref()),
+                (&job.layouts, job.lattice.as_ref(), job.symmetry.as_ref()),
             );
             let result =
                 disk.write_whole(&snapshot_path(&dir, job.stroke), &bytes).map_err(|e| format!("{e:#}"));
@@ -842,12 +875,13 @@ impl Writer {
 }
 
 /// A snapshot of the sculpt: `bricks` of its parts, the first in a field of `(voxel size,
-/// iso-level)`, with the scene's text and tools, the parts' `layouts` and the lattice held open.
+/// iso-level)`, with the scene's text and tools, the parts' `layouts`, the lattice held open and
+/// the symmetry in force.
 fn snapshot_bytes<'b>(
     (voxel_size_m, iso): (f32, f32),
     bricks: impl Iterator<Item = (&'b PartKey, &'b Arc<Brick>)>,
     (scene_toml, tools): (Option<&str>, &[StoredTool]),
-    (layouts, lattice): (&[PartLayout], Option<&StoredLattice>),
+    (layouts, lattice, symmetry): (&[PartLayout], Option<&StoredLattice>, Option<&Symmetry>),
 ) -> Vec<u8> {
     let (mut first, mut others) = (Vec::new(), Vec::new());
     for ((part, key), brick) in bricks {
@@ -856,7 +890,7 @@ fn snapshot_bytes<'b>(
             p => others.push((u32::from(*p), *key, &**brick)),
         }
     }
-    let scene = SceneParts { toml: scene_toml, tools, layouts, lattice, ..SceneParts::default() };
+    let scene = SceneParts { toml: scene_toml, tools, layouts, lattice, symmetry, ..SceneParts::default() };
     encode_bricks(voxel_size_m, iso, first, scene, others, &mut |_| {})
 }
 
