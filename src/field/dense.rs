@@ -156,8 +156,11 @@ impl DenseCopy {
 
     /// The density, where every point of `lo ..= hi` is held and has the same one.
     pub fn constant_density(&self, lo: IVec3, hi: IVec3) -> Option<f32> {
+        if !self.contains(lo, hi) {
+            return None;
+        }
         let span = self.span(lo, hi);
-        (self.contains(lo, hi) && span.min == span.max).then_some(span.min)
+        (span.min == span.max).then_some(span.min)
     }
 
     /// The trilinear density at a fractional lattice coordinate held in double precision

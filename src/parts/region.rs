@@ -455,18 +455,24 @@ impl RegionDrag {
             .filter(|&(key, &fill)| fill == Fill::Mixed || fill != was(key))
             .map(|(&key, &fill)| (key, fill))
             .collect();
-        let mixed: Vec<IVec3> = writes.iter().filter(|w| w.1 == Fill::Mixed).map(|w| w.0).collect();
+        // Each mixed brick's values at its place in `values`.
+        let mut mixed: Vec<IVec3> = Vec::new();
+        let plan: HashMap<IVec3, Planned> = writes
+            .iter()
+            .map(|&(key, fill)| match fill {
+                Fill::Mixed => {
+                    mixed.push(key);
+                    (key, Planned::Values(mixed.len() - 1))
+                }
+                fill => (key, Planned::Fill(fill)),
+            })
+            .collect();
         values.resize(mixed.len() * BRICK_VOLUME, (0.0, DEFAULT_COLOUR));
         let evaluated: usize = values
             .par_chunks_mut(BRICK_VOLUME)
             .zip(&mixed)
             .map_init(|| self.originals.reader(), |originals, (out, &key)| how.evaluate(key, originals, out))
             .sum();
-        let plan: HashMap<IVec3, Planned> = writes
-            .iter()
-            .map(|&(key, fill)| (key, Planned::Fill(fill)))
-            .chain(mixed.iter().enumerate().map(|(i, &key)| (key, Planned::Values(i))))
-            .collect();
         let lo = writes.iter().fold(IVec3::MAX, |a, w| a.min(w.0 * size));
         let hi = writes.iter().fold(IVec3::MIN, |a, w| a.max(w.0 * size + size - IVec3::ONE));
         let mut written = 0u64;
@@ -543,7 +549,7 @@ enum Fill {
     Mixed,
 }
 
-/// How a brick is written: filled, or from its evaluated values.
+/// How a brick is written: filled (never [`Fill::Mixed`]), or from its evaluated values.
 #[derive(Clone, Copy, Debug)]
 enum Planned {
     Fill(Fill),
@@ -572,13 +578,9 @@ impl Resample<'_> {
     fn fill(&self, lo: IVec3, n: i32) -> Fill {
         let Some(op) = self.op else { return Fill::Original };
         let hi = lo + IVec3::splat(n - 1);
-        // The box's corners and centre on the lattice, and the ball holding it (in metres, a
-        // little wider for rounding).
-        let corners: [Vec3; 8] = std::array::from_fn(|i| {
-            let o = IVec3::new(i as i32 & 1, (i as i32 >> 1) & 1, (i as i32 >> 2) & 1);
-            (lo + o * (n - 1)).as_vec3()
-        });
-        let centre = 0.5 * (corners[0] + corners[7]);
+        // The box's centre on the lattice, and the ball holding it (in metres, a little wider
+        // for rounding).
+        let centre = lo.as_vec3() + Vec3::splat(0.5 * (n - 1) as f32);
         let r = 0.5 * (n - 1) as f32 * 3f32.sqrt() * self.t.voxel_size_m * 1.001;
         if op == RegionOp::Bend {
             let centre = self.t.index_to_world(centre);
@@ -586,7 +588,13 @@ impl Resample<'_> {
                 self.sweeps.iter().flat_map(|s| &s.steps).any(|s| centre.distance(s.centre) <= s.reach + r);
             return if reached { Fill::Mixed } else { Fill::Original };
         }
+        let corners: [Vec3; 8] = std::array::from_fn(|i| {
+            let o = IVec3::new(i as i32 & 1, (i as i32 >> 1) & 1, (i as i32 >> 2) & 1);
+            (lo + o * (n - 1)).as_vec3()
+        });
         let original = self.originals.span(lo, hi);
+        // Whether every image leaves the clay here as it is, or one takes it all away; and what
+        // the images bring (`Original`: nothing).
         let (mut kept, mut gone) = (true, false);
         let mut brought = Fill::Original;
         for (image, c) in self.images.iter().zip(&self.carries) {
