@@ -27,7 +27,7 @@
 use crate::math::Vec3;
 
 use super::clip::Clipping;
-use super::volume::{to_f64, Eval, SplineVolume, Uvw};
+use super::volume::{to_f64, Located, SplineVolume, Uvw};
 
 /// The result of an inverse mapping.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -111,8 +111,8 @@ struct Run {
     uvw: Uvw,
     residual: f64,
     iterations: u32,
-    /// Position, value and derivatives at `uvw`.
-    eval: Eval,
+    /// Position and Jacobian at `uvw`.
+    located: Located,
 }
 
 impl SplineVolume {
@@ -131,14 +131,14 @@ impl SplineVolume {
 
     /// The inverse map refusing points farther than `margin` outside the control hull; with
     /// `fallbacks`, failed starts inside the hull try the nearest control and a coarse grid.
-    /// Also returns the evaluation at the parameters found, when the search ran.
+    /// Also returns the position and Jacobian at the parameters found, when the search ran.
     pub(crate) fn inverse_map_within(
         &self,
         x: Vec3,
         start: Option<Uvw>,
         margin: Vec3,
         fallbacks: bool,
-    ) -> (InverseMap, Option<Eval>) {
+    ) -> (InverseMap, Option<Located>) {
         if !x.is_finite() {
             let map = InverseMap {
                 uvw: Uvw::new(0.5, 0.5, 0.5),
@@ -193,13 +193,13 @@ impl SplineVolume {
             iterations,
             residual_m: best.residual,
         };
-        (map, Some(best.eval))
+        (map, Some(best.located))
     }
 
     /// Damped Newton (Levenberg–Marquardt where the Jacobian is singular) from `start`.
     fn newton(&self, target: [f64; 3], start: Uvw, tol: f64) -> Run {
         let mut u = clamp_search(start);
-        let mut e = self.eval::<true>(u);
+        let mut e = self.locate::<true>(u);
         let mut r = sub(e.position, target);
         let mut err = norm(r);
         let mut iterations = 0;
@@ -216,7 +216,7 @@ impl SplineVolume {
                 let mut t = 1.0;
                 for _ in 0..MAX_HALVINGS {
                     let cand = clamp_search(Uvw(std::array::from_fn(|a| u.0[a] + t * delta[a])));
-                    let ec = self.eval::<true>(cand);
+                    let ec = self.locate::<true>(cand);
                     let rc = sub(ec.position, target);
                     let ec_err = norm(rc);
                     if ec_err < err * (1.0 - 1e-4 * t) || ec_err <= tol {
@@ -234,7 +234,7 @@ impl SplineVolume {
                 break;
             }
         }
-        Run { uvw: u, residual: err, iterations, eval: e }
+        Run { uvw: u, residual: err, iterations, located: e }
     }
 
     /// The Greville parameters (clamped to the cube) of the control point nearest `target`.
@@ -283,20 +283,22 @@ impl SplineVolume {
         (density, map)
     }
 
-    /// As [`Self::mapped_density_from`], with the evaluation at the parameters found.
+    /// As [`Self::mapped_density_from`], with the position and Jacobian at the parameters
+    /// found.
     pub(crate) fn mapped_density_detailed(
         &self,
         x: Vec3,
         start: Option<Uvw>,
         clip: &Clipping,
-    ) -> (f32, InverseMap, Option<Eval>) {
+    ) -> (f32, InverseMap, Option<Located>) {
         // Points whose preimage lies beyond the band read 0: refuse them at about the band's
         // width outside the hull (the rest lattice's parameters scale with the box).
         let margin = self.region().size() * clip.band() as f32;
         let (map, eval) = self.inverse_map_within(x, start, margin, true);
         let density = match eval {
-            // The search's last evaluation holds F at the parameters found.
-            Some(e) if map.converged && !clip.is_empty_at(map.uvw) => clip.density(e.value, map.uvw),
+            Some(_) if map.converged && !clip.is_empty_at(map.uvw) => {
+                clip.density(self.value(map.uvw), map.uvw)
+            }
             _ => 0.0,
         };
         (density, map, eval)

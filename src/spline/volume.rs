@@ -15,6 +15,13 @@
 //! `F = Φ / W` (ESM: the function coordinate is rational in the same weights as the space
 //! coordinates). Derivatives follow the quotient rule, `∂P = (∂A − P ∂W) / W`. Only the
 //! `k_u·k_v·k_w` controls of the parameter's span take part.
+//!
+//! A control at rest counts at its exact Greville point (in `f64`, not its `f32` copy), so
+//! the rest lattice maps the cube exactly affinely. Where the weights are equal, the inverse
+//! mapping's searches locate points by that: `P(u) = A(u) + Σ N_i(u) d_i` over the controls
+//! moved by `d_i` from rest (`A` the box's affine map, by linear precision), which for a drag of
+//! a few controls costs three bases and a few products rather than the span's full sum
+//! ([`SplineVolume::locate`]).
 
 use crate::math::{Aabb, Mat3, Vec3};
 
@@ -115,7 +122,31 @@ pub struct SplineVolume {
     /// Per control, the homogeneous coordinates `(w·x, w·y, w·z, w, w·f)` in `f64`, kept in
     /// step with `controls`: what evaluation sums.
     homogeneous: Vec<[f64; 5]>,
+    /// Per control, its rest point in `f64`: the Greville point of the box.
+    rest: Vec<[f64; 3]>,
+    /// The controls away from rest, kept in step with `controls`.
+    displaced: Vec<Displaced>,
 }
+
+/// The position and its derivatives at one parameter: what the inverse mapping needs.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Located {
+    /// `P(u, v, w)`.
+    pub position: [f64; 3],
+    /// `∂P/∂u`, `∂P/∂v`, `∂P/∂w` (when derivatives were asked for).
+    pub jacobian: [[f64; 3]; 3],
+}
+
+/// A control away from its rest point: its indices and how far it moved, metres.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Displaced {
+    ijk: [usize; 3],
+    by: [f64; 3],
+}
+
+/// Up to this many moved controls, [`SplineVolume::locate`] sums their displacements over the
+/// affine map; past it, the span's full sum is cheaper.
+const SPARSE_LIMIT: usize = 64;
 
 /// The homogeneous sums at one parameter and what follows from them.
 #[derive(Clone, Copy, Debug, Default)]
@@ -130,8 +161,9 @@ pub(crate) struct Eval {
     pub gradient: [f64; 3],
 }
 
-fn homogeneous(c: &ControlPoint) -> [f64; 5] {
-    let [x, y, z] = to_f64(c.position_m);
+/// The homogeneous coordinates of `c`, whose exact rest point is `rest`.
+fn homogeneous(c: &ControlPoint, rest: [f64; 3]) -> [f64; 5] {
+    let [x, y, z] = if c.position_m == c.rest_m { rest } else { to_f64(c.position_m) };
     let w = c.weight;
     [w * x, w * y, w * z, w, w * c.value]
 }
@@ -184,14 +216,17 @@ impl SplineVolume {
         let counts = [knots[0].count(), knots[1].count(), knots[2].count()];
         let (min, max) = (to_f64(region.min), to_f64(region.max));
         let mut controls = Vec::with_capacity(counts.iter().product());
+        let mut rests = Vec::with_capacity(counts.iter().product());
         for k in 0..counts[2] {
             for j in 0..counts[1] {
                 for i in 0..counts[0] {
                     let g = [knots[0].greville(i), knots[1].greville(j), knots[2].greville(k)];
                     // As a blend of the corners, so that the corner abscissae 0 and 1 give the
                     // box's corners exactly.
-                    let rest = to_vec3(std::array::from_fn(|a| min[a] * (1.0 - g[a]) + max[a] * g[a]));
+                    let exact: [f64; 3] = std::array::from_fn(|a| min[a] * (1.0 - g[a]) + max[a] * g[a]);
+                    let rest = to_vec3(exact);
                     controls.push(ControlPoint { rest_m: rest, position_m: rest, weight: 1.0, value: 0.0 });
+                    rests.push(exact);
                 }
             }
         }
@@ -205,6 +240,8 @@ impl SplineVolume {
             uniform_weights: true,
             min_weight: 1.0,
             homogeneous: Vec::new(),
+            rest: rests,
+            displaced: Vec::new(),
         };
         out.refresh_derived();
         Ok(out)
@@ -431,11 +468,27 @@ impl SplineVolume {
     /// Recomputes what follows from every control: the hull and the homogeneous coordinates.
     fn refresh_derived(&mut self) {
         self.hull = self.controls.iter().fold(Aabb::EMPTY, |b, c| b.grown_by_point(c.position_m));
-        self.homogeneous = self.controls.iter().map(homogeneous).collect();
+        self.homogeneous = self.controls.iter().zip(&self.rest).map(|(c, &r)| homogeneous(c, r)).collect();
+        self.refresh_displaced();
     }
 
     fn refresh_homogeneous_at(&mut self, index: usize) {
-        self.homogeneous[index] = homogeneous(&self.controls[index]);
+        self.homogeneous[index] = homogeneous(&self.controls[index], self.rest[index]);
+        self.refresh_displaced();
+    }
+
+    fn refresh_displaced(&mut self) {
+        self.displaced.clear();
+        for (index, (c, r)) in self.controls.iter().zip(&self.rest).enumerate() {
+            if c.position_m != c.rest_m {
+                let p = to_f64(c.position_m);
+                let ijk = {
+                    let [l, m, _] = self.counts;
+                    [index % l, (index / l) % m, index / (l * m)]
+                };
+                self.displaced.push(Displaced { ijk, by: std::array::from_fn(|a| p[a] - r[a]) });
+            }
+        }
     }
 
     fn refresh_weights(&mut self) {
@@ -481,6 +534,66 @@ impl SplineVolume {
     /// `P(u, v, w)` in `f64`.
     pub fn position_f64(&self, uvw: Uvw) -> [f64; 3] {
         self.eval::<false>(uvw).position
+    }
+
+    /// The position at one parameter, and with `D` its Jacobian: [`Self::eval`]'s, found as
+    /// the box's affine map plus the moved controls' displacements where the weights are equal
+    /// and few controls moved (see the module documentation).
+    #[inline]
+    pub(crate) fn locate<const D: bool>(&self, uvw: Uvw) -> Located {
+        if !self.uniform_weights || self.displaced.len() > SPARSE_LIMIT {
+            let e = self.eval::<D>(uvw);
+            return Located { position: e.position, jacobian: e.jacobian };
+        }
+        let (min, max) = (to_f64(self.region.min), to_f64(self.region.max));
+        let u = uvw.0;
+        let mut out = Located {
+            position: std::array::from_fn(|a| min[a] * (1.0 - u[a]) + max[a] * u[a]),
+            jacobian: [[0.0; 3]; 3],
+        };
+        if D {
+            for a in 0..3 {
+                out.jacobian[a][a] = max[a] - min[a];
+            }
+        }
+        if self.displaced.is_empty() {
+            return out;
+        }
+        let bases: [_; 3] = std::array::from_fn(|a| {
+            if D {
+                self.knots[a].basis_with_derivatives(u[a])
+            } else {
+                let b = self.knots[a].basis(u[a]);
+                super::BasisDerivatives {
+                    first: b.first,
+                    order: b.order,
+                    values: b.values,
+                    derivatives: [0.0; MAX_ORDER],
+                }
+            }
+        });
+        for c in &self.displaced {
+            // The control's place among each axis's non-zero functions, if it has one.
+            let r: [usize; 3] = std::array::from_fn(|a| c.ijk[a].wrapping_sub(bases[a].first));
+            if (0..3).any(|a| r[a] >= bases[a].order) {
+                continue;
+            }
+            let n: [f64; 3] = std::array::from_fn(|a| bases[a].values[r[a]]);
+            let weight = n[0] * n[1] * n[2];
+            for x in 0..3 {
+                out.position[x] += weight * c.by[x];
+            }
+            if D {
+                let dn: [f64; 3] = std::array::from_fn(|a| bases[a].derivatives[r[a]]);
+                let along = [dn[0] * n[1] * n[2], n[0] * dn[1] * n[2], n[0] * n[1] * dn[2]];
+                for a in 0..3 {
+                    for x in 0..3 {
+                        out.jacobian[a][x] += along[a] * c.by[x];
+                    }
+                }
+            }
+        }
+        out
     }
 
     /// Everything at one parameter: position and value, and with `D` their derivatives.
@@ -755,6 +868,47 @@ pub(crate) mod tests {
                         let fd = (ep.position[x] - em.position[x]) / (2.0 * h);
                         assert!((fd - e.jacobian[ax][x]).abs() < 1e-5 * (size as f64 + fd.abs()));
                     }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn locating_by_displacements_gives_the_full_sum() {
+        let mut rng = Rng(23);
+        for mut vol in volumes() {
+            let size = vol.region().size().max_element() as f64;
+            let n = vol.controls().len();
+            // At rest, then a few controls moved (the displacements' sum), then every one
+            // (the full sum, past the sparse limit for the larger lattices).
+            for moved in [0, 1, 3, n] {
+                vol.reset_positions();
+                for _ in 0..moved {
+                    let index = (rng.next_f64() * n as f64) as usize % n;
+                    let [i, j, k] = vol.ijk(index);
+                    let p = vol.controls()[index].rest_m + rng.uvw(-0.1, 0.1).to_vec3() * size as f32;
+                    vol.set_position(i, j, k, p).unwrap();
+                }
+                for _ in 0..50 {
+                    // In the cube and beyond it, where the end spans' polynomials continue.
+                    let uvw = rng.uvw(-0.3, 1.3);
+                    let (full, located) = (vol.eval::<true>(uvw), vol.locate::<true>(uvw));
+                    for x in 0..3 {
+                        assert!(
+                            (full.position[x] - located.position[x]).abs() < 1e-12 * size,
+                            "{moved} moved"
+                        );
+                        for a in 0..3 {
+                            assert!(
+                                (full.jacobian[a][x] - located.jacobian[a][x]).abs() < 1e-11 * size,
+                                "{moved} moved: {:?} against {:?}",
+                                full.jacobian,
+                                located.jacobian
+                            );
+                        }
+                    }
+                    let plain = vol.locate::<false>(uvw).position;
+                    assert!((0..3).all(|x| (plain[x] - located.position[x]).abs() < 1e-12 * size));
                 }
             }
         }
