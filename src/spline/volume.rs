@@ -357,6 +357,7 @@ impl SplineVolume {
             self.hull = self.hull.grown_by_point(position_m);
         }
         self.refresh_homogeneous_at(index);
+        self.refresh_displaced();
         Ok(())
     }
 
@@ -474,21 +475,17 @@ impl SplineVolume {
 
     fn refresh_homogeneous_at(&mut self, index: usize) {
         self.homogeneous[index] = homogeneous(&self.controls[index], self.rest[index]);
-        self.refresh_displaced();
     }
 
+    /// Recomputes the list of moved controls (after a position changed).
     fn refresh_displaced(&mut self) {
-        self.displaced.clear();
-        for (index, (c, r)) in self.controls.iter().zip(&self.rest).enumerate() {
-            if c.position_m != c.rest_m {
+        self.displaced = (self.controls.iter().zip(&self.rest).enumerate())
+            .filter(|(_, (c, _))| c.position_m != c.rest_m)
+            .map(|(index, (c, r))| {
                 let p = to_f64(c.position_m);
-                let ijk = {
-                    let [l, m, _] = self.counts;
-                    [index % l, (index / l) % m, index / (l * m)]
-                };
-                self.displaced.push(Displaced { ijk, by: std::array::from_fn(|a| p[a] - r[a]) });
-            }
-        }
+                Displaced { ijk: self.ijk(index), by: std::array::from_fn(|a| p[a] - r[a]) }
+            })
+            .collect();
     }
 
     fn refresh_weights(&mut self) {
@@ -536,6 +533,25 @@ impl SplineVolume {
         self.eval::<false>(uvw).position
     }
 
+    /// Each axis's non-zero basis functions at `uvw`, and with `D` their derivatives (else
+    /// zeros).
+    #[inline]
+    fn bases<const D: bool>(&self, uvw: Uvw) -> [super::BasisDerivatives; 3] {
+        std::array::from_fn(|a| {
+            if D {
+                self.knots[a].basis_with_derivatives(uvw.0[a])
+            } else {
+                let b = self.knots[a].basis(uvw.0[a]);
+                super::BasisDerivatives {
+                    first: b.first,
+                    order: b.order,
+                    values: b.values,
+                    derivatives: [0.0; MAX_ORDER],
+                }
+            }
+        })
+    }
+
     /// The position at one parameter, and with `D` its Jacobian: [`Self::eval`]'s, found as
     /// the box's affine map plus the moved controls' displacements where the weights are equal
     /// and few controls moved (see the module documentation).
@@ -559,19 +575,7 @@ impl SplineVolume {
         if self.displaced.is_empty() {
             return out;
         }
-        let bases: [_; 3] = std::array::from_fn(|a| {
-            if D {
-                self.knots[a].basis_with_derivatives(u[a])
-            } else {
-                let b = self.knots[a].basis(u[a]);
-                super::BasisDerivatives {
-                    first: b.first,
-                    order: b.order,
-                    values: b.values,
-                    derivatives: [0.0; MAX_ORDER],
-                }
-            }
-        });
+        let bases = self.bases::<D>(uvw);
         for c in &self.displaced {
             // The control's place among each axis's non-zero functions, if it has one.
             let r: [usize; 3] = std::array::from_fn(|a| c.ijk[a].wrapping_sub(bases[a].first));
@@ -586,9 +590,9 @@ impl SplineVolume {
             if D {
                 let dn: [f64; 3] = std::array::from_fn(|a| bases[a].derivatives[r[a]]);
                 let along = [dn[0] * n[1] * n[2], n[0] * dn[1] * n[2], n[0] * n[1] * dn[2]];
-                for a in 0..3 {
-                    for x in 0..3 {
-                        out.jacobian[a][x] += along[a] * c.by[x];
+                for (column, along) in out.jacobian.iter_mut().zip(along) {
+                    for (entry, by) in column.iter_mut().zip(c.by) {
+                        *entry += along * by;
                     }
                 }
             }
@@ -600,19 +604,7 @@ impl SplineVolume {
     /// Allocates nothing.
     #[inline]
     pub(crate) fn eval<const D: bool>(&self, uvw: Uvw) -> Eval {
-        let bases: [_; 3] = std::array::from_fn(|a| {
-            if D {
-                self.knots[a].basis_with_derivatives(uvw.0[a])
-            } else {
-                let b = self.knots[a].basis(uvw.0[a]);
-                super::BasisDerivatives {
-                    first: b.first,
-                    order: b.order,
-                    values: b.values,
-                    derivatives: [0.0; MAX_ORDER],
-                }
-            }
-        });
+        let bases = self.bases::<D>(uvw);
         let [bu, bv, bw] = &bases;
         let [l, m, _] = self.counts;
         // Sums of (w·p, w, w·f): t, and its derivatives along u, v, w.
