@@ -20,6 +20,7 @@ mod brick;
 mod dense;
 mod history;
 mod levels;
+mod plan;
 mod sample;
 mod tree;
 
@@ -31,6 +32,7 @@ pub use brick::{
 pub use dense::{DenseCopy, Span, TiledCopy, TiledReader};
 pub use history::{HistoryConfig, HistoryError, HistoryStats, BRICK_BYTES};
 pub use levels::{COLOUR_DETAIL_TOLERANCE, DETAIL_TOLERANCE};
+pub use plan::{bricks_over, BrickPlan, Fill, PlanStats};
 pub use sample::FieldReader;
 
 /// The finest voxel sizes a field may have, metres: from 0.1 mm (a 20 cm figure is then 2 000

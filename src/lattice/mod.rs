@@ -66,11 +66,24 @@
 //!
 //! A drag changes the mapping only on the dragged control's support
 //! ([`SplineVolume::support_world_bounds`] before and after); [`Lattice::changed_box`] says
-//! where, and callers re-evaluate only there. The inverse mapping is found by Newton's method
-//! at every [`COARSE_STRIDE`]-th point of that box and interpolated between (the points near
-//! the box's faces and outside it are mapped one by one); the function mapping's shift, when a
-//! value or weight has changed, is evaluated at every point. Rows are evaluated in parallel;
-//! each Newton search starts from its neighbour's parameters, extrapolated.
+//! where, and [`Lattice::write`] re-evaluates only there, brick by brick ([`BrickPlan`]):
+//!
+//! - Where the weights are equal, a point's read lies within the moved controls'
+//!   displacements of the point (`A(u) = x − Σ N_i(u) d_i`): a brick whose every such read
+//!   lies in empty clay is empty, one whose reads lie in full clay of one colour is full of it
+//!   (when the cube's faces are at rest, so that every point has a preimage), with no inverse
+//!   mapping found at all.
+//! - For the other bricks the inverse mapping is found by Newton's method at the nodes of a
+//!   grid every [`COARSE_STRIDE`] points (each search from its row's two nodes before it,
+//!   extrapolated, to [`MAPPING_TOLERANCE_VOXELS`]) and interpolated between; the reads of a
+//!   brick, or of a 4³ block of one, lie between its nodes' reads, which decide it whole
+//!   where they can.
+//! - Only the points of the blocks left mixed are evaluated one by one (the function
+//!   mapping's shift, when a value or weight has changed, at each), on every thread; a brick
+//!   that comes out as the last write left it is not written again.
+//!
+//! [`Lattice::evaluate`] is the same mapping point by point over any box (the reference the
+//! tests hold the writes to).
 
 mod edit;
 #[cfg(test)]
@@ -80,7 +93,9 @@ pub use edit::{volume_at, ControlEdit, Selection, TimedEdit};
 
 use rayon::prelude::*;
 
-use crate::field::{Colour, DenseCopy, Field, DEFAULT_COLOUR};
+use crate::field::{
+    bricks_over, Brick, BrickPlan, Colour, DenseCopy, Field, Fill, Span, BRICK_SIZE, DEFAULT_COLOUR,
+};
 use crate::math::{Aabb, IVec3, Vec3, VoxelTransform};
 use crate::spline::{
     unit_cube_function, FitReport, KnotStyle, SplineError, SplineKind, SplineVolume, Uvw,
@@ -90,6 +105,11 @@ use crate::spline::{
 /// The most lattice points of the field a lattice may copy (its box, and the room its
 /// control points may move into): 2²⁴, 256³, about 320 MiB with their colours.
 pub const MAX_SOURCE_POINTS: u64 = 1 << 24;
+
+/// How closely the inverse mapping is solved for, in voxels: the clay is read trilinearly, so
+/// an error this small changes no density by more than it times the steepest ramp (about one
+/// per voxel).
+pub const MAPPING_TOLERANCE_VOXELS: f64 = 1e-5;
 
 /// The width of the window `κ` on each face, as a fraction of the box: the clay within it is
 /// blended from the mapping to itself.
@@ -273,21 +293,25 @@ pub enum LatticeError {
     },
 }
 
-/// What an evaluation did.
+/// What an evaluation or a write did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct LatticeStats {
-    /// Samples evaluated.
+    /// Samples evaluated one by one (a write's whole bricks and blocks filled or given back
+    /// are not).
     pub points: usize,
-    /// Samples whose inverse mapping ran Newton's method (the others were at rest, or had no
-    /// preimage in the cube).
+    /// Samples whose inverse mapping ran Newton's method (the others were at rest, had no
+    /// preimage in the cube, or were interpolated), the coarse grid's nodes included.
     pub searched: usize,
     /// Samples read elsewhere than where they are (the mapping moved them).
     pub moved: usize,
     /// Newton iterations, in all.
     pub newton_iterations: u64,
-    /// Samples whose parameters were interpolated between the coarse grid's nodes, or whose
-    /// cell of constant clay needed none.
+    /// Samples whose parameters were interpolated between the coarse grid's nodes.
     pub interpolated: usize,
+    /// Samples written into the field (a write: every brick it changed).
+    pub written: u64,
+    /// Bricks written.
+    pub bricks: usize,
 }
 
 impl std::ops::Add for LatticeStats {
@@ -300,6 +324,8 @@ impl std::ops::Add for LatticeStats {
             moved: self.moved + o.moved,
             newton_iterations: self.newton_iterations + o.newton_iterations,
             interpolated: self.interpolated + o.interpolated,
+            written: self.written + o.written,
+            bricks: self.bricks + o.bricks,
         }
     }
 }
@@ -308,93 +334,115 @@ impl std::ops::Add for LatticeStats {
 /// found by Newton's method; between them the parameters are interpolated trilinearly (the
 /// mapping is a polynomial of the lattice's order over spans many voxels long: `tests` bound
 /// the error it makes), and the function mapping's shift, which varies on the scale of the
-/// clay's surface, is evaluated at every point.
+/// clay's surface, is evaluated at every point. Nodes lie on multiples of it (and on the box's
+/// faces), so that a brick's points lie between the nodes on its own corners, mid-points and
+/// far faces.
 pub const COARSE_STRIDE: i32 = 4;
 
-/// The parameters at the nodes of a coarse grid over a box of lattice points (in the cube or
-/// not): `None` at nodes where the search found none (outside the control points' hull, or
-/// not converged), around which points are mapped one by one.
+/// The parameters at the nodes of a coarse grid over the lattice's box (within the points it
+/// serves): `None` at nodes where the search found none (outside the control points' hull,
+/// or not converged), around which points are mapped one by one.
 #[derive(Debug)]
 struct CoarseMap {
-    counts: IVec3,
-    /// The lattice point of the first node: the grid covers the lattice's box (where the
-    /// mapping is smooth) within the box of points evaluated.
-    origin: IVec3,
-    /// The offset of the grid's last point from its first: node `n` lies at
-    /// `origin + min(n · COARSE_STRIDE, last)`, so that the last nodes lie on its far faces.
-    last: IVec3,
+    /// Per axis, each node's lattice coordinate: the first point served in the box, every
+    /// multiple of [`COARSE_STRIDE`] past it, and the last.
+    at: [Vec<i32>; 3],
+    /// Per axis, per lattice coordinate from the first node's to the last's: the cell holding
+    /// it (between nodes `c` and `c + 1`) and where in it (0 to 1).
+    cells: [Vec<(usize, f64)>; 3],
+    /// The nodes' parameters, axis 0 fastest.
     nodes: Vec<Option<[f64; 3]>>,
-    /// Per cell (`counts − 1` per axis): the density of every point in it, when every read
-    /// its points make lies where the clay is constant (the rest mapping is affine, so
-    /// their reads lie in the box of its corners' reads), and no shift applies.
-    constant: Vec<Option<f32>>,
 }
 
 impl CoarseMap {
-    /// For the row of lattice points `(·, y, z)` of `p`: per node column, the parameters
-    /// interpolated in `y` and `z` from the four nodes around the row (`None` where one of
-    /// them has none); `None` for a row outside the grid.
-    fn row_edges(&self, p: IVec3) -> Option<Vec<Option<[f64; 3]>>> {
-        let q = p - self.origin;
-        if q.y < 0 || q.z < 0 || q.y > self.last.y || q.z > self.last.z {
+    /// The nodes of a grid over the lattice points `lo ..= hi` (the box's, of those served),
+    /// without parameters; `None` where it is too thin for one.
+    fn laid_over(lo: IVec3, hi: IVec3) -> Option<Self> {
+        if (hi - lo).min_element() < 2 * COARSE_STRIDE {
             return None;
         }
-        let (cy, ty) = self.cell(1, q.y);
-        let (cz, tz) = self.cell(2, q.z);
-        let (nx, ny) = (self.counts.x as usize, self.counts.y as usize);
-        let node = |x: usize, y: i32, z: i32| self.nodes[x + nx * (y as usize + ny * z as usize)];
-        Some(
-            (0..nx)
-                .map(|x| {
-                    let corners =
-                        [node(x, cy, cz), node(x, cy + 1, cz), node(x, cy, cz + 1), node(x, cy + 1, cz + 1)];
-                    let [a, b, c, d] = [corners[0]?, corners[1]?, corners[2]?, corners[3]?];
-                    Some(std::array::from_fn(|i| {
-                        let low = a[i] + (b[i] - a[i]) * ty;
-                        let high = c[i] + (d[i] - c[i]) * ty;
-                        low + (high - low) * tz
-                    }))
-                })
-                .collect(),
-        )
+        let at: [Vec<i32>; 3] = std::array::from_fn(|a| {
+            let mut at = vec![lo[a]];
+            let mut next = (lo[a].div_euclid(COARSE_STRIDE) + 1) * COARSE_STRIDE;
+            while next < hi[a] {
+                at.push(next);
+                next += COARSE_STRIDE;
+            }
+            at.push(hi[a]);
+            at
+        });
+        let cells = std::array::from_fn(|a| {
+            let nodes = &at[a];
+            let mut cells = Vec::with_capacity((hi[a] - lo[a] + 1) as usize);
+            for c in 0..nodes.len() - 1 {
+                let (x0, x1) = (nodes[c], nodes[c + 1]);
+                let last = c == nodes.len() - 2;
+                for x in x0..if last { x1 + 1 } else { x1 } {
+                    cells.push((c, (x - x0) as f64 / (x1 - x0) as f64));
+                }
+            }
+            cells
+        });
+        let n = at.iter().map(Vec::len).product();
+        Some(Self { at, cells, nodes: vec![None; n] })
     }
 
-    /// The offset of node `n` along `axis`.
+    /// Nodes per axis.
     #[inline]
-    fn node_offset(&self, axis: usize, n: i32) -> i32 {
-        (n * COARSE_STRIDE).min(self.last[axis])
+    fn counts(&self) -> [usize; 3] {
+        [self.at[0].len(), self.at[1].len(), self.at[2].len()]
     }
 
-    /// The cell holding offset `o` along `axis`, and where in it `o` lies (0 to 1).
+    /// The lattice point of node `n`.
     #[inline]
-    fn cell(&self, axis: usize, o: i32) -> (i32, f64) {
-        let c = (o / COARSE_STRIDE).min(self.counts[axis] - 2);
-        let (a, b) = (self.node_offset(axis, c), self.node_offset(axis, c + 1));
-        (c, (o - a) as f64 / (b - a).max(1) as f64)
+    fn point(&self, n: [usize; 3]) -> IVec3 {
+        IVec3::new(self.at[0][n[0]], self.at[1][n[1]], self.at[2][n[2]])
     }
 
-    /// The constant density of the cell holding lattice point `p`, if it has one.
     #[inline]
-    fn constant_at(&self, p: IVec3) -> Option<f32> {
-        let q = p - self.origin;
-        if q.cmplt(IVec3::ZERO).any() || q.cmpgt(self.last).any() {
-            return None;
+    fn node(&self, n: [usize; 3]) -> Option<[f64; 3]> {
+        let [cx, cy, _] = self.counts();
+        self.nodes[n[0] + cx * (n[1] + cy * n[2])]
+    }
+
+    /// The cell holding coordinate `x` along `axis`, and where in it, when the grid covers it.
+    #[inline]
+    fn cell(&self, axis: usize, x: i32) -> Option<(usize, f64)> {
+        usize::try_from(x - self.at[axis][0]).ok().and_then(|o| self.cells[axis].get(o).copied())
+    }
+
+    /// The parameters at lattice point `p`, interpolated from its cell's corners; `None`
+    /// outside the grid or where a corner has none.
+    #[inline]
+    fn parameters(&self, p: IVec3) -> Option<[f64; 3]> {
+        let (cx, tx) = self.cell(0, p.x)?;
+        let (cy, ty) = self.cell(1, p.y)?;
+        let (cz, tz) = self.cell(2, p.z)?;
+        let mut out = [0.0; 3];
+        for corner in 0..8 {
+            let (i, j, k) = (corner & 1, (corner >> 1) & 1, corner >> 2);
+            let u = self.node([cx + i, cy + j, cz + k])?;
+            let w = (if i == 1 { tx } else { 1.0 - tx })
+                * (if j == 1 { ty } else { 1.0 - ty })
+                * (if k == 1 { tz } else { 1.0 - tz });
+            for a in 0..3 {
+                out[a] += w * u[a];
+            }
         }
-        let c = IVec3::new(self.cell(0, q.x).0, self.cell(1, q.y).0, self.cell(2, q.z).0);
-        let cells = self.counts - IVec3::ONE;
-        self.constant[(c.x + cells.x * (c.y + cells.y * c.z)) as usize]
+        Some(out)
     }
 
-    /// The parameters at lattice point `(x, ·, ·)` of the row whose `edges` are given.
-    #[inline]
-    fn interpolate(&self, edges: &[Option<[f64; 3]>], x: i32) -> Option<[f64; 3]> {
-        let q = x - self.origin.x;
-        if q < 0 || q > self.last.x {
-            return None;
+    /// The nodes `first ..= last` whose cells hold the lattice points `lo ..= hi`, when the grid
+    /// covers them.
+    fn nodes_over(&self, lo: IVec3, hi: IVec3) -> Option<([usize; 3], [usize; 3])> {
+        let mut first = [0; 3];
+        let mut last = [0; 3];
+        for a in 0..3 {
+            first[a] = self.cell(a, lo[a])?.0;
+            let (c, t) = self.cell(a, hi[a])?;
+            last[a] = if t == 0.0 { c } else { c + 1 };
         }
-        let (c, t) = self.cell(0, q);
-        let (a, b) = (edges[c as usize]?, edges[c as usize + 1]?);
-        Some(std::array::from_fn(|i| a[i] + (b[i] - a[i]) * t))
+        Some((first, last))
     }
 }
 
@@ -436,6 +484,11 @@ pub struct Lattice {
     window_scale: f64,
     /// What opening it cost.
     opened: OpenTimes,
+    /// What the writes left in each brick of the field.
+    plan: BrickPlan,
+    /// The rest mapping onto the field's lattice: parameters `u` lie at index coordinates
+    /// `to_index.0 + to_index.1 · u`.
+    to_index: ([f64; 3], [f64; 3]),
 }
 
 /// What opening a lattice cost, seconds.
@@ -470,6 +523,203 @@ struct State {
     /// [`Lattice::shifts`].
     shifting: bool,
 }
+
+/// What bounds the reads of a box of points when its fill is decided.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum By {
+    /// The moved controls' displacements (no node needed): each point's read lies within the
+    /// displacements' box of the point.
+    Displacements,
+    /// The coarse grid's nodes around the box: every point's parameters lie between theirs,
+    /// so its read (the rest mapping being affine) lies in the box of the nodes' reads.
+    Nodes,
+}
+
+/// What evaluating a box of lattice points needs, found once for it.
+struct Context<'a> {
+    lattice: &'a Lattice,
+    state: State,
+    /// The lattice points in the lattice's box.
+    box_lo: IVec3,
+    box_hi: IVec3,
+    /// The lattice points around the control points' hull: beyond them nothing has a
+    /// preimage in the cube.
+    hull_lo: IVec3,
+    hull_hi: IVec3,
+    /// The longest shift, in lattice points (rounded up).
+    shift_points: i32,
+    /// Where the weights are equal: how far below and above a point its read may lie (the
+    /// displacements' box, the shift, the trilinear read's corner and a point of slack), and
+    /// whether every point of the box has a preimage in the cube.
+    bound: Option<(IVec3, IVec3, bool)>,
+    /// The nodes of the inverse mapping's coarse grid, when it has one.
+    coarse: Option<CoarseMap>,
+    /// What finding the nodes cost.
+    stats: LatticeStats,
+}
+
+impl Context<'_> {
+    /// What the lattice points `lo ..= hi` become, where they all become one thing; else
+    /// [`Fill::Mixed`]. Outside the box and the hull nothing reaches them; inside the box, the
+    /// reads lie within the bound `by` gives (see [`By`]), grown by the longest shift when
+    /// values or weights changed: where the clay was empty there, or full of one colour, so
+    /// are the points.
+    fn fill(&self, lo: IVec3, hi: IVec3, by: By) -> Fill {
+        // Empty where the clay was empty, or full of the colour it was full of, is the clay as
+        // it was: no brick made where there was none, none written again.
+        match self.fill_of(lo, hi, by) {
+            Fill::Empty if self.lattice.source.span(lo, hi).max == 0.0 => Fill::Original,
+            Fill::Full(colour)
+                if self.lattice.source.span(lo, hi) == (Span { min: 1.0, max: 1.0, full: Some(colour) }) =>
+            {
+                Fill::Original
+            }
+            fill => fill,
+        }
+    }
+
+    /// [`Self::fill`], before a fill that is the clay as it was is named so.
+    fn fill_of(&self, lo: IVec3, hi: IVec3, by: By) -> Fill {
+        let outside = |a: IVec3, b: IVec3| lo.cmpgt(b).any() || hi.cmplt(a).any();
+        let untouched = self.state.at_rest && !self.state.shifting;
+        if untouched || (outside(self.box_lo, self.box_hi) && outside(self.hull_lo, self.hull_hi)) {
+            return Fill::Original;
+        }
+        if lo.cmplt(self.box_lo).any() || hi.cmpgt(self.box_hi).any() {
+            return Fill::Mixed;
+        }
+        if by == By::Displacements {
+            return self.bounded_fill(lo, hi);
+        }
+        let Some(grid) = &self.coarse else { return Fill::Mixed };
+        let Some((first, last)) = grid.nodes_over(lo, hi) else { return Fill::Mixed };
+        let (mut a, mut b) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        let mut moved = false;
+        for k in first[2]..=last[2] {
+            for j in first[1]..=last[1] {
+                for i in first[0]..=last[0] {
+                    let Some(u) = grid.node([i, j, k]) else { return Fill::Mixed };
+                    if !Uvw(u).is_in_unit_cube() {
+                        return Fill::Mixed;
+                    }
+                    let own = grid.point([i, j, k]);
+                    let read = self.lattice.rest_index(u);
+                    for x in 0..3 {
+                        moved |= (read[x] - own[x] as f64).abs() > 1e-4;
+                        a[x] = a[x].min(read[x]);
+                        b[x] = b[x].max(read[x]);
+                    }
+                }
+            }
+        }
+        if !moved && !self.state.shifting {
+            return Fill::Original;
+        }
+        let grow = if self.state.shifting { self.shift_points } else { 0 };
+        let a =
+            IVec3::new(a[0].floor() as i32, a[1].floor() as i32, a[2].floor() as i32) - IVec3::splat(grow);
+        let b = IVec3::new(b[0].floor() as i32, b[1].floor() as i32, b[2].floor() as i32)
+            + IVec3::splat(1 + grow);
+        // Every node in the cube: every point has its preimage.
+        self.fill_reading(a, b, true)
+    }
+
+    /// What points become whose reads all lie in the clay as it was at `lo ..= hi`: empty
+    /// where it was empty, full of its colour where it was full of one (and every point has a
+    /// preimage in the cube, as `preimages` says), else mixed.
+    fn fill_reading(&self, lo: IVec3, hi: IVec3, preimages: bool) -> Fill {
+        match self.lattice.source.span(lo, hi) {
+            Span { max: 0.0, .. } => Fill::Empty,
+            Span { min: 1.0, full: Some(colour), .. } if preimages => Fill::Full(colour),
+            _ => Fill::Mixed,
+        }
+    }
+
+    /// [`Self::fill`] for points of the box, from the displacements' bound alone: empty where
+    /// every read the bound allows lies in empty clay, full where it lies in full clay of one
+    /// colour and every point has a preimage.
+    fn bounded_fill(&self, lo: IVec3, hi: IVec3) -> Fill {
+        let Some((below, above, preimages)) = self.bound else { return Fill::Mixed };
+        self.fill_reading(lo - below, hi + above, preimages)
+    }
+
+    /// Brick `key`'s densities and colours into `out` ([`Brick::linear`] order), decided
+    /// again block by block and the mixed blocks' points evaluated one by one.
+    fn brick(&self, key: IVec3, out: &mut [(f32, Colour)]) -> LatticeStats {
+        let base = key * IVec3::splat(BRICK_SIZE);
+        let mut stats = LatticeStats::default();
+        let blocks = BRICK_SIZE / BLOCK;
+        for block in 0..blocks * blocks * blocks {
+            let offset =
+                IVec3::new(block % blocks, (block / blocks) % blocks, block / (blocks * blocks)) * BLOCK;
+            let lo = base + offset;
+            let fill = self.fill(lo, lo + IVec3::splat(BLOCK - 1), By::Nodes);
+            let mut previous = [None; 2];
+            for i in 0..BLOCK * BLOCK * BLOCK {
+                let local = offset + IVec3::new(i % BLOCK, (i / BLOCK) % BLOCK, i / (BLOCK * BLOCK));
+                let p = base + local;
+                if i % BLOCK == 0 {
+                    previous = [None; 2];
+                }
+                let source = &self.lattice.source;
+                out[Brick::linear(local)] = fill
+                    .value(|| (source.density(p), source.colour(p)))
+                    .unwrap_or_else(|| self.point(p, &mut previous, true, &mut stats));
+            }
+        }
+        stats
+    }
+
+    /// The deformed clay at lattice point `p` (its colour only when asked): the parameters
+    /// interpolated on the coarse grid where it covers `p`, else found by Newton's method from
+    /// the row's `previous` two points' extrapolated.
+    #[inline]
+    fn point(
+        &self,
+        p: IVec3,
+        previous: &mut [Option<Uvw>; 2],
+        colour: bool,
+        stats: &mut LatticeStats,
+    ) -> (f32, Colour) {
+        let lattice = self.lattice;
+        let own = [p.x as f64, p.y as f64, p.z as f64];
+        stats.points += 1;
+        let interpolated = self.coarse.as_ref().and_then(|c| c.parameters(p)).map(Uvw);
+        let read = match interpolated {
+            Some(uvw) => {
+                // The grid lies in the box.
+                stats.interpolated += 1;
+                match uvw.is_in_unit_cube() {
+                    true => lattice.read_at_parameters(own, uvw, true, self.state.shifting),
+                    false => Read::Empty,
+                }
+            }
+            None => {
+                let m = lattice.map_index(own, extrapolated(*previous), &self.state);
+                *previous = [previous[1], m.uvw];
+                stats.searched += usize::from(m.iterations > 0);
+                stats.newton_iterations += m.iterations as u64;
+                m.read
+            }
+        };
+        stats.moved += usize::from(read != Read::Own);
+        lattice.read(p, read, colour)
+    }
+}
+
+/// A start for the inverse mapping of the next point of a row (evenly spaced) from the
+/// parameters of the two before it: extrapolated linearly.
+#[inline]
+fn extrapolated(previous: [Option<Uvw>; 2]) -> Option<Uvw> {
+    match previous {
+        [Some(a), Some(b)] => Some(Uvw(std::array::from_fn(|i| 2.0 * b.0[i] - a.0[i]))),
+        [_, b] => b,
+    }
+}
+
+/// Lattice points along a side of the blocks a mixed brick is decided in, block by block,
+/// before its points are evaluated one by one.
+const BLOCK: i32 = 4;
 
 /// One sample of the result: how it reads the clay, and its parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -509,6 +759,15 @@ impl Lattice {
             max_shift_m: spec.max_shift_m(),
             window_scale: 1.0 / (FACE_BLEND * (1.0 - FACE_BLEND)),
             opened: OpenTimes::default(),
+            plan: BrickPlan::new(),
+            to_index: {
+                let (min, size) = (spec.region.min, spec.region.size());
+                let (h, o) = (transform.voxel_size_m as f64, transform.origin_m);
+                (
+                    std::array::from_fn(|a| (min[a] as f64 - o[a] as f64) / h),
+                    std::array::from_fn(|a| size[a] as f64 / h),
+                )
+            },
         };
         let (lo, hi) = lattice.source_box(volume.hull())?;
         let start = std::time::Instant::now();
@@ -700,7 +959,9 @@ impl Lattice {
             if !(x.cmpge(hull.min).all() && x.cmple(hull.max).all()) {
                 return left(None, 0);
             }
-            let (mut m, _) = self.volume.inverse_map_within(x, start, Vec3::ZERO, false);
+            let tolerance = MAPPING_TOLERANCE_VOXELS * t.voxel_size_m as f64
+                / self.spec.region.size().max_element() as f64;
+            let (mut m, _) = self.volume.inverse_map_within(x, start, Vec3::ZERO, false, tolerance);
             if !m.converged {
                 let spent = m.iterations;
                 m = self.volume.inverse_map_from(x, start);
@@ -737,29 +998,32 @@ impl Lattice {
     /// reads the clay (`shifting`: [`Self::shifts`]).
     #[inline]
     fn read_at_parameters(&self, own: [f64; 3], uvw: Uvw, in_box: bool, shifting: bool) -> Read {
-        let t = &self.transform;
-        let (voxel, origin) = (t.voxel_size_m as f64, t.origin_m);
-        let region = self.spec.region;
-        let (min, size) = (region.min, region.size());
-        let mut rest: [f64; 3] = std::array::from_fn(|a| min[a] as f64 + size[a] as f64 * uvw.0[a]);
+        let mut read_at = self.rest_index(uvw.0);
         // The function mapping's shift, faded out on the faces so that it meets the clay
         // outside without a step.
         if shifting {
             let kappa = smoothstep(self.window_scale * unit_cube_function(uvw));
             if kappa > 0.0 {
                 let shift = self.shift(uvw);
+                let h = self.transform.voxel_size_m as f64;
                 for a in 0..3 {
-                    rest[a] += kappa * shift[a];
+                    read_at[a] += kappa * shift[a] / h;
                 }
             }
         }
-        let read_at: [f64; 3] = std::array::from_fn(|a| (rest[a] - origin[a] as f64) / voxel);
         let moved = (0..3).any(|a| (read_at[a] - own[a]).abs() > 1e-4);
         match (moved, in_box) {
             (false, true) => Read::Own,
             (true, true) => Read::At(read_at),
             (_, false) => Read::AtOrOwn(read_at),
         }
+    }
+
+    /// The index coordinates where the rest lattice places parameters `u`.
+    #[inline]
+    fn rest_index(&self, u: [f64; 3]) -> [f64; 3] {
+        let (offset, scale) = &self.to_index;
+        std::array::from_fn(|a| offset[a] + scale[a] * u[a])
     }
 
     /// The function mapping's shift at `uvw`, metres: `ΔF g / (|g|² + ε²)`, capped.
@@ -794,7 +1058,8 @@ impl Lattice {
     }
 
     /// The deformed clay's densities (and with `colours`, colours) at the lattice points
-    /// `lo ..= hi`, `x` fastest; rows in parallel.
+    /// `lo ..= hi`, `x` fastest, point by point (the inverse mapping interpolated between the
+    /// nodes of a coarse grid); rows in parallel.
     pub fn evaluate(
         &self,
         lo: IVec3,
@@ -830,59 +1095,16 @@ impl Lattice {
         let row_of = |row: usize| {
             IVec3::new(lo.x, lo.y + (row % dims.y as usize) as i32, lo.z + (row / dims.y as usize) as i32)
         };
-        let (coarse, coarse_stats) =
-            if coarse { self.coarse_map(lo, dims) } else { (None, LatticeStats::default()) };
-        let state = self.state();
-        let shifting = state.shifting;
-        let t = self.transform;
+        let mut context = self.context(lo, hi, coarse);
+        let all = vec![true; context.coarse.as_ref().map_or(0, |c| c.nodes.len())];
+        self.find_nodes(&mut context, &all);
         let eval_row = |row: usize, out: &mut [f32], mut colour: Option<&mut [Colour]>| {
             let start = row_of(row);
-            let mut stats = LatticeStats { points: nx, ..LatticeStats::default() };
-            let edges = coarse.as_ref().and_then(|c| c.row_edges(start));
-            let mut previous: [Option<Uvw>; 2] = [None, None];
+            let mut stats = LatticeStats::default();
+            let mut previous = [None; 2];
             for (x, d) in out.iter_mut().enumerate() {
                 let p = start + IVec3::new(x as i32, 0, 0);
-                let own = [p.x as f64, p.y as f64, p.z as f64];
-                // A cell of constant clay: its value, and no colour to find but the default.
-                if let Some(v) = coarse.as_ref().and_then(|c| c.constant_at(p)) {
-                    if v == 0.0 || colour.is_none() {
-                        stats.interpolated += 1;
-                        *d = v;
-                        if let Some(out) = colour.as_deref_mut() {
-                            out[x] = DEFAULT_COLOUR;
-                        }
-                        continue;
-                    }
-                }
-                let interpolated = match (&coarse, &edges) {
-                    (Some(c), Some(e)) => c.interpolate(e, p.x).map(Uvw),
-                    _ => None,
-                };
-                stats.interpolated += usize::from(interpolated.is_some());
-                let read = match interpolated {
-                    Some(uvw) => {
-                        let x = t.index_to_world(p.as_vec3());
-                        let in_box = self.volume.rest_parameters(x).is_in_unit_cube();
-                        match (uvw.is_in_unit_cube(), in_box) {
-                            (true, _) => self.read_at_parameters(own, uvw, in_box, shifting),
-                            (false, true) => Read::Empty,
-                            (false, false) => Read::Own,
-                        }
-                    }
-                    None => {
-                        let guess = match previous {
-                            [Some(a), Some(b)] => Some(Uvw(std::array::from_fn(|i| 2.0 * b.0[i] - a.0[i]))),
-                            [_, b] => b,
-                        };
-                        let m = self.map_index(own, guess, &state);
-                        previous = [previous[1], m.uvw];
-                        stats.searched += usize::from(m.iterations > 0);
-                        stats.newton_iterations += m.iterations as u64;
-                        m.read
-                    }
-                };
-                stats.moved += usize::from(read != Read::Own);
-                let (density, c) = self.read(p, read, colour.is_some());
+                let (density, c) = context.point(p, &mut previous, colour.is_some(), &mut stats);
                 *d = density;
                 if let Some(out) = colour.as_deref_mut() {
                     out[x] = c;
@@ -903,12 +1125,79 @@ impl Lattice {
                 .map(|(row, out)| eval_row(row, out, None))
                 .reduce(LatticeStats::default, |a, b| a + b),
         };
-        let LatticeStats { searched, newton_iterations, .. } = coarse_stats;
-        LatticeStats {
-            searched: stats.searched + searched,
-            newton_iterations: stats.newton_iterations + newton_iterations,
-            ..stats
+        stats + context.stats
+    }
+
+    /// What evaluating the lattice points `lo ..= hi` needs: the lattice's state, its box and
+    /// hull on the field's lattice, and (with `coarse`, where the lattice is deformed and the
+    /// box thick enough) the coarse grid's nodes over the box within them, found in parallel.
+    fn context(&self, lo: IVec3, hi: IVec3, coarse: bool) -> Context<'_> {
+        let state = self.state();
+        let t = &self.transform;
+        let region = self.spec.region;
+        // A face on the lattice (within rounding) holds its points.
+        let box_lo = (t.world_to_index(region.min) - Vec3::splat(1e-3)).ceil().as_ivec3();
+        let box_hi = (t.world_to_index(region.max) + Vec3::splat(1e-3)).floor().as_ivec3();
+        let hull = self.volume.hull();
+        let hull_lo = t.world_to_index(hull.min).floor().as_ivec3();
+        let hull_hi = t.world_to_index(hull.max).ceil().as_ivec3();
+        let mut context = Context {
+            lattice: self,
+            state,
+            box_lo,
+            box_hi,
+            hull_lo,
+            hull_hi,
+            shift_points: (self.max_shift_m / t.voxel_size_m as f64).ceil() as i32,
+            bound: None,
+            coarse: None,
+            stats: LatticeStats::default(),
+        };
+        if let Some(d) = self.volume.displacement_box() {
+            let grow = 1 + if state.shifting { context.shift_points } else { 0 };
+            let h = t.voxel_size_m;
+            let below = (d.max / h).ceil().as_ivec3() + IVec3::splat(grow);
+            let above = (-d.min / h).ceil().as_ivec3() + IVec3::splat(grow + 1);
+            context.bound = Some((below, above, self.volume.faces_at_rest()));
         }
+        if coarse && !state.at_rest {
+            context.coarse = CoarseMap::laid_over(lo.max(box_lo), hi.min(box_hi));
+        }
+        context
+    }
+
+    /// Finds the coarse grid's nodes where `needed` says, by Newton's method, rows in parallel;
+    /// each search starts from the row's two nodes before it, extrapolated.
+    fn find_nodes(&self, context: &mut Context<'_>, needed: &[bool]) {
+        let Some(grid) = context.coarse.as_mut() else { return };
+        let state = context.state;
+        let [cx, cy, _] = grid.counts();
+        let at = &grid.at;
+        context.stats = grid
+            .nodes
+            .par_chunks_mut(cx)
+            .zip(needed.par_chunks(cx))
+            .enumerate()
+            .map(|(row, (out, needed))| {
+                let (y, z) = (at[1][row % cy], at[2][row / cy]);
+                let mut stats = LatticeStats::default();
+                let mut previous = [None; 2];
+                for (x, (node, &needed)) in out.iter_mut().zip(needed).enumerate() {
+                    if !needed {
+                        previous = [None; 2];
+                        continue;
+                    }
+                    let own = [at[0][x] as f64, y as f64, z as f64];
+                    let m = self.map_index(own, extrapolated(previous), &state);
+                    previous = [previous[1], m.uvw];
+                    stats.searched += usize::from(m.iterations > 0);
+                    stats.newton_iterations += m.iterations as u64;
+                    // Its parameters wherever the search converged, in the cube or not.
+                    *node = m.uvw.map(|u| u.0);
+                }
+                stats
+            })
+            .reduce(LatticeStats::default, |a, b| a + b);
     }
 
     /// The density and colour of sample `p` read as `read` says (the colour only when asked).
@@ -934,81 +1223,16 @@ impl Lattice {
         }
     }
 
-    /// The mapping at every [`COARSE_STRIDE`]-th lattice point of the box of `dims` points from
-    /// `lo` (and one node past its far end), node rows in parallel; `None` when the lattice
-    /// is at rest (every point's own read is cheaper) or the box too thin.
-    fn coarse_map(&self, lo: IVec3, dims: IVec3) -> (Option<CoarseMap>, LatticeStats) {
-        let s = COARSE_STRIDE;
-        let state = self.state();
-        // The grid covers the lattice's box within the points evaluated: outside the box the
-        // mapping has no preimage or meets the clay outside, and is found point by point.
-        let t = &self.transform;
-        let region = self.spec.region;
-        let box_lo = t.world_to_index(region.min).ceil().as_ivec3();
-        let box_hi = t.world_to_index(region.max).floor().as_ivec3();
-        let lo = lo.max(box_lo);
-        let last = (lo + dims - IVec3::ONE).min(box_hi) - lo;
-        if state.at_rest || last.min_element() < 2 * s {
-            return (None, LatticeStats::default());
-        }
-        let counts = (last + IVec3::splat(s - 1)) / s + IVec3::ONE;
-        let (cx, cy) = (counts.x as usize, counts.y as usize);
-        let mut nodes = vec![None; cx * cy * counts.z as usize];
-        let stats = nodes
-            .par_chunks_mut(cx)
-            .enumerate()
-            .map(|(row, out)| {
-                let (y, z) = ((row % cy) as i32, (row / cy) as i32);
-                let mut stats = LatticeStats::default();
-                let mut previous: Option<Uvw> = None;
-                for (x, node) in out.iter_mut().enumerate() {
-                    let p = lo + (s * IVec3::new(x as i32, y, z)).min(last);
-                    let m = self.map_index([p.x as f64, p.y as f64, p.z as f64], previous, &state);
-                    previous = m.uvw;
-                    stats.searched += usize::from(m.iterations > 0);
-                    stats.newton_iterations += m.iterations as u64;
-                    // Its parameters wherever the search converged, in the cube or not.
-                    *node = m.uvw.map(|u| u.0);
-                }
-                stats
-            })
-            .reduce(LatticeStats::default, |a, b| a + b);
-        let cells = counts - IVec3::ONE;
-        let read_of = |u: [f64; 3]| -> [f64; 3] {
-            std::array::from_fn(|a| {
-                let world = region.min[a] as f64 + region.size()[a] as f64 * u[a];
-                (world - t.origin_m[a] as f64) / t.voxel_size_m as f64
-            })
-        };
-        let node = |x: i32, y: i32, z: i32| nodes[(x + counts.x * (y + counts.y * z)) as usize];
-        let constant = (0..cells.x * cells.y * cells.z)
-            .into_par_iter()
-            .map(|c| {
-                if state.shifting {
-                    return None;
-                }
-                let (x, y, z) = (c % cells.x, (c / cells.x) % cells.y, c / (cells.x * cells.y));
-                let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-                for n in 0..8 {
-                    let u = node(x + (n & 1), y + ((n >> 1) & 1), z + ((n >> 2) & 1))?;
-                    let r = read_of(u);
-                    for a in 0..3 {
-                        lo[a] = lo[a].min(r[a]);
-                        hi[a] = hi[a].max(r[a]);
-                    }
-                }
-                let lo = IVec3::new(lo[0].floor() as i32, lo[1].floor() as i32, lo[2].floor() as i32);
-                let hi =
-                    IVec3::new(hi[0].floor() as i32, hi[1].floor() as i32, hi[2].floor() as i32) + IVec3::ONE;
-                self.source.constant_density(lo, hi)
-            })
-            .collect();
-        (Some(CoarseMap { counts, origin: lo, last, nodes, constant }), stats)
-    }
-
     /// Evaluates the deformed clay over `world` and writes it into `field`, growing the copy
     /// of the clay first where the control points now reach beyond it. The caller holds
-    /// `field`'s stroke open (the lattice's whole session is one undo step).
+    /// `field`'s stroke open (the lattice's whole session is one undo step), and nothing else
+    /// writes the field while the lattice is open.
+    ///
+    /// Written brick by brick ([`BrickPlan`]): a brick (or a 4³ block of one) whose points all
+    /// read clay as it was, or read only where the clay was empty, or full of one colour, is
+    /// filled whole (its reads lie between those of the coarse grid's nodes around it, grown
+    /// by the longest shift); only the rest are evaluated point by point, and a brick left as
+    /// the last write left it is not written again.
     pub fn write(&mut self, field: &mut Field, world: Aabb) -> Result<LatticeStats, LatticeError> {
         let (slo, shi) = self.source_box(self.volume.hull())?;
         if !self.source.contains(slo, shi) {
@@ -1022,21 +1246,74 @@ impl Lattice {
             return Ok(LatticeStats::default());
         }
         let (lo, hi) = self.points_of(world);
-        let (mut d, mut c) = (Vec::new(), Vec::new());
-        let stats = self.evaluate(lo, hi, &mut d, Some(&mut c));
-        let dims = hi - lo + IVec3::ONE;
-        let at = |p: IVec3| {
-            let q = p - lo;
-            (q.x + dims.x * (q.y + dims.y * q.z)) as usize
-        };
-        field.edit_box(lo, hi, true, |p, density, colour| {
-            let i = at(p);
-            *density = d[i];
-            if d[i] > 0.0 {
-                *colour = c[i];
+        // Whole bricks: the grid over every brick the box touches.
+        let size = IVec3::splat(BRICK_SIZE);
+        let (blo, bhi) = (lo.div_euclid(size) * size, hi.div_euclid(size) * size + size - IVec3::ONE);
+        let mut plan = std::mem::take(&mut self.plan);
+        // Its far nodes on the next bricks' first points, where every brick's are.
+        let mut context = self.context(blo, bhi + IVec3::ONE, true);
+        // Each brick decided by the displacements' bound, then the nodes of those it leaves
+        // undecided found, alone, and those decided by them.
+        let keys: Vec<IVec3> = bricks_over(lo, hi).collect();
+        let bounds = |key: IVec3| (key * size, key * size + size - IVec3::ONE);
+        let mut fills: Vec<Fill> = keys
+            .par_iter()
+            .map(|&key| {
+                let (a, b) = bounds(key);
+                context.fill(a, b, By::Displacements)
+            })
+            .collect();
+        if let Some(grid) = &context.coarse {
+            let mut needed = vec![false; grid.nodes.len()];
+            let [cx, cy, _] = grid.counts();
+            let undecided: Vec<([usize; 3], [usize; 3])> = keys
+                .iter()
+                .zip(&fills)
+                .filter(|&(_, &fill)| fill == Fill::Mixed)
+                .filter_map(|(&key, _)| {
+                    // The brick's points the grid covers (a brick across a face has some).
+                    let (a, b) = bounds(key);
+                    let (first, last) = (grid.point([0; 3]), grid.point(grid.counts().map(|n| n - 1)));
+                    let (a, b) = (a.max(first), b.min(last));
+                    a.cmple(b).all().then(|| grid.nodes_over(a, b)).flatten()
+                })
+                .collect();
+            for (first, last) in undecided {
+                for k in first[2]..=last[2] {
+                    for j in first[1]..=last[1] {
+                        for i in first[0]..=last[0] {
+                            needed[i + cx * (j + cy * k)] = true;
+                        }
+                    }
+                }
             }
-        });
-        Ok(stats)
+            self.find_nodes(&mut context, &needed);
+            keys.par_iter().zip(&mut fills).filter(|(_, fill)| **fill == Fill::Mixed).for_each(
+                |(&key, fill)| {
+                    let (a, b) = bounds(key);
+                    *fill = context.fill(a, b, By::Nodes);
+                },
+            );
+        }
+        let decided: std::collections::HashMap<IVec3, Fill> = keys.iter().copied().zip(fills).collect();
+        let counted = std::sync::Mutex::new(LatticeStats::default());
+        let written = plan.write(
+            field,
+            keys,
+            |key| decided[&key],
+            || (),
+            |key, _, out| {
+                let stats = context.brick(key, out);
+                let mut all = counted.lock().unwrap_or_else(|e| e.into_inner());
+                *all = *all + stats;
+                stats.points
+            },
+            |_, p| (self.source.density(p), self.source.colour(p)),
+        );
+        let stats = counted.into_inner().unwrap_or_else(|e| e.into_inner()) + context.stats;
+        drop(context);
+        self.plan = plan;
+        Ok(LatticeStats { written: written.written, bricks: written.bricks, ..stats })
     }
 
     /// Puts the clay back as it was over everything the lattice reaches, and the lattice at

@@ -71,7 +71,8 @@ fn an_untouched_lattice_leaves_the_clay_bit_for_bit() {
         let mut field = original.clone();
         let mut lattice = open(&field, spec);
         let stats = lattice.write(&mut field, everywhere(&lattice)).unwrap();
-        assert!(stats.points > 0 && stats.moved == 0, "{stats:?}");
+        // At rest: every brick is the clay as it was, none written.
+        assert!(stats.written == 0 && stats.points == 0, "{stats:?}");
         assert!(field.same_samples(&original), "{:?}: the clay changed", spec.kind);
         // Moved and put back: exact again.
         let c = lattice.volume().control(2, 2, 2).unwrap().position_m;
@@ -296,6 +297,124 @@ fn refusals_leave_the_lattice_as_it_was() {
     let huge = Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) };
     let e = Lattice::open(&field, &LatticeSpec::cubic(huge, [4, 4, 4])).unwrap_err();
     assert!(e.to_string().contains("over the limit"), "{e}");
+}
+
+/// Writes each change of `lattice` into `field` and checks the field against the lattice's
+/// point-by-point evaluation of all it reaches: the same densities within the density
+/// quantum and the mapping's tolerance, the same colours wherever there is clay. Returns the
+/// writes' statistics.
+fn written_as_evaluated(
+    field: &mut Field,
+    lattice: &mut Lattice,
+    changes: &mut dyn FnMut(&mut Lattice, usize) -> Option<Aabb>,
+    what: &str,
+) -> Vec<LatticeStats> {
+    let mut stats = Vec::new();
+    field.begin_stroke();
+    for step in 0.. {
+        let Some(changed) = changes(lattice, step) else { break };
+        stats.push(lattice.write(field, changed).unwrap());
+        // Beyond the reach the lattice holds no copy of the clay (and changes none).
+        let (lo, hi) = lattice.points_of(lattice.reach());
+        let (mut d, mut c) = (Vec::new(), Vec::new());
+        lattice.evaluate(lo, hi, &mut d, Some(&mut c));
+        let dims = hi - lo + IVec3::ONE;
+        let mut r = FieldReader::new(field);
+        let tolerance = 2.0 * crate::field::DENSITY_TOLERANCE + 1e-4;
+        for z in 0..dims.z {
+            for y in 0..dims.y {
+                for x in 0..dims.x {
+                    let p = lo + IVec3::new(x, y, z);
+                    let i = (x + dims.x * (y + dims.y * z)) as usize;
+                    let got = r.density(p);
+                    assert!(
+                        (got - d[i]).abs() <= tolerance,
+                        "{what}, step {step}: {got} at {p}, evaluated {}",
+                        d[i]
+                    );
+                    if d[i] > 0.01 {
+                        let colour = field.colour(p);
+                        let off = (0..4).map(|k| (colour[k] - c[i][k]).abs()).fold(0.0f32, f32::max);
+                        assert!(
+                            off < 1e-3,
+                            "{what}, step {step}: colour {colour:?} at {p}, evaluated {:?}",
+                            c[i]
+                        );
+                    }
+                }
+            }
+        }
+    }
+    field.end_stroke();
+    stats
+}
+
+#[test]
+fn a_write_brick_by_brick_gives_the_clay_of_the_point_by_point_evaluation() {
+    let box_ = bar_box();
+    let lift = |l: &mut Lattice, ijk: [usize; 3], by: Vec3| {
+        let p = l.volume().control(ijk[0], ijk[1], ijk[2]).unwrap().position_m;
+        l.move_control(ijk, p + by).unwrap()
+    };
+    // An interior control dragged up, down and back (the displacements' bound and the nodes
+    // decide whole bricks), a value raised and lowered (the shift), a NURBS weight, a face
+    // control (whose face then moves: no brick is full by the bound alone), uniform knots.
+    type Changes = Box<dyn FnMut(&mut Lattice, usize) -> Option<Aabb>>;
+    // With each: whether whole bricks are filled (a shift of the values or weights reaches a
+    // control's spacing, here every brick of the box).
+    let cases: Vec<(&str, LatticeSpec, Changes, bool)> = vec![
+        (
+            "an interior drag",
+            LatticeSpec::cubic(box_, [8, 5, 5]),
+            Box::new(move |l, step| {
+                let by = [0.012, -0.024, 0.006, 0.006];
+                (step < by.len()).then(|| lift(l, [3, 2, 2], Vec3::new(0.0, by[step], 0.002)))
+            }),
+            true,
+        ),
+        (
+            "a value",
+            LatticeSpec::cubic(box_, [8, 5, 5]),
+            Box::new(|l, step| {
+                let v = l.volume().control(3, 2, 2).unwrap().value;
+                let by = [0.3, -0.5, 0.2];
+                (step < by.len()).then(|| l.set_value([3, 2, 2], v + by[step]).unwrap())
+            }),
+            false,
+        ),
+        (
+            "a weight and a drag",
+            LatticeSpec { kind: SplineKind::Nurbs, ..LatticeSpec::cubic(box_, [6, 5, 5]) },
+            Box::new(move |l, step| match step {
+                0 => Some(l.set_weight([2, 2, 2], 3.0).unwrap()),
+                1 => Some(lift(l, [3, 2, 2], Vec3::new(0.0, 0.01, 0.0))),
+                _ => None,
+            }),
+            false,
+        ),
+        (
+            "a face control",
+            LatticeSpec::cubic(box_, [6, 5, 5]),
+            Box::new(move |l, step| (step < 2).then(|| lift(l, [5, 2, 2], Vec3::new(-0.012, 0.006, 0.0)))),
+            true,
+        ),
+        (
+            "uniform knots",
+            LatticeSpec { knots: KnotStyle::Uniform, ..LatticeSpec::cubic(box_, [7, 5, 5]) },
+            Box::new(move |l, step| (step < 2).then(|| lift(l, [3, 2, 2], Vec3::new(0.0, 0.01, 0.0)))),
+            true,
+        ),
+    ];
+    for (what, spec, mut changes, fills_whole) in cases {
+        let mut field = bar();
+        let mut lattice = open(&field, spec);
+        let stats = written_as_evaluated(&mut field, &mut lattice, &mut *changes, what);
+        // Whole bricks and blocks were filled, not every point evaluated.
+        assert!(stats.iter().all(|s| s.written > 0), "{what}: {stats:?}");
+        if fills_whole {
+            assert!(stats.iter().all(|s| (s.points as u64) < s.written), "{what}: {stats:?}");
+        }
+    }
 }
 
 #[test]

@@ -32,13 +32,8 @@
 //! motion (`I·M·I⁻¹`), and all act at once on the clay as it was, so images that overlap
 //! unite rather than overwrite each other.
 
-use std::collections::HashMap;
-
-use rayon::prelude::*;
-
 use crate::field::{
-    brick_key, Brick, Colour, DenseCopy, Field, Span, TiledCopy, TiledReader, BRICK_SIZE, BRICK_VOLUME,
-    DEFAULT_COLOUR,
+    bricks_over, Brick, BrickPlan, Colour, DenseCopy, Field, Fill, Span, TiledCopy, TiledReader, BRICK_SIZE,
 };
 use crate::math::{Aabb, Affine3A, IVec3, Isometry, Mat3, Pose, Quat, Vec3, VoxelTransform};
 use crate::tool::{
@@ -274,10 +269,8 @@ pub struct RegionDrag {
     images: Vec<Image>,
     /// The clay as it was wherever the drag has written.
     originals: TiledCopy,
-    /// What the drag left in each brick it holds other than as it was (by brick key).
-    left: HashMap<IVec3, Fill>,
-    /// The values of the bricks evaluated point by point, kept from one update to the next.
-    scratch: Vec<(f32, Colour)>,
+    /// What the drag left in each brick, and the buffer its mixed bricks are evaluated into.
+    plan: BrickPlan,
     /// The ramp across a region's edge, in the region's local units.
     band_local_m: f32,
     /// The motion last applied.
@@ -319,8 +312,7 @@ impl RegionDrag {
             op,
             images,
             originals: TiledCopy::new(),
-            left: HashMap::new(),
-            scratch: Vec::new(),
+            plan: BrickPlan::new(),
             band_local_m: band_m / region.frame.min_scale(),
             motion: None,
         })
@@ -438,84 +430,24 @@ impl RegionDrag {
         }
         // Every brick the clay may change in now, and every one an earlier update left other
         // than as it was: what each becomes, decided for the whole brick where it can be.
-        let mut keys: Vec<IVec3> =
-            reach.iter().flat_map(|&(lo, hi)| bricks_over(lo, hi)).chain(self.left.keys().copied()).collect();
-        keys.sort_unstable_by_key(|k| k.to_array());
-        keys.dedup();
-        let size = IVec3::splat(BRICK_SIZE);
-        let mut values = std::mem::take(&mut self.scratch);
+        let mut plan = std::mem::take(&mut self.plan);
+        let keys: Vec<IVec3> =
+            reach.iter().flat_map(|&(lo, hi)| bricks_over(lo, hi)).chain(plan.changed_bricks()).collect();
         let how = self.resample(&moved, t, &self.originals);
-        let fills: Vec<Fill> = keys.par_iter().map(|&key| how.fill(key * size, BRICK_SIZE)).collect();
-        // A brick left as it is now is not written again; a mixed one is evaluated point by
-        // point, on every thread.
-        let was = |key: &IVec3| self.left.get(key).copied().unwrap_or(Fill::Original);
-        let writes: Vec<(IVec3, Fill)> = keys
-            .iter()
-            .zip(&fills)
-            .filter(|&(key, &fill)| fill == Fill::Mixed || fill != was(key))
-            .map(|(&key, &fill)| (key, fill))
-            .collect();
-        // Each mixed brick's values at its place in `values`.
-        let mut mixed: Vec<IVec3> = Vec::new();
-        let plan: HashMap<IVec3, Planned> = writes
-            .iter()
-            .map(|&(key, fill)| match fill {
-                Fill::Mixed => {
-                    mixed.push(key);
-                    (key, Planned::Values(mixed.len() - 1))
-                }
-                fill => (key, Planned::Fill(fill)),
-            })
-            .collect();
-        values.resize(mixed.len() * BRICK_VOLUME, (0.0, DEFAULT_COLOUR));
-        let evaluated: usize = values
-            .par_chunks_mut(BRICK_VOLUME)
-            .zip(&mixed)
-            .map_init(|| self.originals.reader(), |originals, (out, &key)| how.evaluate(key, originals, out))
-            .sum();
-        let lo = writes.iter().fold(IVec3::MAX, |a, w| a.min(w.0 * size));
-        let hi = writes.iter().fold(IVec3::MIN, |a, w| a.max(w.0 * size + size - IVec3::ONE));
-        let mut written = 0u64;
-        let mut originals = self.originals.reader();
-        let mut brick: Option<(IVec3, Planned)> = None;
-        field.edit_region(
-            lo,
-            hi,
-            true,
-            |a, _| plan.contains_key(&brick_key(a)),
-            |p, d, c| {
-                written += 1;
-                let key = brick_key(p);
-                let planned = match brick {
-                    Some((k, planned)) if k == key => planned,
-                    _ => {
-                        let planned = plan[&key];
-                        brick = Some((key, planned));
-                        planned
-                    }
-                };
-                match planned {
-                    Planned::Fill(Fill::Original) => (*d, *c) = originals.get(p),
-                    Planned::Fill(Fill::Empty) => *d = 0.0,
-                    Planned::Fill(Fill::Full(colour)) => (*d, *c) = (1.0, colour),
-                    Planned::Fill(Fill::Mixed) => unreachable!("a mixed brick's values are evaluated"),
-                    Planned::Values(i) => (*d, *c) = values[i * BRICK_VOLUME + Brick::linear(p - key * size)],
-                }
-            },
+        let stats = plan.write(
+            field,
+            keys,
+            |key| how.fill(key * BRICK_SIZE, BRICK_SIZE),
+            || self.originals.reader(),
+            |key, originals, out| how.evaluate(key, originals, out),
+            |originals, p| originals.get(p),
         );
-        for (key, fill) in keys.into_iter().zip(fills) {
-            if fill == Fill::Original {
-                self.left.remove(&key);
-            } else {
-                self.left.insert(key, fill);
-            }
-        }
+        self.plan = plan;
         self.motion = Some(motion);
-        self.scratch = values;
         let copied = (self.originals.points() + sources) as u64;
         Ok(RegionStats {
-            written,
-            evaluated: evaluated as u64,
+            written: stats.written,
+            evaluated: stats.evaluated,
             copied,
             sweep_steps: if self.op == RegionOp::Bend { steps } else { 0 },
         })
@@ -534,26 +466,6 @@ struct Moved {
     sweeps: Vec<Sweep>,
     /// The steps of a bend's sweep (1 for other operations).
     steps: u32,
-}
-
-/// What an update makes of a whole brick.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Fill {
-    /// The clay as it was.
-    Original,
-    /// No clay.
-    Empty,
-    /// Full clay of one colour.
-    Full(Colour),
-    /// Each point its own: evaluated one by one.
-    Mixed,
-}
-
-/// How a brick is written: filled (never [`Fill::Mixed`]), or from its evaluated values.
-#[derive(Clone, Copy, Debug)]
-enum Planned {
-    Fill(Fill),
-    Values(usize),
 }
 
 /// What one update resamples the clay through (`op` none: the clay as it was, exactly).
@@ -647,15 +559,10 @@ impl Resample<'_> {
             for i in 0..BLOCK * BLOCK * BLOCK {
                 let local = offset + IVec3::new(i % BLOCK, (i / BLOCK) % BLOCK, i / (BLOCK * BLOCK));
                 let p = base + local;
-                out[Brick::linear(local)] = match fill {
-                    Fill::Original => originals.get(p),
-                    Fill::Empty => (0.0, DEFAULT_COLOUR),
-                    Fill::Full(colour) => (1.0, colour),
-                    Fill::Mixed => {
-                        evaluated += 1;
-                        self.point(p, originals.get(p))
-                    }
-                };
+                out[Brick::linear(local)] = fill.value(|| originals.get(p)).unwrap_or_else(|| {
+                    evaluated += 1;
+                    self.point(p, originals.get(p))
+                });
             }
         }
         evaluated
@@ -674,14 +581,6 @@ impl Resample<'_> {
             }
         }
     }
-}
-
-/// The keys of the bricks over the lattice box `lo ..= hi`.
-fn bricks_over(lo: IVec3, hi: IVec3) -> impl Iterator<Item = IVec3> {
-    let size = IVec3::splat(BRICK_SIZE);
-    let (a, b) = (lo.div_euclid(size), hi.div_euclid(size));
-    (a.z..=b.z)
-        .flat_map(move |z| (a.y..=b.y).flat_map(move |y| (a.x..=b.x).map(move |x| IVec3::new(x, y, z))))
 }
 
 /// One image's maps from a lattice point, for [`carried`]: into its region's frame where it

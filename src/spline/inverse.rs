@@ -126,11 +126,13 @@ impl SplineVolume {
     /// before the rest lattice's inverse.
     pub fn inverse_map_from(&self, x: Vec3, start: Option<Uvw>) -> InverseMap {
         let margin = self.region().size() * HULL_MARGIN as f32;
-        self.inverse_map_within(x, start, margin, true).0
+        self.inverse_map_within(x, start, margin, true, TOLERANCE).0
     }
 
-    /// The inverse map refusing points farther than `margin` outside the control hull; with
-    /// `fallbacks`, failed starts inside the hull try the nearest control and a coarse grid.
+    /// The inverse map refusing points farther than `margin` outside the control hull, converged
+    /// within `tolerance` (relative to the box's largest side; [`TOLERANCE`] unless a caller
+    /// needs less); with `fallbacks`, failed starts inside the hull try the nearest control
+    /// and a coarse grid.
     /// Also returns the position and Jacobian at the parameters found, when the search ran.
     pub(crate) fn inverse_map_within(
         &self,
@@ -138,6 +140,7 @@ impl SplineVolume {
         start: Option<Uvw>,
         margin: Vec3,
         fallbacks: bool,
+        tolerance: f64,
     ) -> (InverseMap, Option<Located>) {
         if !x.is_finite() {
             let map = InverseMap {
@@ -151,7 +154,7 @@ impl SplineVolume {
         }
         let rest = self.rest_parameters(x);
         let target = to_f64(x);
-        let tol = TOLERANCE * self.region().size().max_element() as f64;
+        let tol = tolerance * self.region().size().max_element() as f64;
         let hull = self.hull();
         let grown = crate::math::Aabb { min: hull.min - margin, max: hull.max + margin };
         let in_grown = x.cmpge(grown.min).all() && x.cmple(grown.max).all();
@@ -294,7 +297,7 @@ impl SplineVolume {
         // Points whose preimage lies beyond the band read 0: refuse them at about the band's
         // width outside the hull (the rest lattice's parameters scale with the box).
         let margin = self.region().size() * clip.band() as f32;
-        let (map, eval) = self.inverse_map_within(x, start, margin, true);
+        let (map, eval) = self.inverse_map_within(x, start, margin, true, TOLERANCE);
         let density = match eval {
             Some(_) if map.converged && !clip.is_empty_at(map.uvw) => {
                 clip.density(self.value(map.uvw), map.uvw)

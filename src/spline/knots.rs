@@ -268,8 +268,13 @@ impl KnotVector {
 
     /// Whether this is the Bézier basis: order equal to the count, clamped.
     pub fn is_bezier(&self) -> bool {
-        self.order == self.count
-            && self.knots[..self.order].iter().all(|&t| t == self.lo)
+        self.order == self.count && self.is_clamped()
+    }
+
+    /// Whether the first and last `order` knots lie on the domain's ends: the end controls
+    /// alone shape the ends (the curve starts and ends at them).
+    pub fn is_clamped(&self) -> bool {
+        self.knots[..self.order].iter().all(|&t| t == self.lo)
             && self.knots[self.count..].iter().all(|&t| t == self.hi)
     }
 
@@ -330,18 +335,20 @@ impl KnotVector {
     /// Cox–de Boor on span `span` at knot-space `t` (Piegl and Tiller's algorithm A2.2): the
     /// `order` values into `n`; when `lower` is given, the `order − 1` values of the order
     /// below into it first.
+    /// Arrays of `N` entries, at least the order.
     #[inline]
-    fn cox_de_boor(
+    fn cox_de_boor<const N: usize>(
         &self,
         span: usize,
         t: f64,
-        n: &mut [f64; MAX_ORDER],
-        mut lower: Option<&mut [f64; MAX_ORDER]>,
+        n: &mut [f64; N],
+        mut lower: Option<&mut [f64; N]>,
     ) {
+        debug_assert!(self.order <= N);
         let p = self.order - 1;
         let u = &self.knots;
-        let mut left = [0.0; MAX_ORDER];
-        let mut right = [0.0; MAX_ORDER];
+        let mut left = [0.0; N];
+        let mut right = [0.0; N];
         n[0] = 1.0;
         for j in 1..=p {
             if j == p {
@@ -377,15 +384,28 @@ impl KnotVector {
     /// The non-zero basis functions at `u` and their derivatives with respect to `u`.
     #[inline]
     pub fn basis_with_derivatives(&self, u: f64) -> BasisDerivatives {
+        let (first, values, derivatives) = self.basis_sized::<MAX_ORDER, true>(u);
+        BasisDerivatives { first, order: self.order, values, derivatives }
+    }
+
+    /// The index of the first non-zero basis function at `u`, the functions, and with `D` their
+    /// derivatives with respect to `u` (else zeros), in arrays of `N` entries, at least the
+    /// order: no wider than a caller of low orders needs.
+    #[inline]
+    pub(crate) fn basis_sized<const N: usize, const D: bool>(&self, u: f64) -> (usize, [f64; N], [f64; N]) {
         let scale = self.hi - self.lo;
         let t = self.lo + u * scale;
         let span = self.span(t);
         let p = self.order - 1;
-        let mut values = [0.0; MAX_ORDER];
-        let mut lower = [0.0; MAX_ORDER];
+        let mut values = [0.0; N];
+        let mut derivatives = [0.0; N];
+        if !D {
+            self.cox_de_boor(span, t, &mut values, None);
+            return (span + 1 - self.order, values, derivatives);
+        }
+        let mut lower = [0.0; N];
         self.cox_de_boor(span, t, &mut values, Some(&mut lower));
         let k = &self.knots;
-        let mut derivatives = [0.0; MAX_ORDER];
         let degree = p as f64 * scale;
         for (r, d) in derivatives.iter_mut().enumerate().take(self.order) {
             // N_{span−p+r} at order k draws on N_{span−p+r} (lower[r − 1]) and
@@ -399,7 +419,7 @@ impl KnotVector {
             }
             *d = degree * acc;
         }
-        BasisDerivatives { first: span + 1 - self.order, order: self.order, values, derivatives }
+        (span + 1 - self.order, values, derivatives)
     }
 }
 

@@ -322,6 +322,33 @@ impl SplineVolume {
         self.hull
     }
 
+    /// Where the weights are equal: the box of the moved controls' displacements from rest, and
+    /// the origin, metres. In the cube `P(u) − A(u) = Σ N_i(u) d_i` lies in it (the basis
+    /// functions being non-negative and summing to 1), so a point's preimage `u` maps back to
+    /// rest within it: `A(u) ∈ x − box`. `None` for unequal weights (no such bound).
+    pub fn displacement_box(&self) -> Option<Aabb> {
+        self.uniform_weights.then(|| {
+            self.displaced
+                .iter()
+                .fold(Aabb { min: Vec3::ZERO, max: Vec3::ZERO }, |b, c| b.grown_by_point(to_vec3(c.by)))
+        })
+    }
+
+    /// Whether every control that shapes the cube's faces is at rest and the knots are
+    /// clamped (or Bézier) on every axis, so that each face maps onto itself as at rest and the
+    /// deformed cube's image is the box itself: every point of the box has a preimage in the
+    /// cube (the boundary fixed, the mapping has degree 1 over the box).
+    pub fn faces_at_rest(&self) -> bool {
+        let clamped = self.knots.iter().all(|k| k.is_clamped());
+        let [l, m, n] = self.counts;
+        clamped
+            && self.uniform_weights
+            && self.displaced.iter().all(|c| {
+                let [i, j, k] = c.ijk;
+                i > 0 && j > 0 && k > 0 && i + 1 < l && j + 1 < m && k + 1 < n
+            })
+    }
+
     /// The linear index of control `(i, j, k)`, if it lies in the lattice.
     pub fn index(&self, i: usize, j: usize, k: usize) -> Option<usize> {
         let [l, m, n] = self.counts;
@@ -561,6 +588,16 @@ impl SplineVolume {
             let e = self.eval::<D>(uvw);
             return Located { position: e.position, jacobian: e.jacobian };
         }
+        if self.knots.iter().all(|k| k.order() <= 4) {
+            self.locate_displaced::<4, D>(uvw)
+        } else {
+            self.locate_displaced::<MAX_ORDER, D>(uvw)
+        }
+    }
+
+    /// [`Self::locate`] as the affine map plus the displacements, bases in arrays of `N`.
+    #[inline]
+    fn locate_displaced<const N: usize, const D: bool>(&self, uvw: Uvw) -> Located {
         let (min, max) = (to_f64(self.region.min), to_f64(self.region.max));
         let u = uvw.0;
         let mut out = Located {
@@ -575,20 +612,22 @@ impl SplineVolume {
         if self.displaced.is_empty() {
             return out;
         }
-        let bases = self.bases::<D>(uvw);
+        let bases: [(usize, [f64; N], [f64; N]); 3] =
+            std::array::from_fn(|a| self.knots[a].basis_sized::<N, D>(u[a]));
+        let orders: [usize; 3] = std::array::from_fn(|a| self.knots[a].order());
         for c in &self.displaced {
             // The control's place among each axis's non-zero functions, if it has one.
-            let r: [usize; 3] = std::array::from_fn(|a| c.ijk[a].wrapping_sub(bases[a].first));
-            if (0..3).any(|a| r[a] >= bases[a].order) {
+            let r: [usize; 3] = std::array::from_fn(|a| c.ijk[a].wrapping_sub(bases[a].0));
+            if (0..3).any(|a| r[a] >= orders[a]) {
                 continue;
             }
-            let n: [f64; 3] = std::array::from_fn(|a| bases[a].values[r[a]]);
+            let n: [f64; 3] = std::array::from_fn(|a| bases[a].1[r[a]]);
             let weight = n[0] * n[1] * n[2];
             for x in 0..3 {
                 out.position[x] += weight * c.by[x];
             }
             if D {
-                let dn: [f64; 3] = std::array::from_fn(|a| bases[a].derivatives[r[a]]);
+                let dn: [f64; 3] = std::array::from_fn(|a| bases[a].2[r[a]]);
                 let along = [dn[0] * n[1] * n[2], n[0] * dn[1] * n[2], n[0] * n[1] * dn[2]];
                 for (column, along) in out.jacobian.iter_mut().zip(along) {
                     for (entry, by) in column.iter_mut().zip(c.by) {
@@ -902,6 +941,45 @@ pub(crate) mod tests {
                     let plain = vol.locate::<false>(uvw).position;
                     assert!((0..3).all(|x| (plain[x] - located.position[x]).abs() < 1e-12 * size));
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn a_point_maps_back_to_rest_within_the_displacements_box() {
+        let mut rng = Rng(29);
+        for mut vol in volumes() {
+            let size = vol.region().size().max_element();
+            let n = vol.controls().len();
+            for _ in 0..4 {
+                let index = (rng.next_f64() * n as f64) as usize % n;
+                let [i, j, k] = vol.ijk(index);
+                let p = vol.controls()[index].rest_m + rng.uvw(-0.2, 0.2).to_vec3() * size;
+                vol.set_position(i, j, k, p).unwrap();
+            }
+            let d = vol.displacement_box().expect("equal weights");
+            for _ in 0..200 {
+                let uvw = rng.uvw(0.0, 1.0);
+                let off = vol.position(uvw) - vol.rest_point(uvw);
+                let slack = Vec3::splat(1e-6 * size);
+                assert!(
+                    off.cmpge(d.min - slack).all() && off.cmple(d.max + slack).all(),
+                    "{off} not in {d:?}"
+                );
+            }
+            // Interior controls alone moved keep a clamped lattice's faces where they were.
+            let interior = vol.counts().iter().all(|&c| c > 2)
+                && vol.controls().iter().enumerate().all(|(index, c)| {
+                    let [i, j, k] = vol.ijk(index);
+                    let [l, m, n] = vol.counts();
+                    c.position_m == c.rest_m
+                        || (i > 0 && j > 0 && k > 0 && i + 1 < l && j + 1 < m && k + 1 < n)
+                });
+            let clamped = (0..3).all(|a| vol.knots(a).is_clamped());
+            assert_eq!(vol.faces_at_rest(), interior && clamped);
+            if vol.kind() == SplineKind::Nurbs {
+                vol.set_weight(1, 1, 1, 2.0).unwrap();
+                assert!(vol.displacement_box().is_none() && !vol.faces_at_rest());
             }
         }
     }
