@@ -10,7 +10,9 @@
 //! the edit's reach moves, those an earlier update changed.
 //!
 //! The plan holds for as long as nothing else writes the bricks it has written: the edits that
-//! use it hold the field's stroke open for their whole session.
+//! use it hold the field's stroke open for their whole session. An edit that shares its bricks
+//! with another writer (lattices open side by side) names the points it may write: a brick is
+//! decided and evaluated whole, but written only there.
 
 use std::collections::HashMap;
 
@@ -92,10 +94,13 @@ impl BrickPlan {
     /// `evaluate(key, reader, out)` into `out` in [`Brick::linear`] order (returning how many
     /// points it evaluated one by one), on every thread, each with a `reader()` of its own;
     /// `original(reader, p)` is the clay as it was at `p`. A brick that would come out as the
-    /// last update left it is not written.
+    /// last update left it is not written. Only the points `within` (`lo ..= hi`), where given,
+    /// are written.
+    #[allow(clippy::too_many_arguments)]
     pub fn write<R>(
         &mut self,
         field: &mut Field,
+        within: Option<(IVec3, IVec3)>,
         keys: impl IntoIterator<Item = IVec3>,
         fill: impl Fn(IVec3) -> Fill + Sync,
         reader: impl Fn() -> R + Sync + Send,
@@ -138,6 +143,7 @@ impl BrickPlan {
         if !writes.is_empty() {
             let lo = writes.iter().fold(IVec3::MAX, |a, w| a.min(w.0 * size));
             let hi = writes.iter().fold(IVec3::MIN, |a, w| a.max(w.0 * size + size - IVec3::ONE));
+            let (lo, hi) = within.map_or((lo, hi), |(a, b)| (lo.max(a), hi.min(b)));
             let mut r = reader();
             let mut brick: Option<(IVec3, Planned)> = None;
             field.edit_region(
@@ -216,7 +222,7 @@ mod tests {
         };
         let keys: Vec<IVec3> = bricks_over(IVec3::ZERO, IVec3::splat(23)).collect();
         assert_eq!(keys.len(), 27);
-        let stats = plan.write(&mut field, keys.clone(), fill, || (), evaluate, original);
+        let stats = plan.write(&mut field, None, keys.clone(), fill, || (), evaluate, original);
         // Bricks x = 0 and x = 1 of the 3 × 3 × 3 over the box.
         assert_eq!(stats.bricks, 18);
         assert_eq!(stats.evaluated, 9 * BRICK_VOLUME as u64);
@@ -228,10 +234,10 @@ mod tests {
         assert!((got - expect).abs() <= crate::field::DENSITY_TOLERANCE, "{got} against {expect}");
         assert_eq!(field.density(IVec3::new(17, 3, 3)), 0.0);
         // The same again: the full bricks stay, the mixed ones are written again.
-        let stats = plan.write(&mut field, keys.clone(), fill, || (), evaluate, original);
+        let stats = plan.write(&mut field, None, keys.clone(), fill, || (), evaluate, original);
         assert_eq!(stats.bricks, 9);
         // Everything back as it was: only the bricks the plan changed are written, exactly.
-        let stats = plan.write(&mut field, keys, |_| Fill::Original, || (), evaluate, original);
+        let stats = plan.write(&mut field, None, keys, |_| Fill::Original, || (), evaluate, original);
         assert_eq!((stats.bricks, stats.evaluated), (18, 0));
         for p in bricks_over(IVec3::ZERO, IVec3::splat(15)).flat_map(|k| {
             (0..BRICK_VOLUME as i32).map(move |i| k * BRICK_SIZE + IVec3::new(i % 8, (i / 8) % 8, i / 64))

@@ -486,6 +486,9 @@ pub struct Lattice {
     opened: OpenTimes,
     /// What the writes left in each brick of the field.
     plan: BrickPlan,
+    /// Every reach the writes have had (see [`Self::reach`]): only there is the field written,
+    /// and there it is the lattice's, however the reach shrinks again.
+    written: Aabb,
     /// The rest mapping onto the field's lattice: parameters `u` lie at index coordinates
     /// `to_index.0 + to_index.1 · u`.
     to_index: ([f64; 3], [f64; 3]),
@@ -760,6 +763,7 @@ impl Lattice {
             window_scale: 1.0 / (FACE_BLEND * (1.0 - FACE_BLEND)),
             opened: OpenTimes::default(),
             plan: BrickPlan::new(),
+            written: Aabb::EMPTY,
             to_index: {
                 let (min, size) = (spec.region.min, spec.region.size());
                 let (h, o) = (transform.voxel_size_m as f64, transform.origin_m);
@@ -1240,12 +1244,15 @@ impl Lattice {
             let hi = shi.max(self.source.hi());
             self.source = self.source.grown(field, lo, hi);
         }
-        let reach = self.reach();
+        // The clay of a reach left behind goes back as it was (its points read their own).
+        self.written = self.written.union(&self.reach());
+        let reach = self.written;
         let world = Aabb { min: world.min.max(reach.min), max: world.max.min(reach.max) };
         if world.is_empty() {
             return Ok(LatticeStats::default());
         }
         let (lo, hi) = self.points_of(world);
+        let within = self.points_of(reach);
         // Whole bricks: the grid over every brick the box touches.
         let size = IVec3::splat(BRICK_SIZE);
         let (blo, bhi) = (lo.div_euclid(size) * size, hi.div_euclid(size) * size + size - IVec3::ONE);
@@ -1299,6 +1306,7 @@ impl Lattice {
         let counted = std::sync::Mutex::new(LatticeStats::default());
         let written = plan.write(
             field,
+            Some(within),
             keys,
             |key| decided[&key],
             || (),

@@ -436,6 +436,7 @@ impl RegionDrag {
         let how = self.resample(&moved, t, &self.originals);
         let stats = plan.write(
             field,
+            None,
             keys,
             |key| how.fill(key * BRICK_SIZE, BRICK_SIZE),
             || self.originals.reader(),
