@@ -290,6 +290,23 @@ pub fn trilinear(index: Vec3, mut at: impl FnMut(IVec3) -> f32) -> f32 {
     acc
 }
 
+/// `x.floor() as i32`, inlined: on the baseline x86-64 target `f64::floor` is a call into
+/// the maths library, which the per-sample loops of the resampling tools cannot afford.
+/// Exact for every `x` an `i32` holds; saturates as `as` does beyond.
+#[inline(always)]
+pub fn floor_i32(x: f64) -> i32 {
+    let t = x as i32;
+    t - i32::from((t as f64) > x)
+}
+
+/// `x.round() as i32` (halves away from zero), inlined as [`floor_i32`] is.
+#[inline(always)]
+pub fn round_i32(x: f64) -> i32 {
+    let t = x as i32;
+    let d = x - t as f64;
+    t + i32::from(d >= 0.5) - i32::from(d <= -0.5)
+}
+
 /// Euclidean floor division of integers (rounds towards negative infinity).
 pub fn div_floor(a: i32, b: i32) -> i32 {
     a.div_euclid(b)
@@ -298,6 +315,18 @@ pub fn div_floor(a: i32, b: i32) -> i32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn inlined_floor_and_round_match_the_library() {
+        let mut xs =
+            vec![0.0, -0.0, 0.5, -0.5, 1.5, -1.5, 2.5, -2.5, 1e-12, -1e-12, 7.0, -7.0, 123456.49999999999];
+        xs.extend((0..2000).map(|i| (i as f64 - 1000.0) * 0.173 + 0.001 * (i % 7) as f64));
+        for x in xs {
+            assert_eq!(floor_i32(x), x.floor() as i32, "floor {x}");
+            assert_eq!(round_i32(x), x.round() as i32, "round {x}");
+        }
+        assert_eq!(floor_i32(f64::NAN), 0);
+    }
 
     #[test]
     fn voxel_transform_round_trips() {

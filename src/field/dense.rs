@@ -6,7 +6,7 @@
 use std::collections::HashMap;
 
 use super::{Colour, Field, FieldReader, DEFAULT_COLOUR};
-use crate::math::{div_floor, IVec3, Vec3};
+use crate::math::{div_floor, floor_i32, round_i32, IVec3, Vec3};
 
 /// Densities and colours over the lattice points `lo ..= lo + dims − 1`, `x` fastest; points
 /// outside read as empty.
@@ -18,6 +18,21 @@ pub struct DenseCopy {
     colour: Vec<Colour>,
     /// What each cell of [`CELL`]³ points holds, `x` fastest, for [`DenseCopy::span`].
     cells: Vec<Span>,
+    /// A summed-volume table over `dims + 1` corners, `x` fastest: at corner `c`, how many
+    /// points below it on every axis hold clay, and how many are not full, so that
+    /// [`DenseCopy::holds`] knows from 8 entries whether a box is empty or full.
+    counts: Vec<[u32; 2]>,
+}
+
+/// What every point of a box holds, where they all hold the same ([`DenseCopy::holds`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Holds {
+    /// No clay.
+    Empty,
+    /// Full clay of one colour.
+    Full(Colour),
+    /// Anything else.
+    Mixed,
 }
 
 /// Lattice points along each side of a [`DenseCopy`]'s summary cells.
@@ -85,7 +100,54 @@ impl DenseCopy {
             }
         }
         let cells = summarise(dims, &density, &colour);
-        Self { lo, dims, density, colour, cells }
+        let counts = summed_counts(dims, &density);
+        Self { lo, dims, density, colour, cells, counts }
+    }
+
+    /// Whether every point of `lo ..= hi` is empty (points outside the copy are), or every
+    /// one full and of one colour, exactly (the colour read from the summary cells, which
+    /// may hold a few points around the box: a box of full points of one colour next to
+    /// clay of another may be called mixed, never the other way).
+    pub fn holds(&self, lo: IVec3, hi: IVec3) -> Holds {
+        let (a, b) = (lo.max(self.lo), hi.min(self.hi()));
+        if a.cmpgt(b).any() {
+            return Holds::Empty;
+        }
+        let [occupied, unfull] = self.count(a - self.lo, b - self.lo + IVec3::ONE);
+        if occupied == 0 {
+            return Holds::Empty;
+        }
+        if unfull > 0 || !(a == lo && b == hi) {
+            return Holds::Mixed;
+        }
+        match self.span(lo, hi).full {
+            Some(colour) => Holds::Full(colour),
+            None => Holds::Mixed,
+        }
+    }
+
+    /// The counts of [`Self::counts`] over the points from corner `a` up to (not including) corner `b`.
+    #[inline]
+    fn count(&self, a: IVec3, b: IVec3) -> [u32; 2] {
+        let (sy, sz) = ((self.dims.x + 1) as usize, ((self.dims.x + 1) * (self.dims.y + 1)) as usize);
+        let at = |x: i32, y: i32, z: i32| self.counts[x as usize + sy * y as usize + sz * z as usize];
+        let mut out = [0u32; 2];
+        for corner in 0..8 {
+            let (x, y, z) = (
+                if corner & 1 == 1 { b.x } else { a.x },
+                if corner & 2 == 2 { b.y } else { a.y },
+                if corner & 4 == 4 { b.z } else { a.z },
+            );
+            // Inclusion and exclusion: a corner counts positively where it takes an odd number
+            // of its coordinates from `b` (`b` itself does, `a` does not).
+            let c = at(x, y, z);
+            let add = (corner as u32).count_ones() % 2 == 1;
+            for k in 0..2 {
+                // The sum is exact in `u32` whatever the order (wrapping arithmetic).
+                out[k] = if add { out[k].wrapping_add(c[k]) } else { out[k].wrapping_sub(c[k]) };
+            }
+        }
+        out
     }
 
     /// What the points of `lo ..= hi` hold, points outside the copy empty; the cells it reads
@@ -167,9 +229,8 @@ impl DenseCopy {
     /// (for mappings whose parameters need it).
     #[inline]
     pub fn density_f64(&self, p: [f64; 3]) -> f32 {
-        let base = p.map(f64::floor);
-        let f = [p[0] - base[0], p[1] - base[1], p[2] - base[2]];
-        let b = IVec3::new(base[0] as i32, base[1] as i32, base[2] as i32);
+        let b = IVec3::new(floor_i32(p[0]), floor_i32(p[1]), floor_i32(p[2]));
+        let f = [p[0] - b.x as f64, p[1] - b.y as f64, p[2] - b.z as f64];
         let c = b - self.lo;
         if c.cmpge(IVec3::ZERO).all() && (c + IVec3::ONE).cmplt(self.dims).all() {
             // The 2 × 2 × 2 block lies in the copy: direct indices.
@@ -200,11 +261,11 @@ impl DenseCopy {
 
     /// The colour of the nearest lattice point holding matter around `p`, else the default.
     pub fn colour_near(&self, p: [f64; 3]) -> Colour {
-        let near = IVec3::new(p[0].round() as i32, p[1].round() as i32, p[2].round() as i32);
+        let near = IVec3::new(round_i32(p[0]), round_i32(p[1]), round_i32(p[2]));
         if let Some(i) = self.index(near).filter(|&i| self.density[i] > 0.0) {
             return self.colour[i];
         }
-        let base = IVec3::new(p[0].floor() as i32, p[1].floor() as i32, p[2].floor() as i32);
+        let base = IVec3::new(floor_i32(p[0]), floor_i32(p[1]), floor_i32(p[2]));
         (0..8)
             .map(|c| base + IVec3::new(c & 1, (c >> 1) & 1, (c >> 2) & 1))
             .filter_map(|q| self.index(q))
@@ -217,6 +278,7 @@ impl DenseCopy {
     pub fn bytes(&self) -> usize {
         self.density.len() * (std::mem::size_of::<f32>() + std::mem::size_of::<Colour>())
             + self.cells.len() * std::mem::size_of::<Span>()
+            + self.counts.len() * std::mem::size_of::<[u32; 2]>()
     }
 
     /// Trilinear density and density-weighted colour at a fractional lattice coordinate.
@@ -254,6 +316,31 @@ impl DenseCopy {
             (0.0, DEFAULT_COLOUR)
         }
     }
+}
+
+/// The summed-volume table of [`DenseCopy::counts`] for densities over `dims` points.
+fn summed_counts(dims: IVec3, density: &[f32]) -> Vec<[u32; 2]> {
+    let (nx, ny, nz) = ((dims.x + 1) as usize, (dims.y + 1) as usize, (dims.z + 1) as usize);
+    let mut counts = vec![[0u32; 2]; nx * ny * nz];
+    let (sy, sz) = (nx, nx * ny);
+    let mut i = 0;
+    for z in 1..nz {
+        for y in 1..ny {
+            let mut row = [0u32; 2];
+            for x in 1..nx {
+                let d = density[i];
+                i += 1;
+                row[0] += u32::from(d > 0.0);
+                row[1] += u32::from(d < 1.0);
+                let c = x + sy * y + sz * z;
+                // This row so far, plus the box below it in y, plus the slab below in z, less
+                // their overlap.
+                let (below, under, both) = (counts[c - sy], counts[c - sz], counts[c - sy - sz]);
+                counts[c] = std::array::from_fn(|k| row[k] + below[k] + under[k] - both[k]);
+            }
+        }
+    }
+    counts
 }
 
 fn cell_dims(dims: IVec3) -> IVec3 {
@@ -442,6 +529,60 @@ mod tests {
         }
         assert_eq!(r.get(IVec3::splat(40)).0, 0.0, "nothing held there");
         assert_eq!(copy.points(), 8 * TiledCopy::TILE_POINTS);
+    }
+
+    #[test]
+    fn holds_says_exactly_where_a_box_is_empty_or_full() {
+        // A full red block, a blue one beside it, a ramp of partial densities and empty clay.
+        let mut f = Field::new(0.001, 0.5);
+        let (red, blue) = ([0.9, 0.1, 0.1, 1.0], [0.1, 0.2, 0.9, 1.0]);
+        f.edit_box(IVec3::ZERO, IVec3::new(12, 9, 9), true, |p, d, c| {
+            *d = if p.x < 10 { 1.0 } else { 0.3 };
+            *c = if p.y < 6 { red } else { blue };
+        });
+        let copy = DenseCopy::read(&f, IVec3::splat(-2), IVec3::new(17, 12, 12));
+        let brute = |lo: IVec3, hi: IVec3| {
+            let mut points = (lo.z..=hi.z).flat_map(|z| {
+                (lo.y..=hi.y).flat_map(move |y| (lo.x..=hi.x).map(move |x| IVec3::new(x, y, z)))
+            });
+            let first = IVec3::new(lo.x, lo.y, lo.z);
+            if points.clone().all(|p| copy.density(p) == 0.0) {
+                Holds::Empty
+            } else if copy.contains(lo, hi)
+                && points.all(|p| copy.density(p) == 1.0 && copy.colour(p) == copy.colour(first))
+            {
+                Holds::Full(copy.colour(first))
+            } else {
+                Holds::Mixed
+            }
+        };
+        let mut seed = 7u64;
+        let mut next = |n: i32| {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((seed >> 33) % n as u64) as i32
+        };
+        let (mut empty, mut full) = (0, 0);
+        for _ in 0..3000 {
+            let lo = IVec3::new(next(22) - 4, next(18) - 4, next(18) - 4);
+            let hi = lo + IVec3::new(next(6), next(6), next(6));
+            let (exact, got) = (brute(lo, hi), copy.holds(lo, hi));
+            match exact {
+                // Empty is exact; a full box of one colour may be called mixed where a cell
+                // around it holds another (never the other way).
+                Holds::Empty => assert_eq!(got, Holds::Empty, "{lo} {hi}"),
+                Holds::Full(_) => assert!(got == exact || got == Holds::Mixed, "{lo} {hi}: {got:?}"),
+                Holds::Mixed => assert_eq!(got, Holds::Mixed, "{lo} {hi}"),
+            }
+            empty += usize::from(got == Holds::Empty);
+            full += usize::from(matches!(got, Holds::Full(_)));
+        }
+        assert!(empty > 300 && full > 10, "{empty} empty, {full} full");
+        // Exact where the summary cells (4³ from -2) are not: an empty box whose cell holds
+        // clay, a full box of cells that hold partial points.
+        assert_eq!(copy.holds(IVec3::new(13, 0, 0), IVec3::new(15, 3, 3)), Holds::Empty);
+        assert!(copy.span(IVec3::new(13, 0, 0), IVec3::new(15, 3, 3)).max > 0.25);
+        assert_eq!(copy.holds(IVec3::new(2, 2, 2), IVec3::new(9, 5, 9)), Holds::Full(red));
+        assert_eq!(copy.holds(IVec3::new(2, 2, 2), IVec3::new(10, 5, 9)), Holds::Mixed);
     }
 
     #[test]

@@ -29,7 +29,7 @@ pub use brick::{
     BrickKey, Colour, LevelKey, Quantum, BRICK_SIZE, BRICK_VOLUME, DEFAULT_COLOUR, DENSITY_ONE,
     DENSITY_TOLERANCE, LEVELS, MESHED_LEVELS,
 };
-pub use dense::{DenseCopy, Span, TiledCopy, TiledReader};
+pub use dense::{DenseCopy, Holds, Span, TiledCopy, TiledReader};
 pub use history::{HistoryConfig, HistoryError, HistoryStats, BRICK_BYTES};
 pub use levels::{COLOUR_DETAIL_TOLERANCE, DETAIL_TOLERANCE};
 pub use plan::{bricks_over, BrickPlan, Fill, PlanStats};

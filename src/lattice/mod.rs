@@ -94,9 +94,9 @@ pub use edit::{volume_at, ControlEdit, Selection, TimedEdit};
 use rayon::prelude::*;
 
 use crate::field::{
-    bricks_over, Brick, BrickPlan, Colour, DenseCopy, Field, Fill, Span, BRICK_SIZE, DEFAULT_COLOUR,
+    bricks_over, Brick, BrickPlan, Colour, DenseCopy, Field, Fill, Holds, BRICK_SIZE, DEFAULT_COLOUR,
 };
-use crate::math::{Aabb, IVec3, Vec3, VoxelTransform};
+use crate::math::{floor_i32, Aabb, IVec3, Vec3, VoxelTransform};
 use crate::spline::{
     unit_cube_function, FitReport, KnotStyle, SplineError, SplineKind, SplineVolume, Uvw,
     DEFAULT_SAMPLES_PER_SPAN, MAX_SAMPLES_PER_SPAN,
@@ -432,6 +432,52 @@ impl CoarseMap {
         Some(out)
     }
 
+    /// The parameters at the points of the [`BLOCK`]³ block at `lo` (`x` fastest),
+    /// interpolated axis by axis: `None` unless the block lies in one cell whose corners all
+    /// have parameters.
+    fn block(&self, lo: IVec3) -> Option<[[f64; 3]; BLOCK_POINTS]> {
+        const N: usize = BLOCK as usize;
+        let mut cell = [0usize; 3];
+        let mut t = [[0.0f64; N]; 3];
+        for a in 0..3 {
+            for (o, t) in t[a].iter_mut().enumerate() {
+                let (c, at) = self.cell(a, lo[a] + o as i32)?;
+                if o == 0 {
+                    cell[a] = c;
+                } else if c != cell[a] {
+                    return None;
+                }
+                *t = at;
+            }
+        }
+        let corner = |i: usize, j: usize, k: usize| self.node([cell[0] + i, cell[1] + j, cell[2] + k]);
+        let lerp = |a: [f64; 3], b: [f64; 3], t: f64| -> [f64; 3] {
+            std::array::from_fn(|c| a[c] + (b[c] - a[c]) * t)
+        };
+        // Along x on the cell's four edges, then along y on its two faces, then along z.
+        let mut edges = [[[0.0; 3]; N]; 4];
+        for (e, edge) in edges.iter_mut().enumerate() {
+            let (a, b) = (corner(0, e & 1, e >> 1)?, corner(1, e & 1, e >> 1)?);
+            for (x, v) in edge.iter_mut().enumerate() {
+                *v = lerp(a, b, t[0][x]);
+            }
+        }
+        let mut faces = [[[[0.0; 3]; N]; N]; 2];
+        for (k, face) in faces.iter_mut().enumerate() {
+            for (y, row) in face.iter_mut().enumerate() {
+                for (x, v) in row.iter_mut().enumerate() {
+                    *v = lerp(edges[2 * k][x], edges[2 * k + 1][x], t[1][y]);
+                }
+            }
+        }
+        let mut out = [[0.0; 3]; BLOCK_POINTS];
+        for (i, v) in out.iter_mut().enumerate() {
+            let (x, y, z) = (i % N, (i / N) % N, i / (N * N));
+            *v = lerp(faces[0][y][x], faces[1][y][x], t[2][z]);
+        }
+        Some(out)
+    }
+
     /// The nodes `first ..= last` whose cells hold the lattice points `lo ..= hi`, when the grid
     /// covers them.
     fn nodes_over(&self, lo: IVec3, hi: IVec3) -> Option<([usize; 3], [usize; 3])> {
@@ -568,15 +614,16 @@ impl Context<'_> {
     /// values or weights changed: where the clay was empty there, or full of one colour, so
     /// are the points.
     fn fill(&self, lo: IVec3, hi: IVec3, by: By) -> Fill {
-        // Empty where the clay was empty, or full of the colour it was full of, is the clay as
-        // it was: no brick made where there was none, none written again.
-        match self.fill_of(lo, hi, by) {
-            Fill::Empty if self.lattice.source.span(lo, hi).max == 0.0 => Fill::Original,
-            Fill::Full(colour)
-                if self.lattice.source.span(lo, hi) == (Span { min: 1.0, max: 1.0, full: Some(colour) }) =>
-            {
-                Fill::Original
-            }
+        self.as_it_was(lo, hi, self.fill_of(lo, hi, by))
+    }
+
+    /// `fill` of the points `lo ..= hi`, named [`Fill::Original`] where it is the clay as it
+    /// was: empty where it was empty, or full of the colour it was full of (no brick made where
+    /// there was none, none written again).
+    fn as_it_was(&self, lo: IVec3, hi: IVec3, fill: Fill) -> Fill {
+        match fill {
+            Fill::Empty if self.lattice.source.holds(lo, hi) == Holds::Empty => Fill::Original,
+            Fill::Full(colour) if self.lattice.source.holds(lo, hi) == Holds::Full(colour) => Fill::Original,
             fill => fill,
         }
     }
@@ -596,33 +643,40 @@ impl Context<'_> {
         }
         let Some(grid) = &self.coarse else { return Fill::Mixed };
         let Some((first, last)) = grid.nodes_over(lo, hi) else { return Fill::Mixed };
+        let nodes = (first[2]..=last[2]).flat_map(|k| {
+            (first[1]..=last[1]).flat_map(move |j| {
+                (first[0]..=last[0]).map(move |i| (grid.point([i, j, k]), grid.node([i, j, k])))
+            })
+        });
+        self.fill_between(nodes)
+    }
+
+    /// What points become whose parameters are each a convex combination of those of
+    /// `corners` (lattice points, and their parameters where found): every point of a cell of
+    /// the coarse grid, or of a box in one, of its corners'. Their reads (the rest mapping
+    /// being affine) lie in the box of the corners' reads, grown by the longest shift when
+    /// values or weights changed; where every corner lies in the cube, so does every point.
+    fn fill_between(&self, corners: impl Iterator<Item = (IVec3, Option<[f64; 3]>)>) -> Fill {
         let (mut a, mut b) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
         let mut moved = false;
-        for k in first[2]..=last[2] {
-            for j in first[1]..=last[1] {
-                for i in first[0]..=last[0] {
-                    let Some(u) = grid.node([i, j, k]) else { return Fill::Mixed };
-                    if !Uvw(u).is_in_unit_cube() {
-                        return Fill::Mixed;
-                    }
-                    let own = grid.point([i, j, k]);
-                    let read = self.lattice.rest_index(u);
-                    for x in 0..3 {
-                        moved |= (read[x] - own[x] as f64).abs() > 1e-4;
-                        a[x] = a[x].min(read[x]);
-                        b[x] = b[x].max(read[x]);
-                    }
-                }
+        for (own, u) in corners {
+            let Some(u) = u else { return Fill::Mixed };
+            if !Uvw(u).is_in_unit_cube() {
+                return Fill::Mixed;
+            }
+            let read = self.lattice.rest_index(u);
+            for x in 0..3 {
+                moved |= (read[x] - own[x] as f64).abs() > 1e-4;
+                a[x] = a[x].min(read[x]);
+                b[x] = b[x].max(read[x]);
             }
         }
         if !moved && !self.state.shifting {
             return Fill::Original;
         }
         let grow = if self.state.shifting { self.shift_points } else { 0 };
-        let a =
-            IVec3::new(a[0].floor() as i32, a[1].floor() as i32, a[2].floor() as i32) - IVec3::splat(grow);
-        let b = IVec3::new(b[0].floor() as i32, b[1].floor() as i32, b[2].floor() as i32)
-            + IVec3::splat(1 + grow);
+        let a = IVec3::new(floor_i32(a[0]), floor_i32(a[1]), floor_i32(a[2])) - IVec3::splat(grow);
+        let b = IVec3::new(floor_i32(b[0]), floor_i32(b[1]), floor_i32(b[2])) + IVec3::splat(1 + grow);
         // Every node in the cube: every point has its preimage.
         self.fill_reading(a, b, true)
     }
@@ -631,9 +685,9 @@ impl Context<'_> {
     /// where it was empty, full of its colour where it was full of one (and every point has a
     /// preimage in the cube, as `preimages` says), else mixed.
     fn fill_reading(&self, lo: IVec3, hi: IVec3, preimages: bool) -> Fill {
-        match self.lattice.source.span(lo, hi) {
-            Span { max: 0.0, .. } => Fill::Empty,
-            Span { min: 1.0, full: Some(colour), .. } if preimages => Fill::Full(colour),
+        match self.lattice.source.holds(lo, hi) {
+            Holds::Empty => Fill::Empty,
+            Holds::Full(colour) if preimages => Fill::Full(colour),
             _ => Fill::Mixed,
         }
     }
@@ -657,6 +711,9 @@ impl Context<'_> {
                 IVec3::new(block % blocks, (block / blocks) % blocks, block / (blocks * blocks)) * BLOCK;
             let lo = base + offset;
             let fill = self.fill(lo, lo + IVec3::splat(BLOCK - 1), By::Nodes);
+            if fill == Fill::Mixed && self.sub_blocks(lo, base, out, &mut stats) {
+                continue;
+            }
             let mut previous = [None; 2];
             for i in 0..BLOCK * BLOCK * BLOCK {
                 let local = offset + IVec3::new(i % BLOCK, (i / BLOCK) % BLOCK, i / (BLOCK * BLOCK));
@@ -673,6 +730,61 @@ impl Context<'_> {
         stats
     }
 
+    /// A mixed block `lo ..= lo + 3` of the brick at `base` into `out`, as 2³ sub-blocks, where
+    /// the block lies in one cell of the coarse grid (the points' parameters interpolated
+    /// between its corners): each sub-block decided from its own corners' parameters, only
+    /// the undecided ones' points evaluated. `false`, and nothing written, where the block
+    /// does not lie in one cell.
+    fn sub_blocks(
+        &self,
+        lo: IVec3,
+        base: IVec3,
+        out: &mut [(f32, Colour)],
+        stats: &mut LatticeStats,
+    ) -> bool {
+        // Every point's parameters, interpolated once.
+        let Some(parameters) = self.coarse.as_ref().and_then(|grid| grid.block(lo)) else { return false };
+        let at = |o: IVec3| (o.x + BLOCK * (o.y + BLOCK * o.z)) as usize;
+        let source = &self.lattice.source;
+        for sub in 0..8 {
+            let s = IVec3::new(sub & 1, (sub >> 1) & 1, sub >> 2) * SUB_BLOCK;
+            let points = (0..8).map(|c| s + IVec3::new(c & 1, (c >> 1) & 1, c >> 2));
+            let (a, b) = (lo + s, lo + s + IVec3::splat(SUB_BLOCK - 1));
+            let fill = self.as_it_was(
+                a,
+                b,
+                self.fill_between(points.clone().map(|o| (lo + o, Some(parameters[at(o)])))),
+            );
+            for o in points {
+                let p = lo + o;
+                out[Brick::linear(p - base)] = fill
+                    .value(|| (source.density(p), source.colour(p)))
+                    .unwrap_or_else(|| self.point_at(p, Uvw(parameters[at(o)]), true, stats));
+            }
+        }
+        true
+    }
+
+    /// The deformed clay at lattice point `p` whose parameters `uvw` were interpolated on the
+    /// coarse grid (which lies in the box).
+    #[inline]
+    fn point_at(&self, p: IVec3, uvw: Uvw, colour: bool, stats: &mut LatticeStats) -> (f32, Colour) {
+        let lattice = self.lattice;
+        stats.points += 1;
+        stats.interpolated += 1;
+        let read = match uvw.is_in_unit_cube() {
+            true => lattice.read_at_parameters(
+                [p.x as f64, p.y as f64, p.z as f64],
+                uvw,
+                true,
+                self.state.shifting,
+            ),
+            false => Read::Empty,
+        };
+        stats.moved += usize::from(read != Read::Own);
+        lattice.read(p, read, colour)
+    }
+
     /// The deformed clay at lattice point `p` (its colour only when asked): the parameters
     /// interpolated on the coarse grid where it covers `p`, else found by Newton's method from
     /// the row's `previous` two points' extrapolated.
@@ -684,27 +796,16 @@ impl Context<'_> {
         colour: bool,
         stats: &mut LatticeStats,
     ) -> (f32, Colour) {
+        if let Some(uvw) = self.coarse.as_ref().and_then(|c| c.parameters(p)) {
+            return self.point_at(p, Uvw(uvw), colour, stats);
+        }
         let lattice = self.lattice;
-        let own = [p.x as f64, p.y as f64, p.z as f64];
         stats.points += 1;
-        let interpolated = self.coarse.as_ref().and_then(|c| c.parameters(p)).map(Uvw);
-        let read = match interpolated {
-            Some(uvw) => {
-                // The grid lies in the box.
-                stats.interpolated += 1;
-                match uvw.is_in_unit_cube() {
-                    true => lattice.read_at_parameters(own, uvw, true, self.state.shifting),
-                    false => Read::Empty,
-                }
-            }
-            None => {
-                let m = lattice.map_index(own, extrapolated(*previous), &self.state);
-                *previous = [previous[1], m.uvw];
-                stats.searched += usize::from(m.iterations > 0);
-                stats.newton_iterations += m.iterations as u64;
-                m.read
-            }
-        };
+        let m = lattice.map_index([p.x as f64, p.y as f64, p.z as f64], extrapolated(*previous), &self.state);
+        *previous = [previous[1], m.uvw];
+        stats.searched += usize::from(m.iterations > 0);
+        stats.newton_iterations += m.iterations as u64;
+        let read = m.read;
         stats.moved += usize::from(read != Read::Own);
         lattice.read(p, read, colour)
     }
@@ -723,6 +824,12 @@ fn extrapolated(previous: [Option<Uvw>; 2]) -> Option<Uvw> {
 /// Lattice points along a side of the blocks a mixed brick is decided in, block by block,
 /// before its points are evaluated one by one.
 const BLOCK: i32 = 4;
+
+/// Lattice points in a block.
+const BLOCK_POINTS: usize = (BLOCK * BLOCK * BLOCK) as usize;
+
+/// Lattice points along a side of the sub-blocks a mixed block is decided in.
+const SUB_BLOCK: i32 = 2;
 
 /// One sample of the result: how it reads the clay, and its parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
