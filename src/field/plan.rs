@@ -14,7 +14,7 @@
 //! with another writer (lattices open side by side) names the points it may write: a brick is
 //! decided and evaluated whole, but written only there.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 use rayon::prelude::*;
 

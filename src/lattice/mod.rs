@@ -1409,7 +1409,7 @@ impl Lattice {
                 },
             );
         }
-        let decided: std::collections::HashMap<IVec3, Fill> = keys.iter().copied().zip(fills).collect();
+        let decided: rustc_hash::FxHashMap<IVec3, Fill> = keys.iter().copied().zip(fills).collect();
         let counted = std::sync::Mutex::new(LatticeStats::default());
         let written = plan.write(
             field,
