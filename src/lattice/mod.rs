@@ -643,41 +643,43 @@ impl Context<'_> {
         }
         let Some(grid) = &self.coarse else { return Fill::Mixed };
         let Some((first, last)) = grid.nodes_over(lo, hi) else { return Fill::Mixed };
-        let nodes = (first[2]..=last[2]).flat_map(|k| {
-            (first[1]..=last[1]).flat_map(move |j| {
-                (first[0]..=last[0]).map(move |i| (grid.point([i, j, k]), grid.node([i, j, k])))
-            })
-        });
-        self.fill_between(nodes)
-    }
-
-    /// What points become whose parameters are each a convex combination of those of
-    /// `corners` (lattice points, and their parameters where found): every point of a cell of
-    /// the coarse grid, or of a box in one, of its corners'. Their reads (the rest mapping
-    /// being affine) lie in the box of the corners' reads, grown by the longest shift when
-    /// values or weights changed; where every corner lies in the cube, so does every point.
-    fn fill_between(&self, corners: impl Iterator<Item = (IVec3, Option<[f64; 3]>)>) -> Fill {
+        // Every point's parameters are a convex combination of those of its cell's corners.
         let (mut a, mut b) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
         let mut moved = false;
-        for (own, u) in corners {
-            let Some(u) = u else { return Fill::Mixed };
-            if !Uvw(u).is_in_unit_cube() {
-                return Fill::Mixed;
-            }
-            let read = self.lattice.rest_index(u);
-            for x in 0..3 {
-                moved |= (read[x] - own[x] as f64).abs() > 1e-4;
-                a[x] = a[x].min(read[x]);
-                b[x] = b[x].max(read[x]);
+        for k in first[2]..=last[2] {
+            for j in first[1]..=last[1] {
+                for i in first[0]..=last[0] {
+                    let Some(u) = grid.node([i, j, k]) else { return Fill::Mixed };
+                    if !Uvw(u).is_in_unit_cube() {
+                        return Fill::Mixed;
+                    }
+                    let own = grid.point([i, j, k]);
+                    let read = self.lattice.rest_index(u);
+                    for x in 0..3 {
+                        moved |= (read[x] - own[x] as f64).abs() > 1e-4;
+                        a[x] = a[x].min(read[x]);
+                        b[x] = b[x].max(read[x]);
+                    }
+                }
             }
         }
+        self.fill_within(a, b, moved)
+    }
+
+    /// What points become whose parameters are each a convex combination of some lattice
+    /// points' (the corners of a cell of the coarse grid, or of a box in one cell), every one
+    /// of which lies in the cube, given the box `a ..= b` of those points' reads and whether
+    /// any of them `moved`. The points' reads (the rest mapping being affine) lie in that box,
+    /// grown by the longest shift when values or weights changed; and every point lies in the
+    /// cube too, so has its preimage.
+    #[inline]
+    fn fill_within(&self, a: [f64; 3], b: [f64; 3], moved: bool) -> Fill {
         if !moved && !self.state.shifting {
             return Fill::Original;
         }
         let grow = if self.state.shifting { self.shift_points } else { 0 };
         let a = IVec3::new(floor_i32(a[0]), floor_i32(a[1]), floor_i32(a[2])) - IVec3::splat(grow);
         let b = IVec3::new(floor_i32(b[0]), floor_i32(b[1]), floor_i32(b[2])) + IVec3::splat(1 + grow);
-        // Every node in the cube: every point has its preimage.
         self.fill_reading(a, b, true)
     }
 
@@ -742,24 +744,53 @@ impl Context<'_> {
         out: &mut [(f32, Colour)],
         stats: &mut LatticeStats,
     ) -> bool {
-        // Every point's parameters, interpolated once.
+        // Every point's parameters, interpolated once, and where each reads at rest.
         let Some(parameters) = self.coarse.as_ref().and_then(|grid| grid.block(lo)) else { return false };
-        let at = |o: IVec3| (o.x + BLOCK * (o.y + BLOCK * o.z)) as usize;
+        const N: usize = BLOCK as usize;
+        let offset = |i: usize| IVec3::new((i % N) as i32, (i / N % N) as i32, (i / (N * N)) as i32);
+        let (mut reads, mut moved, mut in_cube) =
+            ([[0.0; 3]; BLOCK_POINTS], [false; BLOCK_POINTS], [false; BLOCK_POINTS]);
+        for (i, u) in parameters.iter().enumerate() {
+            let own = lo + offset(i);
+            reads[i] = self.lattice.rest_index(*u);
+            moved[i] = (0..3).any(|a| (reads[i][a] - own[a] as f64).abs() > 1e-4);
+            in_cube[i] = Uvw(*u).is_in_unit_cube();
+        }
         let source = &self.lattice.source;
         for sub in 0..8 {
             let s = IVec3::new(sub & 1, (sub >> 1) & 1, sub >> 2) * SUB_BLOCK;
-            let points = (0..8).map(|c| s + IVec3::new(c & 1, (c >> 1) & 1, c >> 2));
-            let (a, b) = (lo + s, lo + s + IVec3::splat(SUB_BLOCK - 1));
-            let fill = self.as_it_was(
-                a,
-                b,
-                self.fill_between(points.clone().map(|o| (lo + o, Some(parameters[at(o)])))),
-            );
-            for o in points {
-                let p = lo + o;
-                out[Brick::linear(p - base)] = fill
-                    .value(|| (source.density(p), source.colour(p)))
-                    .unwrap_or_else(|| self.point_at(p, Uvw(parameters[at(o)]), true, stats));
+            let points: [usize; 8] = std::array::from_fn(|c| {
+                let o = s + IVec3::new(c as i32 & 1, (c as i32 >> 1) & 1, c as i32 >> 2);
+                (o.x + BLOCK * (o.y + BLOCK * o.z)) as usize
+            });
+            let fill = if points.iter().all(|&i| in_cube[i]) {
+                let (mut a, mut b) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+                for &i in &points {
+                    for x in 0..3 {
+                        a[x] = a[x].min(reads[i][x]);
+                        b[x] = b[x].max(reads[i][x]);
+                    }
+                }
+                self.fill_within(a, b, points.iter().any(|&i| moved[i]))
+            } else {
+                Fill::Mixed
+            };
+            let fill = self.as_it_was(lo + s, lo + s + IVec3::splat(SUB_BLOCK - 1), fill);
+            for i in points {
+                let p = lo + offset(i);
+                out[Brick::linear(p - base)] =
+                    fill.value(|| (source.density(p), source.colour(p))).unwrap_or_else(|| {
+                        if self.state.shifting {
+                            return self.point_at(p, Uvw(parameters[i]), true, stats);
+                        }
+                        // At rest the read is the one found above (as `read_at_parameters` finds it).
+                        let read = match (in_cube[i], moved[i]) {
+                            (false, _) => Read::Empty,
+                            (true, false) => Read::Own,
+                            (true, true) => Read::At(reads[i]),
+                        };
+                        self.counted_read(p, read, true, stats)
+                    });
             }
         }
         true
@@ -769,11 +800,8 @@ impl Context<'_> {
     /// coarse grid (which lies in the box).
     #[inline]
     fn point_at(&self, p: IVec3, uvw: Uvw, colour: bool, stats: &mut LatticeStats) -> (f32, Colour) {
-        let lattice = self.lattice;
-        stats.points += 1;
-        stats.interpolated += 1;
         let read = match uvw.is_in_unit_cube() {
-            true => lattice.read_at_parameters(
+            true => self.lattice.read_at_parameters(
                 [p.x as f64, p.y as f64, p.z as f64],
                 uvw,
                 true,
@@ -781,8 +809,16 @@ impl Context<'_> {
             ),
             false => Read::Empty,
         };
+        self.counted_read(p, read, colour, stats)
+    }
+
+    /// Point `p` read as `read` says, its parameters interpolated: counted in `stats`.
+    #[inline]
+    fn counted_read(&self, p: IVec3, read: Read, colour: bool, stats: &mut LatticeStats) -> (f32, Colour) {
+        stats.points += 1;
+        stats.interpolated += 1;
         stats.moved += usize::from(read != Read::Own);
-        lattice.read(p, read, colour)
+        self.lattice.read(p, read, colour)
     }
 
     /// The deformed clay at lattice point `p` (its colour only when asked): the parameters
@@ -1317,7 +1353,8 @@ impl Lattice {
         let own = || (self.source.density(p), self.source.colour(p));
         let at = |q: [f64; 3]| {
             let d = self.source.density_f64(q).clamp(0.0, 1.0);
-            (d, if colour { self.source.colour_near(q) } else { DEFAULT_COLOUR })
+            // No clay has no colour (none around to take one from).
+            (d, if colour && d > 0.0 { self.source.colour_near(q) } else { DEFAULT_COLOUR })
         };
         match read {
             Read::Own => own(),
