@@ -18,9 +18,10 @@ pub struct DenseCopy {
     colour: Vec<Colour>,
     /// What each cell of [`CELL`]³ points holds, `x` fastest, for [`DenseCopy::span`].
     cells: Vec<Span>,
-    /// A summed-volume table over `dims + 1` corners, `x` fastest: at corner `c`, how many
-    /// points below it on every axis hold clay, and how many are not full, so that
-    /// [`DenseCopy::holds`] knows from 8 entries whether a box is empty or full.
+    /// Where asked for ([`DenseCopy::counted`]), a summed-volume table over `dims + 1`
+    /// corners, `x` fastest: at corner `c`, how many points below it on every axis hold clay,
+    /// and how many are not full, so that [`DenseCopy::holds`] knows from 8 entries whether a
+    /// box is empty or full. Empty otherwise.
     counts: Vec<[u32; 2]>,
 }
 
@@ -100,18 +101,32 @@ impl DenseCopy {
             }
         }
         let cells = summarise(dims, &density, &colour);
-        let counts = summed_counts(dims, &density);
-        Self { lo, dims, density, colour, cells, counts }
+        Self { lo, dims, density, colour, cells, counts: Vec::new() }
+    }
+
+    /// This copy with the summed-volume table that makes [`Self::holds`] exact (a copy asked
+    /// about many boxes: 8 bytes more per point).
+    pub fn counted(mut self) -> Self {
+        self.counts = summed_counts(self.dims, &self.density);
+        self
     }
 
     /// Whether every point of `lo ..= hi` is empty (points outside the copy are), or every
-    /// one full and of one colour, exactly (the colour read from the summary cells, which
-    /// may hold a few points around the box: a box of full points of one colour next to
-    /// clay of another may be called mixed, never the other way).
+    /// one full and of one colour: exactly where the copy is [`Self::counted`], else from
+    /// the summary cells. The colour is read from the cells, which may hold a few points
+    /// around the box: a box of full points of one colour next to clay of another may be
+    /// called mixed, never the other way.
     pub fn holds(&self, lo: IVec3, hi: IVec3) -> Holds {
         let (a, b) = (lo.max(self.lo), hi.min(self.hi()));
         if a.cmpgt(b).any() {
             return Holds::Empty;
+        }
+        if self.counts.is_empty() {
+            return match self.span(lo, hi) {
+                Span { max: 0.0, .. } => Holds::Empty,
+                Span { min: 1.0, full: Some(colour), .. } => Holds::Full(colour),
+                _ => Holds::Mixed,
+            };
         }
         let [occupied, unfull] = self.count(a - self.lo, b - self.lo + IVec3::ONE);
         if occupied == 0 {
@@ -540,7 +555,8 @@ mod tests {
             *d = if p.x < 10 { 1.0 } else { 0.3 };
             *c = if p.y < 6 { red } else { blue };
         });
-        let copy = DenseCopy::read(&f, IVec3::splat(-2), IVec3::new(17, 12, 12));
+        let plain = DenseCopy::read(&f, IVec3::splat(-2), IVec3::new(17, 12, 12));
+        let copy = plain.clone().counted();
         let brute = |lo: IVec3, hi: IVec3| {
             let mut points = (lo.z..=hi.z).flat_map(|z| {
                 (lo.y..=hi.y).flat_map(move |y| (lo.x..=hi.x).map(move |x| IVec3::new(x, y, z)))
@@ -566,6 +582,9 @@ mod tests {
             let lo = IVec3::new(next(22) - 4, next(18) - 4, next(18) - 4);
             let hi = lo + IVec3::new(next(6), next(6), next(6));
             let (exact, got) = (brute(lo, hi), copy.holds(lo, hi));
+            // Without the table, from the cells: right or mixed.
+            let rough = plain.holds(lo, hi);
+            assert!(rough == exact || rough == Holds::Mixed, "{lo} {hi}: {rough:?} for {exact:?}");
             match exact {
                 // Empty is exact; a full box of one colour may be called mixed where a cell
                 // around it holds another (never the other way).
@@ -580,6 +599,7 @@ mod tests {
         // Exact where the summary cells (4³ from -2) are not: an empty box whose cell holds
         // clay, a full box of cells that hold partial points.
         assert_eq!(copy.holds(IVec3::new(13, 0, 0), IVec3::new(15, 3, 3)), Holds::Empty);
+        assert_eq!(plain.holds(IVec3::new(13, 0, 0), IVec3::new(15, 3, 3)), Holds::Mixed);
         assert!(copy.span(IVec3::new(13, 0, 0), IVec3::new(15, 3, 3)).max > 0.25);
         assert_eq!(copy.holds(IVec3::new(2, 2, 2), IVec3::new(9, 5, 9)), Holds::Full(red));
         assert_eq!(copy.holds(IVec3::new(2, 2, 2), IVec3::new(10, 5, 9)), Holds::Mixed);

@@ -472,7 +472,8 @@ impl CoarseMap {
         }
         let mut out = [[0.0; 3]; BLOCK_POINTS];
         for (i, v) in out.iter_mut().enumerate() {
-            let (x, y, z) = (i % N, (i / N) % N, i / (N * N));
+            let o = block_point(i);
+            let (x, y, z) = (o.x as usize, o.y as usize, o.z as usize);
             *v = lerp(faces[0][y][x], faces[1][y][x], t[2][z]);
         }
         Some(out)
@@ -717,10 +718,10 @@ impl Context<'_> {
                 continue;
             }
             let mut previous = [None; 2];
-            for i in 0..BLOCK * BLOCK * BLOCK {
-                let local = offset + IVec3::new(i % BLOCK, (i / BLOCK) % BLOCK, i / (BLOCK * BLOCK));
+            for i in 0..BLOCK_POINTS {
+                let local = offset + block_point(i);
                 let p = base + local;
-                if i % BLOCK == 0 {
+                if local.x == offset.x {
                     previous = [None; 2];
                 }
                 let source = &self.lattice.source;
@@ -746,12 +747,10 @@ impl Context<'_> {
     ) -> bool {
         // Every point's parameters, interpolated once, and where each reads at rest.
         let Some(parameters) = self.coarse.as_ref().and_then(|grid| grid.block(lo)) else { return false };
-        const N: usize = BLOCK as usize;
-        let offset = |i: usize| IVec3::new((i % N) as i32, (i / N % N) as i32, (i / (N * N)) as i32);
         let (mut reads, mut moved, mut in_cube) =
             ([[0.0; 3]; BLOCK_POINTS], [false; BLOCK_POINTS], [false; BLOCK_POINTS]);
         for (i, u) in parameters.iter().enumerate() {
-            let own = lo + offset(i);
+            let own = lo + block_point(i);
             reads[i] = self.lattice.rest_index(*u);
             moved[i] = (0..3).any(|a| (reads[i][a] - own[a] as f64).abs() > 1e-4);
             in_cube[i] = Uvw(*u).is_in_unit_cube();
@@ -777,17 +776,16 @@ impl Context<'_> {
             };
             let fill = self.as_it_was(lo + s, lo + s + IVec3::splat(SUB_BLOCK - 1), fill);
             for i in points {
-                let p = lo + offset(i);
+                let p = lo + block_point(i);
                 out[Brick::linear(p - base)] =
                     fill.value(|| (source.density(p), source.colour(p))).unwrap_or_else(|| {
-                        if self.state.shifting {
-                            return self.point_at(p, Uvw(parameters[i]), true, stats);
-                        }
-                        // At rest the read is the one found above (as `read_at_parameters` finds it).
-                        let read = match (in_cube[i], moved[i]) {
-                            (false, _) => Read::Empty,
-                            (true, false) => Read::Own,
-                            (true, true) => Read::At(reads[i]),
+                        let read = match in_cube[i] {
+                            true => {
+                                let own = [p.x as f64, p.y as f64, p.z as f64];
+                                let uvw = Uvw(parameters[i]);
+                                self.lattice.read_from_rest(own, uvw, reads[i], true, self.state.shifting)
+                            }
+                            false => Read::Empty,
                         };
                         self.counted_read(p, read, true, stats)
                     });
@@ -864,6 +862,13 @@ const BLOCK: i32 = 4;
 /// Lattice points in a block.
 const BLOCK_POINTS: usize = (BLOCK * BLOCK * BLOCK) as usize;
 
+/// The offset of a block's `i`-th point from its first (`x` fastest).
+#[inline]
+fn block_point(i: usize) -> IVec3 {
+    const N: usize = BLOCK as usize;
+    IVec3::new((i % N) as i32, (i / N % N) as i32, (i / (N * N)) as i32)
+}
+
 /// Lattice points along a side of the sub-blocks a mixed block is decided in.
 const SUB_BLOCK: i32 = 2;
 
@@ -918,7 +923,7 @@ impl Lattice {
         };
         let (lo, hi) = lattice.source_box(volume.hull())?;
         let start = std::time::Instant::now();
-        lattice.source = DenseCopy::read(field, lo, hi);
+        lattice.source = DenseCopy::read(field, lo, hi).counted();
         lattice.opened.copy_s = start.elapsed().as_secs_f64();
         let start = std::time::Instant::now();
         let source = &lattice.source;
@@ -1145,7 +1150,14 @@ impl Lattice {
     /// reads the clay (`shifting`: [`Self::shifts`]).
     #[inline]
     fn read_at_parameters(&self, own: [f64; 3], uvw: Uvw, in_box: bool, shifting: bool) -> Read {
-        let mut read_at = self.rest_index(uvw.0);
+        self.read_from_rest(own, uvw, self.rest_index(uvw.0), in_box, shifting)
+    }
+
+    /// [`Self::read_at_parameters`], where the rest lattice places `uvw` at `rest` (index
+    /// coordinates, [`Self::rest_index`]) already.
+    #[inline]
+    fn read_from_rest(&self, own: [f64; 3], uvw: Uvw, rest: [f64; 3], in_box: bool, shifting: bool) -> Read {
+        let mut read_at = rest;
         // The function mapping's shift, faded out on the faces so that it meets the clay
         // outside without a step.
         if shifting {
@@ -1386,7 +1398,7 @@ impl Lattice {
         if !self.source.contains(slo, shi) {
             let lo = slo.min(self.source.lo());
             let hi = shi.max(self.source.hi());
-            self.source = self.source.grown(field, lo, hi);
+            self.source = self.source.grown(field, lo, hi).counted();
         }
         // The clay of a reach left behind goes back as it was (its points read their own).
         self.written = self.written.union(&self.reach());
